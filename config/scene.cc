@@ -1,0 +1,224 @@
+// The scene schema (documented in config/scene.h), read top to bottom with the checked getters of
+// config/yaml_reader.h. Range checks that involve more than one value (box max > min, exactly one
+// mesh source, unique probe names, the mesh file on disk) are made here.
+
+#include "config/scene.h"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "config/yaml_reader.h"
+#include "core/error.h"
+
+namespace hapsim::config {
+namespace {
+
+namespace fs = std::filesystem;
+
+SourceLocation LocationOf(const YamlMap& map) { return {map.file(), map.line(), map.path()}; }
+
+// Reads min_m and max_m. Requires max > min on every axis, or max ≥ min when `allow_flat` (a box
+// of zero thickness still selects the nodes on a plane).
+AxisAlignedBox ReadBox(const YamlMap& map, bool allow_flat) {
+  AxisAlignedBox box;
+  box.min_m = map.GetVector3("min_m");
+  box.max_m = map.GetVector3("max_m");
+  for (int axis = 0; axis < 3; ++axis) {
+    const double min = box.min_m[axis];
+    const double max = box.max_m[axis];
+    if (max < min || (!allow_flat && max == min)) {
+      std::ostringstream message;
+      message << "must be " << (allow_flat ? ">=" : ">") << " min_m on every axis; on axis "
+              << "xyz"[axis] << " max is " << max << " and min is " << min;
+      map.FailKey("max_m", message.str());
+    }
+  }
+  return box;
+}
+
+// Resolves `file` against base_dir and checks that the mesh (and, for TetGen, its .ele) exists.
+std::string ReadMeshFile(const YamlMap& mesh, const std::string& base_dir) {
+  const fs::path given = mesh.GetString("file");
+  const fs::path path = given.is_absolute() ? given : fs::path(base_dir) / given;
+  const std::string extension = path.extension().string();
+  if (extension != ".msh" && extension != ".node") {
+    mesh.FailKey("file", "must be a Gmsh .msh or TetGen .node file, got '" + given.string() + "'");
+  }
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) mesh.FailKey("file", "no such file: " + path.string());
+  fs::path elements = path;
+  elements.replace_extension(".ele");
+  if (extension == ".node" && !fs::is_regular_file(elements, error)) {
+    mesh.FailKey("file",
+                 "a TetGen mesh needs its elements too; no such file: " + elements.string());
+  }
+  return path.string();
+}
+
+MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
+  map.CheckKeys({"box", "ellipsoid", "file"});
+  const int num_sources = map.Has("box") + map.Has("ellipsoid") + map.Has("file");
+  if (num_sources != 1) {
+    map.Fail("must give exactly one of box, ellipsoid, file; got " + std::to_string(num_sources));
+  }
+  MeshSource mesh;
+  mesh.location = LocationOf(map);
+  if (const std::optional<YamlMap> box = map.FindMap("box")) {
+    box->CheckKeys({"min_m", "max_m", "cells"});
+    mesh.kind = MeshSource::Kind::kBox;
+    mesh.box = ReadBox(*box, /*allow_flat=*/false);
+    mesh.cells = box->GetVector3i("cells", AtLeast(1));
+  } else if (const std::optional<YamlMap> ellipsoid = map.FindMap("ellipsoid")) {
+    ellipsoid->CheckKeys({"center_m", "radii_m", "cell_size_m"});
+    mesh.kind = MeshSource::Kind::kEllipsoid;
+    mesh.center_m = ellipsoid->GetVector3("center_m");
+    mesh.radii_m = ellipsoid->GetVector3("radii_m", Above(0.0));
+    mesh.cell_size_m = ellipsoid->GetDouble("cell_size_m", Above(0.0));
+  } else {
+    mesh.kind = MeshSource::Kind::kFile;
+    mesh.file = ReadMeshFile(map, base_dir);
+  }
+  return mesh;
+}
+
+fem::Material ReadMaterial(const YamlMap& map) {
+  map.CheckKeys({"youngs_modulus_Pa", "poisson_ratio", "density_kg_m3", "rayleigh_alpha_1_s",
+                 "rayleigh_beta_s"});
+  fem::Material material;
+  material.youngs_modulus_Pa = map.GetDouble("youngs_modulus_Pa", Above(0.0));
+  material.poisson_ratio = map.GetDouble("poisson_ratio", OpenInterval(-1.0, 0.5));
+  material.density_kg_m3 = map.GetDouble("density_kg_m3", Above(0.0));
+  material.rayleigh_alpha_1_s = map.GetDoubleOr("rayleigh_alpha_1_s", 0.0, AtLeast(0.0));
+  material.rayleigh_beta_s = map.GetDoubleOr("rayleigh_beta_s", 0.0, AtLeast(0.0));
+  return material;
+}
+
+fem::SolverOptions ReadSolver(const YamlMap& map) {
+  using fem::PreconditionerKind;
+  using fem::SolverKind;
+  map.CheckKeys({"type", "preconditioner", "relative_tolerance", "max_iterations",
+                 "refactor_after_iterations"});
+  fem::SolverOptions solver;
+  solver.kind = map.GetEnumOr<SolverKind>(
+      "type",
+      {{ToString(SolverKind::kConjugateGradient), SolverKind::kConjugateGradient},
+       {ToString(SolverKind::kCholmod), SolverKind::kCholmod}},
+      solver.kind);
+  solver.preconditioner = map.GetEnumOr<PreconditionerKind>(
+      "preconditioner",
+      {{ToString(PreconditionerKind::kLaggedCholesky), PreconditionerKind::kLaggedCholesky},
+       {ToString(PreconditionerKind::kBlockJacobi), PreconditionerKind::kBlockJacobi}},
+      solver.preconditioner);
+  solver.refactor_after_iterations = map.GetIntOr(
+      "refactor_after_iterations", solver.refactor_after_iterations, AtLeast(1));
+  solver.relative_tolerance =
+      map.GetDoubleOr("relative_tolerance", solver.relative_tolerance, OpenInterval(0.0, 1.0));
+  solver.max_iterations = map.GetIntOr("max_iterations", solver.max_iterations, AtLeast(1));
+  return solver;
+}
+
+fem::FemOptions ReadFemOptions(const YamlMap& body) {
+  using fem::ElasticityKind;
+  using fem::IntegratorKind;
+  fem::FemOptions options;
+  options.elasticity = body.GetEnumOr<ElasticityKind>(
+      "elasticity",
+      {{ToString(ElasticityKind::kCorotational), ElasticityKind::kCorotational},
+       {ToString(ElasticityKind::kLinear), ElasticityKind::kLinear}},
+      options.elasticity);
+  options.integrator = body.GetEnumOr<IntegratorKind>(
+      "integrator",
+      {{ToString(IntegratorKind::kImplicitEuler), IntegratorKind::kImplicitEuler},
+       {ToString(IntegratorKind::kExplicitEuler), IntegratorKind::kExplicitEuler}},
+      options.integrator);
+  if (const std::optional<YamlMap> solver = body.FindMap("solver")) {
+    options.solver = ReadSolver(*solver);
+  }
+  return options;
+}
+
+NodalLoad ReadLoad(const YamlMap& map) {
+  map.CheckKeys({"min_m", "max_m", "total_force_N"});
+  NodalLoad load;
+  load.region = ReadBox(map, /*allow_flat=*/true);
+  load.total_force_N = map.GetVector3("total_force_N");
+  load.location = LocationOf(map);
+  return load;
+}
+
+std::vector<Probe> ReadProbes(const YamlMap& body) {
+  std::vector<Probe> probes;
+  for (const YamlMap& map : body.GetMapList("probes")) {
+    map.CheckKeys({"name", "position_m"});
+    Probe probe;
+    probe.name = map.GetString("name");
+    if (probe.name.empty()) map.FailKey("name", "must not be empty");
+    for (const Probe& other : probes) {
+      if (other.name == probe.name) {
+        map.FailKey("name", "duplicate probe name '" + probe.name + "' (first given on line " +
+                                std::to_string(other.location.line) + ")");
+      }
+    }
+    probe.position_m = map.GetVector3("position_m");
+    probe.location = LocationOf(map);
+    probes.push_back(probe);
+  }
+  return probes;
+}
+
+BodyScene ReadBody(const YamlMap& map, const std::string& base_dir) {
+  map.CheckKeys(
+      {"mesh", "material", "elasticity", "integrator", "solver", "fixed", "loads", "probes"});
+  BodyScene body;
+  body.mesh = ReadMesh(map.GetMap("mesh"), base_dir);
+  body.material = ReadMaterial(map.GetMap("material"));
+  body.options = ReadFemOptions(map);
+  if (const std::optional<YamlMap> fixed = map.FindMap("fixed")) {
+    fixed->CheckKeys({"min_m", "max_m"});
+    body.fixed = ReadBox(*fixed, /*allow_flat=*/true);
+    body.fixed_location = LocationOf(*fixed);
+  }
+  for (const YamlMap& load : map.GetMapList("loads")) body.loads.push_back(ReadLoad(load));
+  body.probes = ReadProbes(map);
+  return body;
+}
+
+}  // namespace
+
+Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
+                 const std::string& base_dir) {
+  const YamlMap root = YamlMap::Parse(yaml_text, file_label);
+  root.CheckKeys({"name", "description", "gravity_m_s2", "time", "body"});
+  Scene scene;
+  scene.file = file_label;
+  scene.name = root.GetString("name");
+  if (scene.name.empty()) root.FailKey("name", "must not be empty");
+  scene.description = root.GetStringOr("description", "");
+  scene.gravity_m_s2 = root.GetVector3Or("gravity_m_s2", scene.gravity_m_s2);
+
+  const YamlMap time = root.GetMap("time");
+  time.CheckKeys({"dt_s", "num_steps"});
+  scene.dt_s = time.GetDouble("dt_s", Above(0.0));
+  scene.num_steps = time.GetInt("num_steps", AtLeast(1));
+
+  if (const std::optional<YamlMap> body = root.FindMap("body")) {
+    scene.body = ReadBody(*body, base_dir);
+  }
+  return scene;
+}
+
+Scene LoadScene(const std::string& path) {
+  std::error_code error;
+  if (!fs::exists(path, error)) throw InputError(path, 0, "", "no such scene file");
+  if (fs::is_directory(path, error))
+    throw InputError(path, 0, "", "is a directory, not a scene file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in.is_open()) throw InputError(path, 0, "", "cannot open the scene file");
+  std::ostringstream text;
+  text << in.rdbuf();  // an empty file leaves `text` empty, which ParseScene reports
+  if (in.bad()) throw InputError(path, 0, "", "cannot read the scene file");
+  return ParseScene(text.str(), path, fs::path(path).parent_path().string());
+}
+
+}  // namespace hapsim::config

@@ -1,0 +1,91 @@
+#include "fem/cg_solver.h"
+
+#include <cmath>
+
+#include <Eigen/Dense>
+
+namespace hapsim::fem {
+
+void MultiplySymmetric(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& x,
+                       Eigen::VectorXd* y) {
+  const int* outer = A.outerIndexPtr();
+  const int* rows = A.innerIndexPtr();
+  const double* values = A.valuePtr();
+  y->resize(A.rows());
+  for (Eigen::Index j = 0; j < A.cols(); ++j) {
+    double sum = 0.0;
+    for (int k = outer[j]; k < outer[j + 1]; ++k) sum += values[k] * x[rows[k]];
+    (*y)[j] = sum;
+  }
+}
+
+void ConjugateGradientSolver::PreparePreconditioner(const Eigen::SparseMatrix<double>& A) {
+  if (options_.preconditioner == PreconditionerKind::kLaggedCholesky) {
+    const bool stale = !factor_.is_factored() || last_iterations_ > options_.refactor_after_iterations;
+    if (stale) {
+      ++num_factorizations_;
+      factor_.Factorize(A);
+    }
+    use_factor_ = factor_.is_factored();
+    if (use_factor_) return;
+    // A not positive definite at factorisation: fall through to block Jacobi for this solve.
+  }
+  use_factor_ = false;
+  const int num_nodes = static_cast<int>(A.rows() / 3);
+  block_inverse_.resize(num_nodes);
+  for (int n = 0; n < num_nodes; ++n) {
+    Eigen::Matrix3d block;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) block(r, c) = A.coeff(3 * n + r, 3 * n + c);
+    block_inverse_[n] = block.inverse();
+  }
+}
+
+void ConjugateGradientSolver::ApplyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd* z) {
+  if (use_factor_) {
+    factor_.Solve(r, z);
+    return;
+  }
+  for (size_t n = 0; n < block_inverse_.size(); ++n)
+    z->segment<3>(3 * n) = block_inverse_[n] * r.segment<3>(3 * n);
+}
+
+SolveReport ConjugateGradientSolver::Solve(const Eigen::SparseMatrix<double>& A,
+                                           const Eigen::VectorXd& b, Eigen::VectorXd* x) {
+  const Eigen::Index n = b.size();
+  if (x->size() != n) x->setZero(n);
+  r_.resize(n), z_.resize(n), p_.resize(n), Ap_.resize(n);
+  PreparePreconditioner(A);
+  SolveReport report;
+  const double b_norm = b.norm();
+  if (b_norm == 0.0) {
+    x->setZero();
+    report.converged = true;
+    return report;
+  }
+  MultiplySymmetric(A, *x, &Ap_);
+  r_ = b - Ap_;
+  ApplyPreconditioner(r_, &z_);
+  p_ = z_;
+  double rz = r_.dot(z_);
+  const double target = options_.relative_tolerance * b_norm;
+  double r_norm = r_.norm();
+  while (r_norm > target && report.iterations < options_.max_iterations) {
+    MultiplySymmetric(A, p_, &Ap_);
+    const double alpha = rz / p_.dot(Ap_);
+    *x += alpha * p_;
+    r_ -= alpha * Ap_;
+    ApplyPreconditioner(r_, &z_);
+    const double rz_next = r_.dot(z_);
+    p_ = z_ + (rz_next / rz) * p_;
+    rz = rz_next;
+    r_norm = r_.norm();
+    ++report.iterations;
+  }
+  last_iterations_ = report.iterations;
+  report.relative_residual = r_norm / b_norm;
+  report.converged = r_norm <= target;
+  return report;
+}
+
+}  // namespace hapsim::fem

@@ -1,0 +1,40 @@
+#pragma once
+// Preconditioned conjugate gradients, warm-started from the caller's x; stops at
+// ‖b − Ax‖ ≤ tol ‖b‖ or after max_iterations. Preconditioner: a lagged Cholesky factor of an
+// earlier A (refreshed when CG slows down) or 3×3 block Jacobi (see PreconditionerKind).
+
+#include <vector>
+
+#include "fem/cholmod_factor.h"
+#include "fem/linear_solver.h"
+
+namespace hapsim::fem {
+
+class ConjugateGradientSolver final : public LinearSolver {
+ public:
+  explicit ConjugateGradientSolver(const SolverOptions& options) : options_(options) {}
+  SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
+                    Eigen::VectorXd* x) override;
+
+  // Numeric factorisations done so far (kLaggedCholesky).
+  int num_factorizations() const { return num_factorizations_; }
+  const CholmodFactor& factor() const { return factor_; }
+
+ private:
+  void PreparePreconditioner(const Eigen::SparseMatrix<double>& A);
+  void ApplyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd* z);
+
+  SolverOptions options_;
+  bool use_factor_ = false;
+  int last_iterations_ = 0;
+  int num_factorizations_ = 0;
+  CholmodFactor factor_;
+  std::vector<Eigen::Matrix3d> block_inverse_;  // block Jacobi: one per node
+  Eigen::VectorXd r_, z_, p_, Ap_;              // scratch, sized on first use
+};
+
+// y = A x for symmetric A in column-major storage, read as rows (a gather per row).
+void MultiplySymmetric(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& x,
+                       Eigen::VectorXd* y);
+
+}  // namespace hapsim::fem

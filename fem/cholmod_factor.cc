@@ -1,0 +1,79 @@
+#include "fem/cholmod_factor.h"
+
+#include <stdexcept>
+
+namespace hapsim::fem {
+namespace {
+
+// A CHOLMOD view (no copy) of a compressed column-major symmetric matrix, reading its lower half.
+cholmod_sparse ViewAsCholmod(const Eigen::SparseMatrix<double>& A) {
+  cholmod_sparse view{};
+  view.nrow = static_cast<size_t>(A.rows());
+  view.ncol = static_cast<size_t>(A.cols());
+  view.nzmax = static_cast<size_t>(A.nonZeros());
+  view.p = const_cast<int*>(A.outerIndexPtr());
+  view.i = const_cast<int*>(A.innerIndexPtr());
+  view.x = const_cast<double*>(A.valuePtr());
+  view.stype = -1;
+  view.itype = CHOLMOD_INT;
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  view.sorted = 1;
+  view.packed = 1;
+  return view;
+}
+
+cholmod_dense ViewAsCholmod(const Eigen::VectorXd& b) {
+  cholmod_dense view{};
+  view.nrow = static_cast<size_t>(b.size());
+  view.ncol = 1;
+  view.nzmax = static_cast<size_t>(b.size());
+  view.d = static_cast<size_t>(b.size());
+  view.x = const_cast<double*>(b.data());
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  return view;
+}
+
+}  // namespace
+
+CholmodFactor::CholmodFactor() {
+  cholmod_start(&common_);
+  common_.supernodal = CHOLMOD_SUPERNODAL;
+  common_.final_asis = 1;  // keep the factor supernodal: the solves work on it directly
+  common_.print = 0;
+}
+
+CholmodFactor::~CholmodFactor() {
+  cholmod_free_dense(&solution_, &common_);
+  cholmod_free_dense(&work_y_, &common_);
+  cholmod_free_dense(&work_e_, &common_);
+  cholmod_free_factor(&factor_, &common_);
+  cholmod_finish(&common_);
+}
+
+bool CholmodFactor::Factorize(const Eigen::SparseMatrix<double>& A) {
+  if (!A.isCompressed()) throw std::invalid_argument("CholmodFactor needs a compressed matrix");
+  cholmod_sparse A_view = ViewAsCholmod(A);
+  if (!factor_ || A.nonZeros() != analysed_nonzeros_) {
+    cholmod_free_factor(&factor_, &common_);
+    factor_ = cholmod_analyze(&A_view, &common_);
+    if (!factor_) throw std::runtime_error("CHOLMOD symbolic analysis failed");
+    analysed_nonzeros_ = A.nonZeros();
+  }
+  cholmod_factorize(&A_view, factor_, &common_);
+  if (common_.status == CHOLMOD_OUT_OF_MEMORY) throw std::runtime_error("CHOLMOD out of memory");
+  factored_ = common_.status == CHOLMOD_OK;
+  return factored_;
+}
+
+void CholmodFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
+  if (!factored_) throw std::logic_error("CholmodFactor::Solve before a successful Factorize");
+  cholmod_dense b_view = ViewAsCholmod(b);
+  if (!cholmod_solve2(CHOLMOD_A, factor_, &b_view, nullptr, &solution_, nullptr, &work_y_,
+                      &work_e_, &common_))
+    throw std::runtime_error("CHOLMOD solve failed");
+  *x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(solution_->x), b.size());
+}
+
+}  // namespace hapsim::fem

@@ -1,0 +1,44 @@
+#pragma once
+// A sparse Cholesky factor A = L Lᵀ held by CHOLMOD (supernodal). The ordering and symbolic
+// analysis are done when the pattern is first seen and reused while it holds; Factorize() then
+// only redoes the numeric part. Solve() reuses its workspaces, so it allocates nothing after the
+// first call. Used directly (CholmodSolver) and as a lagged preconditioner for CG.
+
+#include <cholmod.h>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+namespace hapsim::fem {
+
+class CholmodFactor {
+ public:
+  CholmodFactor();
+  ~CholmodFactor();
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+
+  // Factors symmetric A (full or lower storage, compressed; only the lower half is read).
+  // Returns false if A is not positive definite. Throws std::runtime_error if CHOLMOD fails
+  // for another reason (out of memory).
+  bool Factorize(const Eigen::SparseMatrix<double>& A);
+
+  // x = A⁻¹ b with the last successful factor. Precondition: Factorize returned true.
+  void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
+
+  bool is_factored() const { return factored_; }
+  // From the symbolic analysis (0 before): nonzeros of L, and flops of one numeric factorisation.
+  double num_factor_nonzeros() const { return factor_ ? common_.lnz : 0.0; }
+  double factorization_flops() const { return factor_ ? common_.fl : 0.0; }
+
+ private:
+  cholmod_common common_;
+  cholmod_factor* factor_ = nullptr;
+  Eigen::Index analysed_nonzeros_ = -1;
+  bool factored_ = false;
+  cholmod_dense* solution_ = nullptr;  // reused by cholmod_solve2
+  cholmod_dense* work_y_ = nullptr;
+  cholmod_dense* work_e_ = nullptr;
+};
+
+}  // namespace hapsim::fem

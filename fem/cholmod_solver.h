@@ -1,0 +1,21 @@
+#pragma once
+// Direct solve by a sparse Cholesky factorisation refreshed at every call (CHOLMOD supernodal;
+// the symbolic analysis is reused while the pattern holds).
+
+#include "fem/cholmod_factor.h"
+#include "fem/linear_solver.h"
+
+namespace hapsim::fem {
+
+class CholmodSolver final : public LinearSolver {
+ public:
+  SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
+                    Eigen::VectorXd* x) override;
+  const CholmodFactor& factor() const { return factor_; }
+
+ private:
+  CholmodFactor factor_;
+  Eigen::VectorXd residual_;  // scratch
+};
+
+}  // namespace hapsim::fem

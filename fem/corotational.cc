@@ -1,0 +1,73 @@
+#include "fem/corotational.h"
+
+#include "fem/polar_decomposition.h"
+
+namespace hapsim::fem {
+namespace {
+
+// Deformation gradient F = Σ_i x_i b_iᵀ of tet t.
+Eigen::Matrix3d CalcDeformationGradient(const Model& model, const Eigen::VectorXd& x_m, int t) {
+  Eigen::Matrix<double, 3, 4> x_local_m;
+  for (int a = 0; a < 4; ++a) x_local_m.col(a) = x_m.segment<3>(3 * model.mesh.tets(a, t));
+  return x_local_m * model.tet_rest[t].shape_gradients_1_m.transpose();
+}
+
+Eigen::Matrix3d CalcRotatedStrain(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R) {
+  const Eigen::Matrix3d H = R.transpose() * F - Eigen::Matrix3d::Identity();
+  return 0.5 * (H + H.transpose());
+}
+
+Eigen::Matrix3d CalcStress(const Eigen::Matrix3d& strain, double mu_Pa, double lambda_Pa) {
+  return 2.0 * mu_Pa * strain + lambda_Pa * strain.trace() * Eigen::Matrix3d::Identity();
+}
+
+}  // namespace
+
+void CalcElementRotations(const Model& model, const Eigen::VectorXd& x_m, ElasticityKind kind,
+                          std::vector<Eigen::Matrix3d>* rotations) {
+  rotations->resize(model.num_tets());
+  for (int t = 0; t < model.num_tets(); ++t) {
+    (*rotations)[t] = kind == ElasticityKind::kLinear
+                          ? Eigen::Matrix3d::Identity()
+                          : CalcRotationOfDeformation(CalcDeformationGradient(model, x_m, t));
+  }
+}
+
+void CalcElasticForce(const Model& model, const Eigen::VectorXd& x_m,
+                      const std::vector<Eigen::Matrix3d>& rotations, Eigen::VectorXd* force_N) {
+  const double mu_Pa = model.material.lame_mu_Pa();
+  const double lambda_Pa = model.material.lame_lambda_Pa();
+  force_N->setZero(model.num_dofs());
+  for (int t = 0; t < model.num_tets(); ++t) {
+    const TetRestData& rest = model.tet_rest[t];
+    const Eigen::Matrix3d& R = rotations[t];
+    const Eigen::Matrix3d F = CalcDeformationGradient(model, x_m, t);
+    const Eigen::Matrix3d sigma_Pa = CalcStress(CalcRotatedStrain(F, R), mu_Pa, lambda_Pa);
+    // Columns are f_0..f_3 = −V R σ b_i.
+    const Eigen::Matrix<double, 3, 4> f_local_N =
+        -rest.volume_m3 * (R * sigma_Pa) * rest.shape_gradients_1_m;
+    for (int a = 0; a < 4; ++a) force_N->segment<3>(3 * model.mesh.tets(a, t)) += f_local_N.col(a);
+  }
+}
+
+double CalcElasticEnergy(const Model& model, const Eigen::VectorXd& x_m,
+                         const std::vector<Eigen::Matrix3d>& rotations) {
+  const double mu_Pa = model.material.lame_mu_Pa();
+  const double lambda_Pa = model.material.lame_lambda_Pa();
+  double energy_J = 0.0;
+  for (int t = 0; t < model.num_tets(); ++t) {
+    const Eigen::Matrix3d strain =
+        CalcRotatedStrain(CalcDeformationGradient(model, x_m, t), rotations[t]);
+    energy_J += model.tet_rest[t].volume_m3 *
+                (mu_Pa * strain.squaredNorm() + 0.5 * lambda_Pa * strain.trace() * strain.trace());
+  }
+  return energy_J;
+}
+
+Eigen::Matrix3d CalcElementStress(const Model& model, const Eigen::VectorXd& x_m,
+                                  const Eigen::Matrix3d& rotation, int tet) {
+  return CalcStress(CalcRotatedStrain(CalcDeformationGradient(model, x_m, tet), rotation),
+                    model.material.lame_mu_Pa(), model.material.lame_lambda_Pa());
+}
+
+}  // namespace hapsim::fem

@@ -1,0 +1,142 @@
+#include "fem/lattice_mesher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace hapsim::fem {
+namespace {
+
+// Corner c of a unit cube has offsets (c & 1, (c >> 1) & 1, (c >> 2) & 1).
+// Even-parity corners {000, 110, 101, 011} = {0, 3, 5, 6}; odd-parity {100, 010, 001, 111} = {1, 2, 4, 7}.
+// Five-tet cut: the central tet on one parity class, and a corner tet at each corner of the other
+// class made of that corner and its three edge neighbours.
+constexpr int kCutEven[5][4] = {{0, 3, 5, 6}, {1, 0, 3, 5}, {2, 0, 3, 6}, {4, 0, 5, 6}, {7, 3, 5, 6}};
+constexpr int kCutOdd[5][4] = {{1, 2, 4, 7}, {0, 1, 2, 4}, {3, 1, 2, 7}, {5, 1, 4, 7}, {6, 2, 4, 7}};
+
+// Lattice nodes and the five tets of every cell, each tet oriented positively.
+TetMesh MakeLattice(const Eigen::Vector3d& min_m, const Eigen::Vector3d& cell_m,
+                    const Eigen::Vector3i& cells) {
+  const Eigen::Vector3i nodes = cells.array() + 1;
+  auto node_index = [&](int i, int j, int k) { return i + nodes.x() * (j + nodes.y() * k); };
+  TetMesh mesh;
+  mesh.rest_positions_m.resize(3, nodes.prod());
+  for (int k = 0; k < nodes.z(); ++k)
+    for (int j = 0; j < nodes.y(); ++j)
+      for (int i = 0; i < nodes.x(); ++i)
+        mesh.rest_positions_m.col(node_index(i, j, k)) =
+            min_m + Eigen::Vector3d(i, j, k).cwiseProduct(cell_m);
+  mesh.tets.resize(4, 5 * cells.prod());
+  int t = 0;
+  for (int k = 0; k < cells.z(); ++k)
+    for (int j = 0; j < cells.y(); ++j)
+      for (int i = 0; i < cells.x(); ++i) {
+        const auto& cut = ((i + j + k) % 2 == 0) ? kCutEven : kCutOdd;
+        for (const auto& corners : cut) {
+          Eigen::Vector4i tet;
+          for (int a = 0; a < 4; ++a) {
+            const int c = corners[a];
+            tet[a] = node_index(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+          }
+          if (CalcSignedVolume(mesh.rest_positions_m, tet) < 0.0) std::swap(tet[2], tet[3]);
+          mesh.tets.col(t++) = tet;
+        }
+      }
+  return mesh;
+}
+
+// Keeps only the listed tets and the nodes they use (renumbered in order).
+TetMesh KeepTets(const TetMesh& lattice, const std::vector<int>& kept_tets) {
+  std::vector<int> new_index(lattice.num_nodes(), -1);
+  int num_kept_nodes = 0;
+  for (int t : kept_tets)
+    for (int a = 0; a < 4; ++a)
+      if (new_index[lattice.tets(a, t)] < 0) new_index[lattice.tets(a, t)] = 0;
+  for (int& index : new_index)
+    if (index == 0) index = num_kept_nodes++;
+  TetMesh mesh;
+  mesh.rest_positions_m.resize(3, num_kept_nodes);
+  for (int n = 0; n < lattice.num_nodes(); ++n)
+    if (new_index[n] >= 0) mesh.rest_positions_m.col(new_index[n]) = lattice.rest_positions_m.col(n);
+  mesh.tets.resize(4, static_cast<Eigen::Index>(kept_tets.size()));
+  for (size_t i = 0; i < kept_tets.size(); ++i)
+    for (int a = 0; a < 4; ++a)
+      mesh.tets(a, static_cast<Eigen::Index>(i)) = new_index[lattice.tets(a, kept_tets[i])];
+  return mesh;
+}
+
+Eigen::Vector3d CalcGradient(const ImplicitFunction& phi, const Eigen::Vector3d& p_m, double h_m) {
+  Eigen::Vector3d gradient;
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d step = Eigen::Vector3d::Unit(axis) * h_m;
+    gradient[axis] = (phi(p_m + step) - phi(p_m - step)) / (2.0 * h_m);
+  }
+  return gradient;
+}
+
+// Moves each boundary node onto φ = 0 by one Newton step, p ← p − φ ∇φ / |∇φ|², unless the move
+// is longer than half a cell or would drop the quality of a tet it touches below `min_quality`.
+void SnapBoundaryNodes(const ImplicitFunction& phi, double cell_size_m, TetMesh* mesh) {
+  constexpr double kMinQuality = 0.05;  // a lattice tet has ≈ 0.6–0.8; keep well clear of slivers
+  const Matrix3Xi surface = ExtractBoundarySurface(*mesh);
+  std::vector<std::vector<int>> tets_of_node(mesh->num_nodes());
+  for (int t = 0; t < mesh->num_tets(); ++t)
+    for (int a = 0; a < 4; ++a) tets_of_node[mesh->tets(a, t)].push_back(t);
+  std::vector<bool> on_boundary(mesh->num_nodes(), false);
+  for (Eigen::Index f = 0; f < surface.cols(); ++f)
+    for (int a = 0; a < 3; ++a) on_boundary[surface(a, f)] = true;
+  for (int n = 0; n < mesh->num_nodes(); ++n) {
+    if (!on_boundary[n]) continue;
+    const Eigen::Vector3d p_m = mesh->rest_positions_m.col(n);
+    const Eigen::Vector3d gradient = CalcGradient(phi, p_m, 1e-3 * cell_size_m);
+    if (!(gradient.squaredNorm() > 0.0)) continue;
+    const Eigen::Vector3d move_m = -phi(p_m) * gradient / gradient.squaredNorm();
+    if (move_m.norm() > 0.5 * cell_size_m) continue;
+    mesh->rest_positions_m.col(n) = p_m + move_m;
+    const bool keeps_quality = std::all_of(tets_of_node[n].begin(), tets_of_node[n].end(), [&](int t) {
+      return CalcTetQuality(mesh->rest_positions_m, mesh->tets.col(t)) >= kMinQuality;
+    });
+    if (!keeps_quality) mesh->rest_positions_m.col(n) = p_m;
+  }
+}
+
+}  // namespace
+
+TetMesh MakeBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m,
+                       const Eigen::Vector3i& cells) {
+  if (!((max_m.array() > min_m.array()).all()))
+    throw std::invalid_argument("box max must exceed min on every axis");
+  if (!((cells.array() >= 1).all())) throw std::invalid_argument("box needs at least one cell per axis");
+  const Eigen::Vector3d cell_m = (max_m - min_m).cwiseQuotient(cells.cast<double>());
+  return MakeLattice(min_m, cell_m, cells);
+}
+
+TetMesh MakeImplicitTetMesh(const ImplicitFunction& phi, const Eigen::Vector3d& min_m,
+                            const Eigen::Vector3d& max_m, double cell_size_m) {
+  if (!(cell_size_m > 0.0)) throw std::invalid_argument("cell size must be positive");
+  if (!((max_m.array() > min_m.array()).all()))
+    throw std::invalid_argument("bounding box max must exceed min on every axis");
+  const Eigen::Vector3i cells =
+      ((max_m - min_m) / cell_size_m).array().ceil().cast<int>().max(1).matrix();
+  const TetMesh lattice = MakeLattice(min_m, Eigen::Vector3d::Constant(cell_size_m), cells);
+  std::vector<int> inside;
+  for (int t = 0; t < lattice.num_tets(); ++t) {
+    Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();
+    for (int a = 0; a < 4; ++a) centroid_m += 0.25 * lattice.rest_positions_m.col(lattice.tets(a, t));
+    if (phi(centroid_m) < 0.0) inside.push_back(t);
+  }
+  if (inside.empty()) throw std::invalid_argument("the implicit shape contains no lattice tet");
+  TetMesh mesh = KeepTets(lattice, inside);
+  SnapBoundaryNodes(phi, cell_size_m, &mesh);
+  return mesh;
+}
+
+ImplicitFunction MakeEllipsoidFunction(const Eigen::Vector3d& center_m,
+                                       const Eigen::Vector3d& radii_m) {
+  return [center_m, radii_m](const Eigen::Vector3d& p_m) {
+    return ((p_m - center_m).cwiseQuotient(radii_m).norm() - 1.0) * radii_m.minCoeff();
+  };
+}
+
+}  // namespace hapsim::fem

@@ -1,0 +1,32 @@
+#pragma once
+// Solvers for the SPD system of the implicit step, A Δv = Δt F̃ (DESIGN.md §2), chosen once per
+// scene through this small interface; the inner loops run on concrete types.
+
+#include <memory>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "fem/fem_options.h"
+
+namespace hapsim::fem {
+
+struct SolveReport {
+  int iterations = 0;              // CG iterations; 1 for a direct solve
+  double relative_residual = 0.0;  // ‖b − A x‖ / ‖b‖ (0 when b = 0)
+  bool converged = false;          // residual within tolerance (direct: factorisation succeeded)
+};
+
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+  // Solves A x = b for symmetric positive definite A (full storage). On entry *x is the initial
+  // guess (CG warm start; ignored by direct solvers). The sparsity pattern of A must stay the
+  // same between calls (it is analysed once).
+  virtual SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
+                            Eigen::VectorXd* x) = 0;
+};
+
+std::unique_ptr<LinearSolver> MakeLinearSolver(const SolverOptions& options);
+
+}  // namespace hapsim::fem

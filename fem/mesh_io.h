@@ -1,0 +1,136 @@
+#pragma once
+// Tetrahedral mesh files: readers for Gmsh MSH (ASCII 2.2 and 4.1) and TetGen (.node + .ele),
+// writers for those and for legacy VTK (ParaView). Units are taken as they stand: coordinates in
+// files are read and written as metres.
+//
+// Every reader is strict: malformed input throws hapsim::InputError naming the file, the 1-based
+// line where the problem was found (0 when the file cannot be opened), and, where it helps, the
+// section or field as key (e.g. "$Nodes", "node count"). Problems found at end of file are
+// reported at the file's last line, with the message naming the line the section started on.
+//
+// What every reader returns (the conventions callers may rely on):
+//   - Only linear 4-node tetrahedra are kept. Points, lines and surface elements are skipped;
+//     other volume elements (hexahedra, prisms, pyramids, higher-order tets) throw, since
+//     silently dropping them would leave holes in the body.
+//   - Node indices are compact 0..N-1 and cover only the nodes used by some tet, in the order in
+//     which those nodes appear in the file's node section (file tags/indices are not kept).
+//   - Every tet is positively oriented (CalcSignedVolume > 0). A file whose tets are all
+//     negatively oriented (another generator's convention) is flipped tet by tet (indices 2 and 3
+//     swapped). Mixed orientations throw at the first tet of the minority orientation (ties count
+//     the negative ones as inverted); a degenerate tet (|CalcTetQuality| <= kDegenerateTetQuality)
+//     throws at its line. So FindRestMeshProblem(result) is always nullopt.
+//
+// Writers write `path + ".tmp"` and rename it over `path` on success, so a reader never sees a
+// half-written file. They write doubles with 17 significant digits: read(write(mesh)) is exact.
+
+#include <array>
+#include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/eigen_types.h"
+#include "fem/tet_mesh.h"
+
+namespace hapsim::fem {
+
+// Reads a Gmsh MSH ASCII file, version 2.x (2.0–2.2) or 4.1, detected from $MeshFormat.
+// Unknown sections ($PhysicalNames, $Entities, $NodeData, ...) are skipped.
+// Throws InputError: file missing/unreadable (line 0); missing or unsupported $MeshFormat
+// (including 4.0 and binary files); counts that disagree with the entries; premature end of file;
+// non-numeric tokens; NaN/Inf coordinates; duplicate node tags; an element naming a missing node
+// tag; unsupported volume elements; no tetrahedra; degenerate or inverted tets.
+TetMesh ReadGmshMesh(const std::string& path);
+
+// Reads a TetGen mesh: `node_path` is the .node file, the .ele file, or the basename without
+// either extension; the companion file is found by swapping/appending the extension.
+// Node numbering starts at 0 or 1 (the first index in .node tells) and must be consecutive.
+// Attribute and boundary-marker columns are read and discarded; '#' starts a comment; blank lines
+// are ignored. Throws InputError for the same classes of problem as ReadGmshMesh, plus a
+// dimension other than 3 and 10-node (-o2) tets, with the file being the .node or .ele file at
+// fault.
+TetMesh ReadTetgenMesh(const std::string& node_path);
+
+// Reads a mesh by extension (case-insensitive): .msh -> ReadGmshMesh, .node/.ele ->
+// ReadTetgenMesh. Throws InputError (line 0) for any other extension, else what the reader throws.
+TetMesh ReadTetMesh(const std::string& path);
+
+// Writes `mesh` as Gmsh MSH ASCII, version 2.2 (version_major 2) or 4.1 (version_major 4), with
+// node tags 1..N and element tags 1..T, all tets in one volume entity (tag 1).
+// Throws InputError if version_major is neither 2 nor 4 or the file cannot be written.
+// Precondition: mesh indices are in range (checked, aborts otherwise).
+void WriteGmshMesh(const TetMesh& mesh, const std::string& path, int version_major);
+
+// Writes `basename`.node and `basename`.ele (1-based, no attributes or markers), tets in the
+// mesh's own (positive) orientation; TetGen's -r reorients tets itself on reading.
+// Throws InputError if a file cannot be written. Precondition as WriteGmshMesh.
+void WriteTetgenMesh(const TetMesh& mesh, const std::string& basename);
+
+// Writes a legacy VTK ASCII (version 3.0) UNSTRUCTURED_GRID: points `positions_m`
+// (3 x num_nodes, m), cells `tets` (4 x num_tets, VTK_TETRA = 10), and one VECTORS point-data
+// field per entry of `point_vectors` (name -> 3 x num_nodes matrix, e.g. "displacement_m").
+// Throws InputError if a field name is empty or contains whitespace (key = the name) or if the
+// file cannot be written. Preconditions (checked, abort otherwise): tet indices in range, every
+// field non-null with num_nodes columns.
+void WriteVtkTetMesh(const Matrix3Xd& positions_m, const Matrix4Xi& tets,
+                     const std::vector<std::pair<std::string, const Matrix3Xd*>>& point_vectors,
+                     const std::string& path);
+
+// ---------------------------------------------------------------------------------------------
+// Internal: shared by the readers (defined in tetgen_reader.cc); not part of the API.
+namespace internal {
+
+// Reads a text file line by line, keeping the 1-based number of the current line so errors can
+// point at it.
+class MeshTextReader {
+ public:
+  // Throws InputError(path, 0, ...) if the file is missing, a directory, or cannot be opened.
+  explicit MeshTextReader(const std::string& path);
+
+  // Reads the next line that has tokens into *tokens (whitespace-separated; with
+  // strip_comments, text from '#' on is dropped first). Returns false at end of file, leaving
+  // line_number() at the last line. Throws InputError on a read error.
+  bool NextTokens(std::vector<std::string>* tokens, bool strip_comments);
+
+  // Throws InputError(path(), line_number(), key, message).
+  [[noreturn]] void Fail(const std::string& key, const std::string& message) const;
+
+  // Parses an integer/real token of the current line; throws via Fail naming `what` if the token
+  // is not entirely a number. ParseReal also throws for NaN and Inf.
+  long long ParseInteger(const std::string& token, const std::string& key,
+                         const std::string& what) const;
+  double ParseReal(const std::string& token, const std::string& key, const std::string& what) const;
+
+  const std::string& path() const { return path_; }
+  int line_number() const { return line_number_; }
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  int line_number_ = 0;
+};
+
+// A node or tet as read from a file, with the tag/index the file gives it and the source line
+// of that tag (for a node of MSH 4.1, the line of its tag, not of its coordinates).
+struct RawNode {
+  long long tag;
+  Eigen::Vector3d p_m;
+  int line;
+};
+struct RawTet {
+  long long tag;                   // element tag/number, for messages
+  std::array<long long, 4> nodes;  // node tags as in the file
+  int line;
+};
+
+// Turns what a reader parsed into a TetMesh following the conventions at the top of this file:
+// resolves node tags (duplicate tag -> error in node_file, missing tag -> error in tet_file),
+// compacts nodes, checks for repeated nodes in a tet, degenerate and inverted tets, and flips an
+// all-negative mesh. `tets` must be non-empty. Errors are thrown at the entry's source line with
+// `node_key`/`tet_key` as key.
+TetMesh MakeCheckedTetMesh(const std::vector<RawNode>& nodes, const std::string& node_file,
+                           const std::string& node_key, const std::vector<RawTet>& tets,
+                           const std::string& tet_file, const std::string& tet_key);
+
+}  // namespace internal
+}  // namespace hapsim::fem

@@ -1,0 +1,51 @@
+#pragma once
+// fem::Model: everything about the deformable body that does not change while it moves (rest
+// mesh, material, fixed degrees of freedom, lumped masses, per-tet rest data). Built once by
+// MakeModel and then read-only; the moving part lives in fem::State.
+//
+// Degrees of freedom are node-major: dof 3n + a is axis a of node n. Positions and velocities
+// are stacked 3N vectors; Eigen::Map them as (3 x N) when a matrix view reads better.
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/eigen_types.h"
+#include "fem/material.h"
+#include "fem/tet_mesh.h"
+
+namespace hapsim::fem {
+
+// Rest data of one linear tet. With D_m = [X1−X0, X2−X0, X3−X0] (rest edges), the deformation
+// gradient is F = Σ_i x_i b_iᵀ, where b_1..3 are the rows of D_m⁻¹ and b_0 = −(b_1 + b_2 + b_3).
+struct TetRestData {
+  Eigen::Matrix<double, 3, 4> shape_gradients_1_m;  // columns b_0..b_3, 1/m
+  double volume_m3 = 0.0;                           // V > 0
+};
+
+struct Model {
+  TetMesh mesh;
+  Matrix3Xi surface_triangles;            // (3 x F) outward-oriented boundary faces
+  Material material;
+  std::vector<TetRestData> tet_rest;      // one per tet
+  Eigen::VectorXd node_mass_kg;           // (N) lumped mass: ρV/4 from each incident tet
+  Eigen::VectorXd dof_mass_kg;            // (3N) node_mass_kg repeated per axis
+  std::vector<std::uint8_t> dof_is_fixed; // (3N) 1 for a Dirichlet (fixed) dof
+  Eigen::VectorXd rest_positions_m;       // (3N) stacked rest positions X
+
+  int num_nodes() const { return mesh.num_nodes(); }
+  int num_dofs() const { return 3 * mesh.num_nodes(); }
+  int num_tets() const { return mesh.num_tets(); }
+  int num_fixed_nodes() const;
+};
+
+// Builds the model. `fixed_nodes` lists nodes whose three dofs are fixed.
+// Throws std::invalid_argument if the mesh fails FindRestMeshProblem or a node index is bad.
+Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& fixed_nodes);
+
+// Nodes whose rest position lies in the axis-aligned box [min_m − tol, max_m + tol].
+std::vector<int> FindNodesInBox(const TetMesh& mesh, const Eigen::Vector3d& min_m,
+                                const Eigen::Vector3d& max_m, double tolerance_m);
+
+}  // namespace hapsim::fem

@@ -1,0 +1,94 @@
+#include "fem/tet_mesh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <unordered_map>
+
+#include <Eigen/Geometry>
+
+namespace hapsim::fem {
+
+double CalcSignedVolume(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                        const Eigen::Vector3d& p2, const Eigen::Vector3d& p3) {
+  return (p1 - p0).dot((p2 - p0).cross(p3 - p0)) / 6.0;
+}
+
+double CalcSignedVolume(const Matrix3Xd& p_m, const Eigen::Vector4i& tet) {
+  return CalcSignedVolume(p_m.col(tet[0]), p_m.col(tet[1]), p_m.col(tet[2]), p_m.col(tet[3]));
+}
+
+double CalcTetQuality(const Matrix3Xd& p_m, const Eigen::Vector4i& tet) {
+  double sum_sq_m2 = 0.0;
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) sum_sq_m2 += (p_m.col(tet[a]) - p_m.col(tet[b])).squaredNorm();
+  const double rms_edge_m = std::sqrt(sum_sq_m2 / 6.0);
+  if (!(rms_edge_m > 0.0)) return 0.0;
+  // A regular tet of edge ℓ has V = ℓ³ / (6√2), hence the normalisation.
+  return 6.0 * std::sqrt(2.0) * CalcSignedVolume(p_m, tet) / (rms_edge_m * rms_edge_m * rms_edge_m);
+}
+
+std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet) {
+  const int num_nodes = mesh.num_nodes();
+  if (!mesh.rest_positions_m.allFinite()) return std::string("a node position is not finite");
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    if (bad_tet) *bad_tet = t;
+    const Eigen::Vector4i tet = mesh.tets.col(t);
+    for (int a = 0; a < 4; ++a) {
+      if (tet[a] < 0 || tet[a] >= num_nodes)
+        return "tet " + std::to_string(t) + " refers to node " + std::to_string(tet[a]) +
+               ", but the mesh has " + std::to_string(num_nodes) + " nodes";
+      for (int b = a + 1; b < 4; ++b)
+        if (tet[a] == tet[b])
+          return "tet " + std::to_string(t) + " uses node " + std::to_string(tet[a]) + " twice";
+    }
+    const double quality = CalcTetQuality(mesh.rest_positions_m, tet);
+    if (quality <= -kDegenerateTetQuality)
+      return "tet " + std::to_string(t) + " is inverted (negative volume " +
+             std::to_string(CalcSignedVolume(mesh.rest_positions_m, tet)) + " m^3)";
+    if (quality <= kDegenerateTetQuality)
+      return "tet " + std::to_string(t) + " is degenerate (zero volume)";
+  }
+  if (bad_tet) *bad_tet = -1;
+  return std::nullopt;
+}
+
+Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh) {
+  // For a positively oriented tet (a,b,c,d) these four faces have outward normals.
+  static constexpr int kOutwardFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  struct FaceRecord {
+    std::array<int, 3> oriented;
+    int count = 0;
+  };
+  struct KeyHash {
+    size_t operator()(const std::array<int, 3>& k) const {
+      return (static_cast<size_t>(k[0]) * 73856093u) ^ (static_cast<size_t>(k[1]) * 19349663u) ^
+             (static_cast<size_t>(k[2]) * 83492791u);
+    }
+  };
+  std::unordered_map<std::array<int, 3>, FaceRecord, KeyHash> faces;
+  faces.reserve(static_cast<size_t>(mesh.num_tets()) * 4);
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    for (const auto& f : kOutwardFaces) {
+      const std::array<int, 3> oriented = {mesh.tets(f[0], t), mesh.tets(f[1], t), mesh.tets(f[2], t)};
+      std::array<int, 3> key = oriented;
+      std::sort(key.begin(), key.end());
+      FaceRecord& record = faces[key];
+      record.oriented = oriented;
+      ++record.count;
+    }
+  }
+  // Deterministic output order: sort the boundary faces by their sorted key.
+  std::vector<std::array<int, 3>> keys;
+  for (const auto& [key, record] : faces)
+    if (record.count == 1) keys.push_back(key);
+  std::sort(keys.begin(), keys.end());
+  Matrix3Xi surface(3, static_cast<Eigen::Index>(keys.size()));
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const auto& o = faces[keys[i]].oriented;
+    surface.col(static_cast<Eigen::Index>(i)) << o[0], o[1], o[2];
+  }
+  return surface;
+}
+
+}  // namespace hapsim::fem

@@ -1,0 +1,45 @@
+#pragma once
+// A linear tetrahedral mesh: rest node positions and tetrahedra. Plain data, built by the lattice
+// mesher or read from Gmsh/TetGen files; fem::Model is built from it.
+
+#include <optional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "core/eigen_types.h"
+
+namespace hapsim::fem {
+
+struct TetMesh {
+  Matrix3Xd rest_positions_m;  // (3 x num_nodes) rest node positions, world frame, m
+  Matrix4Xi tets;              // (4 x num_tets) node indices; positively oriented: V > 0 below
+
+  int num_nodes() const { return static_cast<int>(rest_positions_m.cols()); }
+  int num_tets() const { return static_cast<int>(tets.cols()); }
+};
+
+// Signed volume V = (p1−p0)·((p2−p0)×(p3−p0)) / 6, m³. Positive for a right-handed tet.
+double CalcSignedVolume(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                        const Eigen::Vector3d& p2, const Eigen::Vector3d& p3);
+
+// Signed volume of tet t of `mesh` at positions `p_m` (3 x num_nodes).
+double CalcSignedVolume(const Matrix3Xd& p_m, const Eigen::Vector4i& tet);
+
+// Scale-free quality of a tet: 6√2 V / ℓ_rms³, 1 for a regular tet, ≤ 0 when inverted or flat.
+double CalcTetQuality(const Matrix3Xd& p_m, const Eigen::Vector4i& tet);
+
+// Tets whose quality is at most this are degenerate (flat to round-off, or a sliver no solver
+// can use). A lattice tet has quality ≈ 0.6–0.8; a mesh generator's worst slivers ≈ 1e-3.
+constexpr double kDegenerateTetQuality = 1e-6;
+
+// Describes the first problem that makes `mesh` unusable as a rest mesh (node index out of
+// range, a node used twice in one tet, a degenerate or inverted tet), or nullopt if none.
+// *bad_tet, if given, receives the index of the offending tet.
+std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet = nullptr);
+
+// Boundary faces (faces used by exactly one tet), each oriented so that its normal
+// (q1−q0)×(q2−q0) points out of the body. Returns (3 x num_faces) node indices.
+Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh);
+
+}  // namespace hapsim::fem

@@ -1,0 +1,118 @@
+#include "fem/time_stepper.h"
+
+#include <stdexcept>
+
+#include "core/stopwatch.h"
+#include "fem/cg_solver.h"
+#include "fem/corotational.h"
+
+namespace hapsim::fem {
+
+TimeStepper::TimeStepper(const Model& model, const FemOptions& options, double dt_s,
+                         Eigen::VectorXd external_force_N)
+    : model_(model),
+      options_(options),
+      dt_s_(dt_s),
+      external_force_N_(std::move(external_force_N)),
+      assembler_(model),
+      solver_(MakeLinearSolver(options.solver)),
+      system_(assembler_.MakeMatrix()) {
+  if (!(dt_s > 0.0)) throw std::invalid_argument("time step must be positive");
+  if (external_force_N_.size() != model.num_dofs())
+    throw std::invalid_argument("external force must have 3N entries");
+  for (int i = 0; i < model.num_dofs(); ++i)
+    if (model.dof_is_fixed[i]) fixed_dofs_.push_back(i);
+  for (Eigen::Index col = 0; col < system_.outerSize(); ++col)
+    for (int k = system_.outerIndexPtr()[col]; k < system_.outerIndexPtr()[col + 1]; ++k) {
+      const int row = system_.innerIndexPtr()[k];
+      if (row != col && (model.dof_is_fixed[row] || model.dof_is_fixed[col]))
+        fixed_offdiagonal_value_index_.push_back(k);
+    }
+  delta_v_m_s_.setZero(model.num_dofs());
+}
+
+StepStats TimeStepper::Step(State* state) {
+  return options_.integrator == IntegratorKind::kImplicitEuler ? StepImplicit(state)
+                                                               : StepExplicit(state);
+}
+
+void TimeStepper::ApplyFixedDofsToSystem() {
+  double* values = system_.valuePtr();
+  for (int k : fixed_offdiagonal_value_index_) values[k] = 0.0;
+  for (int i : fixed_dofs_) {
+    values[assembler_.diagonal_value_index()[i]] = 1.0;
+    rhs_[i] = 0.0;
+  }
+}
+
+StepStats TimeStepper::StepImplicit(State* state) {
+  const double h = dt_s_;
+  const double alpha = model_.material.rayleigh_alpha_1_s;
+  const double beta = model_.material.rayleigh_beta_s;
+  StepStats stats;
+  Stopwatch total, stage;
+
+  CalcElementRotations(model_, state->x_m, options_.elasticity, &rotations_);
+  stats.rotations_s = stage.Lap();
+
+  assembler_.Assemble(model_, rotations_, &system_);
+  CalcElasticForce(model_, state->x_m, rotations_, &elastic_force_N_);
+  MultiplySymmetric(system_, state->v_m_s, &stiffness_times_v_N_);
+  // Δt F̃ = Δt (f_ext + f_el − αM v − (β + Δt) K v)
+  rhs_ = h * (external_force_N_ + elastic_force_N_ -
+              alpha * model_.dof_mass_kg.cwiseProduct(state->v_m_s) - (beta + h) * stiffness_times_v_N_);
+  // A = (1 + Δt α) M + (Δt β + Δt²) K, in place over K.
+  Eigen::Map<Eigen::VectorXd>(system_.valuePtr(), system_.nonZeros()) *= h * beta + h * h;
+  for (int i = 0; i < model_.num_dofs(); ++i)
+    system_.valuePtr()[assembler_.diagonal_value_index()[i]] += (1.0 + h * alpha) * model_.dof_mass_kg[i];
+  ApplyFixedDofsToSystem();
+  stats.assembly_s = stage.Lap();
+
+  stats.solve = solver_->Solve(system_, rhs_, &delta_v_m_s_);  // warm start: previous Δv
+  stats.solve_s = stage.Lap();
+
+  state->v_m_s += delta_v_m_s_;
+  for (int i : fixed_dofs_) state->v_m_s[i] = 0.0;
+  state->x_m += h * state->v_m_s;
+  stats.total_s = total.Elapsed();
+  return stats;
+}
+
+StepStats TimeStepper::StepExplicit(State* state) {
+  const double h = dt_s_;
+  const double alpha = model_.material.rayleigh_alpha_1_s;
+  const double beta = model_.material.rayleigh_beta_s;
+  StepStats stats;
+  Stopwatch total, stage;
+
+  CalcElementRotations(model_, state->x_m, options_.elasticity, &rotations_);
+  stats.rotations_s = stage.Lap();
+
+  CalcElasticForce(model_, state->x_m, rotations_, &elastic_force_N_);
+  rhs_ = external_force_N_ + elastic_force_N_ - alpha * model_.dof_mass_kg.cwiseProduct(state->v_m_s);
+  if (beta > 0.0) {  // stiffness damping needs K v
+    assembler_.Assemble(model_, rotations_, &system_);
+    MultiplySymmetric(system_, state->v_m_s, &stiffness_times_v_N_);
+    rhs_ -= beta * stiffness_times_v_N_;
+  }
+  stats.assembly_s = stage.Lap();
+
+  state->v_m_s += h * rhs_.cwiseQuotient(model_.dof_mass_kg);
+  for (int i : fixed_dofs_) state->v_m_s[i] = 0.0;
+  state->x_m += h * state->v_m_s;
+  stats.solve.converged = true;
+  stats.total_s = total.Elapsed();
+  return stats;
+}
+
+Eigen::VectorXd CalcGravityForce(const Model& model, const Eigen::Vector3d& gravity_m_s2) {
+  Eigen::VectorXd force_N(model.num_dofs());
+  for (int n = 0; n < model.num_nodes(); ++n) force_N.segment<3>(3 * n) = model.node_mass_kg[n] * gravity_m_s2;
+  return force_N;
+}
+
+double CalcKineticEnergy(const Model& model, const State& state) {
+  return 0.5 * state.v_m_s.dot(model.dof_mass_kg.cwiseProduct(state.v_m_s));
+}
+
+}  // namespace hapsim::fem

@@ -1,0 +1,74 @@
+#pragma once
+// One time step of the deformable body (DESIGN.md §2). Reads the Model, updates the State; all
+// scratch lives in the stepper, so steps after the first allocate nothing of size N.
+//
+// Linearised implicit backward Euler (one linear solve per step; Baraff & Witkin 1998):
+//   A Δv = Δt F̃,   A = M + Δt D + Δt² K,   D = αM + βK,
+//   F̃ = f_ext + f_el(x) − D v − Δt K v,      then v ← v + Δv,  x ← x + Δt v,
+// with K the warped stiffness Σ R_e K_e R_eᵀ and f_el the corotational elastic force.
+// Symplectic (explicit) Euler, v ← v + Δt M⁻¹ (f_ext + f_el − D v), x ← x + Δt v, is kept only to
+// show where it fails: it is stable only for Δt below about 2/ω_max.
+// Fixed dofs keep v = 0: their rows and columns of A are replaced by the identity.
+
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include "fem/fem_options.h"
+#include "fem/linear_solver.h"
+#include "fem/model.h"
+#include "fem/state.h"
+#include "fem/stiffness_assembly.h"
+
+namespace hapsim::fem {
+
+// Wall time of each stage of one step, seconds, and what the solver reported.
+struct StepStats {
+  double rotations_s = 0.0;  // polar decompositions
+  double assembly_s = 0.0;   // elastic forces, warped stiffness, right-hand side
+  double solve_s = 0.0;      // linear solve
+  double total_s = 0.0;
+  SolveReport solve;
+};
+
+class TimeStepper {
+ public:
+  // `model` must outlive the stepper. external_force_N (3N) is constant (gravity, loads).
+  TimeStepper(const Model& model, const FemOptions& options, double dt_s,
+              Eigen::VectorXd external_force_N);
+
+  StepStats Step(State* state);
+
+  double dt_s() const { return dt_s_; }
+  const Eigen::VectorXd& external_force_N() const { return external_force_N_; }
+  // Element rotations of the last step (at the positions it started from).
+  const std::vector<Eigen::Matrix3d>& rotations() const { return rotations_; }
+
+ private:
+  StepStats StepImplicit(State* state);
+  StepStats StepExplicit(State* state);
+  void ApplyFixedDofsToSystem();
+
+  const Model& model_;
+  FemOptions options_;
+  double dt_s_;
+  Eigen::VectorXd external_force_N_;
+  StiffnessAssembler assembler_;
+  std::unique_ptr<LinearSolver> solver_;
+  std::vector<int> fixed_offdiagonal_value_index_;  // entries in a fixed row or column
+  std::vector<int> fixed_dofs_;
+  // Scratch.
+  std::vector<Eigen::Matrix3d> rotations_;
+  Eigen::SparseMatrix<double> system_;  // K, then A in place
+  Eigen::VectorXd elastic_force_N_, stiffness_times_v_N_, rhs_, delta_v_m_s_;
+};
+
+// Gravity on the lumped masses: f = m_n g for every node (3N, N).
+Eigen::VectorXd CalcGravityForce(const Model& model, const Eigen::Vector3d& gravity_m_s2);
+
+// Kinetic energy ½ vᵀ M v, J.
+double CalcKineticEnergy(const Model& model, const State& state);
+
+}  // namespace hapsim::fem

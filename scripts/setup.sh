@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs the Debian packages hapsim needs (skipping those already there; needs root or sudo
+# only when something is missing), then configures and builds into build/.
+# Usage: scripts/setup.sh [extra cmake -D options]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# Why each package: Eigen (linear algebra), SuiteSparse (CHOLMOD sparse Cholesky), OpenBLAS
+# serial (CHOLMOD's supernodal kernels; about 2x faster than the reference BLAS, single-threaded
+# so benchmarks measure one core), yaml-cpp (scenes), CLI11 (command line), GoogleTest and
+# Google Benchmark (tests, benchmarks), matplotlib (charts).
+packages=(
+  build-essential cmake pkg-config
+  libeigen3-dev libsuitesparse-dev libopenblas0-serial
+  libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev
+  python3 python3-matplotlib
+)
+
+missing=()
+for package in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
+    missing+=("$package")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo_cmd=()
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "setup: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+    sudo_cmd=(sudo)
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -qq
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+cmake --build build -j2

@@ -1,0 +1,433 @@
+#include "fem/mesh_io.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+
+namespace hapsim::fem {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A 2 x 1 x 1 box of two cubes of edge h, each cut into 5 tets (a central tet on one parity of
+// corners and four corner tets); the cubes alternate parity so the shared face is conforming.
+// The origin and h are not round in binary, so round trips test all 17 digits.
+TetMesh MakeTwoCubeMesh() {
+  const double h = 0.1;
+  const Eigen::Vector3d origin(1.0 / 3.0, -2.0 / 7.0, 1e-3);
+  TetMesh mesh;
+  mesh.rest_positions_m.resize(3, 12);
+  auto node = [](int i, int j, int k) { return i + 3 * (j + 2 * k); };
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 3; ++i)
+        mesh.rest_positions_m.col(node(i, j, k)) = origin + h * Eigen::Vector3d(i, j, k);
+  std::vector<Eigen::Vector4i> tets;
+  for (int cube = 0; cube < 2; ++cube) {
+    auto c = [&](int bits) { return node(cube + (bits & 1), (bits >> 1) & 1, (bits >> 2) & 1); };
+    const bool even = cube % 2 == 0;  // parity of the central tet's corners
+    const int central[4] = {even ? 0 : 1, even ? 3 : 2, even ? 5 : 4, even ? 6 : 7};
+    tets.emplace_back(c(central[0]), c(central[1]), c(central[2]), c(central[3]));
+    for (int corner = 0; corner < 8; ++corner) {
+      const bool corner_even = ((corner & 1) + ((corner >> 1) & 1) + (corner >> 2)) % 2 == 0;
+      if (corner_even == even) continue;
+      tets.emplace_back(c(corner), c(corner ^ 1), c(corner ^ 2), c(corner ^ 4));
+    }
+  }
+  mesh.tets.resize(4, static_cast<Eigen::Index>(tets.size()));
+  for (size_t t = 0; t < tets.size(); ++t) {
+    Eigen::Vector4i tet = tets[t];
+    if (CalcSignedVolume(mesh.rest_positions_m, tet) < 0) std::swap(tet[2], tet[3]);
+    mesh.tets.col(static_cast<Eigen::Index>(t)) = tet;
+  }
+  return mesh;
+}
+
+// 1-based number of the first line of `text` containing `needle` (0 if none), so expected error
+// lines are stated by content rather than by counting.
+int LineOf(const std::string& text, const std::string& needle) {
+  std::istringstream lines(text);
+  int number = 0;
+  for (std::string line; std::getline(lines, line);) {
+    ++number;
+    if (line.find(needle) != std::string::npos) return number;
+  }
+  return 0;
+}
+
+int NumLines(const std::string& text) {
+  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+}
+
+// Returns `text` with the first occurrence of `from` replaced by `to` (which must exist).
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+class MeshIoTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::path(::testing::TempDir()) /
+           ("hapsim_mesh_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string PathOf(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Write(const std::string& name, const std::string& text) const {
+    std::ofstream(PathOf(name)) << text;
+    return PathOf(name);
+  }
+
+  fs::path dir_;
+};
+
+void ExpectSameMesh(const TetMesh& expected, const TetMesh& actual) {
+  ASSERT_EQ(expected.num_nodes(), actual.num_nodes());
+  ASSERT_EQ(expected.num_tets(), actual.num_tets());
+  EXPECT_TRUE((expected.rest_positions_m.array() == actual.rest_positions_m.array()).all())
+      << "positions differ (bit-exact comparison)";
+  EXPECT_TRUE(expected.tets == actual.tets);
+}
+
+TEST_F(MeshIoTest, TwoCubeMeshIsValid) {
+  const TetMesh mesh = MakeTwoCubeMesh();
+  EXPECT_EQ(mesh.num_tets(), 10);
+  EXPECT_FALSE(FindRestMeshProblem(mesh).has_value());
+  double volume_m3 = 0;
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    volume_m3 += CalcSignedVolume(mesh.rest_positions_m, mesh.tets.col(t));
+  EXPECT_NEAR(volume_m3, 2e-3, 1e-15);                 // two cubes of 0.1 m; round-off only
+  EXPECT_EQ(ExtractBoundarySurface(mesh).cols(), 20);  // 10 quads, 2 triangles each: conforming
+}
+
+TEST_F(MeshIoTest, RoundTripsAreExact) {
+  const TetMesh mesh = MakeTwoCubeMesh();
+  WriteGmshMesh(mesh, PathOf("v2.msh"), 2);
+  WriteGmshMesh(mesh, PathOf("v4.msh"), 4);
+  WriteTetgenMesh(mesh, PathOf("box"));
+  EXPECT_NE(ReadText(PathOf("v2.msh")).find("\n2.2 0 8\n"), std::string::npos);
+  EXPECT_NE(ReadText(PathOf("v4.msh")).find("\n4.1 0 8\n"), std::string::npos);
+  ExpectSameMesh(mesh, ReadGmshMesh(PathOf("v2.msh")));
+  ExpectSameMesh(mesh, ReadGmshMesh(PathOf("v4.msh")));
+  ExpectSameMesh(mesh, ReadTetgenMesh(PathOf("box.node")));
+  ExpectSameMesh(mesh, ReadTetgenMesh(PathOf("box.ele")));
+  ExpectSameMesh(mesh, ReadTetgenMesh(PathOf("box")));
+  ExpectSameMesh(mesh, ReadTetMesh(PathOf("v4.msh")));
+  ExpectSameMesh(mesh, ReadTetMesh(PathOf("box.ele")));
+  EXPECT_FALSE(fs::exists(PathOf("v2.msh.tmp")));  // renamed, not left behind
+}
+
+TEST_F(MeshIoTest, WriterReportsUnopenableFileAndBadVersion) {
+  const TetMesh mesh = MakeTwoCubeMesh();
+  const std::string bad_path = PathOf("no_such_dir/out.msh");
+  try {
+    WriteGmshMesh(mesh, bad_path, 2);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), bad_path);
+    EXPECT_EQ(e.line(), 0);
+  }
+  EXPECT_THROW(WriteGmshMesh(mesh, PathOf("out.msh"), 3), InputError);
+  EXPECT_FALSE(fs::exists(PathOf("out.msh")));
+}
+
+// Gmsh 4.1 with entities, physical names, non-contiguous tags listed out of order, an unused
+// point node, and point, line, triangle and tet elements.
+constexpr char kGmsh41Mixed[] = R"($MeshFormat
+4.1 0 8
+$EndMeshFormat
+$PhysicalNames
+1
+3 7 "tissue"
+$EndPhysicalNames
+$Entities
+1 1 1 1
+1 5 0 0 0
+2 0 0 0 1 0 0 0 2 1 -1
+3 0 0 0 1 1 0 0 3 2 -1 1
+4 0 0 -1 1 1 1 1 7 1 3
+$EndEntities
+$Nodes
+3 6 10 99
+0 1 0 1
+99
+5 0 0
+2 3 0 3
+30
+10
+20
+0 1 0
+0 0 0
+1 0 0
+3 4 0 2
+40
+50
+0 0 1
+0 0 -1
+$EndNodes
+$Elements
+4 6 1 6
+0 1 15 1
+1 99
+1 2 1 1
+2 10 20
+2 3 2 2
+3 10 20 30
+4 10 30 20
+3 4 4 2
+5 10 20 30 40
+6 10 30 20 50
+$EndElements
+)";
+
+TEST_F(MeshIoTest, ReadsGmsh41WithEntitiesSparseTagsAndMixedElements) {
+  const TetMesh mesh = ReadGmshMesh(Write("mixed.msh", kGmsh41Mixed));
+  ASSERT_EQ(mesh.num_nodes(), 5);  // node 99 is used by no tet
+  ASSERT_EQ(mesh.num_tets(), 2);
+  // Compact indices in node-section order: 30 -> 0, 10 -> 1, 20 -> 2, 40 -> 3, 50 -> 4.
+  Matrix3Xd expected_p(3, 5);
+  expected_p << 0, 0, 1, 0, 0,  //
+      1, 0, 0, 0, 0,            //
+      0, 0, 0, 1, -1;
+  EXPECT_TRUE(mesh.rest_positions_m == expected_p);
+  Matrix4Xi expected_tets(4, 2);
+  expected_tets << 1, 1,  //
+      2, 0,               //
+      0, 2,               //
+      3, 4;
+  EXPECT_TRUE(mesh.tets == expected_tets);
+}
+
+constexpr char kGmsh22[] = R"($MeshFormat
+2.2 0 8
+$EndMeshFormat
+$Nodes
+5
+3 0 0 0
+7 1 0 0
+8 0 1 0
+9 0 0 1
+12 0 0 -1
+$EndNodes
+$Elements
+4
+1 2 2 0 1 3 7 8
+2 15 2 0 1 3
+3 4 2 7 1 3 7 8 9
+4 4 2 7 1 3 8 7 12
+$EndElements
+)";
+
+TEST_F(MeshIoTest, ReadsGmsh22WithSparseTagsAndMixedElements) {
+  const TetMesh mesh = ReadGmshMesh(Write("v2.msh", kGmsh22));
+  EXPECT_EQ(mesh.num_nodes(), 5);
+  EXPECT_EQ(mesh.num_tets(), 2);
+  EXPECT_TRUE(mesh.tets.col(1) == Eigen::Vector4i(0, 2, 1, 4));
+  // Windows line ends read the same.
+  std::string crlf;
+  for (const char c : std::string(kGmsh22))
+    crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  ExpectSameMesh(mesh, ReadGmshMesh(Write("crlf.msh", crlf)));
+}
+
+TEST_F(MeshIoTest, AllNegativeFileIsFlippedToPositive) {
+  // Both tets of kGmsh22 with two nodes swapped: every tet is negatively oriented.
+  std::string text = Replace(kGmsh22, "1 3 7 8 9", "1 3 8 7 9");
+  text = Replace(text, "1 3 8 7 12", "1 3 7 8 12");
+  const TetMesh mesh = ReadGmshMesh(Write("negative.msh", text));
+  EXPECT_FALSE(FindRestMeshProblem(mesh).has_value());
+  EXPECT_TRUE(mesh.tets.col(0) == Eigen::Vector4i(0, 2, 3, 1));  // indices 2 and 3 swapped
+}
+
+// TetGen, 1-based, with 2 attributes and a boundary marker per point, a region attribute per
+// tet, comments and blank lines; its tets are negatively oriented (flipped on reading).
+constexpr char kTetgenNode[] = R"(# five points
+5  3  2  1
+
+1   0 0 0    0.5 7   1
+2   1 0 0    0.5 7   1  # a trailing comment
+3   0 1 0    0.5 7   0
+4   0 0 1    0.5 7   1
+5   0 0 -1   0.5 7   1
+)";
+constexpr char kTetgenEle[] = R"(2  4  1
+# index, nodes, region
+1   1 3 2 4   -1
+2   1 2 3 5   2.5
+)";
+
+TEST_F(MeshIoTest, ReadsTetgenOneBasedWithAttributesAndMarkers) {
+  Write("t.node", kTetgenNode);
+  Write("t.ele", kTetgenEle);
+  const TetMesh mesh = ReadTetgenMesh(PathOf("t"));
+  EXPECT_EQ(mesh.num_nodes(), 5);
+  ASSERT_EQ(mesh.num_tets(), 2);
+  EXPECT_TRUE(mesh.tets.col(0) == Eigen::Vector4i(0, 2, 3, 1));
+  EXPECT_TRUE(mesh.tets.col(1) == Eigen::Vector4i(0, 1, 4, 2));
+  EXPECT_TRUE(mesh.rest_positions_m.col(4) == Eigen::Vector3d(0, 0, -1));
+  // The same mesh 0-based.
+  Write("z.node", "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 0 0 -1\n");
+  Write("z.ele", "2 4 0\n0 0 2 1 3\n1 0 1 2 4\n");
+  EXPECT_TRUE(ReadTetMesh(PathOf("z.node")).tets == mesh.tets);
+}
+
+struct MalformedCase {
+  const char* name;
+  std::string text;
+  int expected_line;
+  const char* expected_key;     // nullptr: not checked
+  const char* message_excerpt;  // must appear in what()
+};
+
+void ExpectInputError(const std::string& path, const MalformedCase& c) {
+  SCOPED_TRACE(c.name);
+  try {
+    ReadTetMesh(path);
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), c.expected_line) << e.what();
+    if (c.expected_key) {
+      EXPECT_EQ(e.key(), c.expected_key) << e.what();
+    }
+    EXPECT_NE(std::string(e.what()).find(c.message_excerpt), std::string::npos) << e.what();
+    EXPECT_EQ(e.file(), path);
+  }
+}
+
+TEST_F(MeshIoTest, MalformedGmshReportsTheLine) {
+  const std::string base = kGmsh22;
+  const std::string v41 = kGmsh41Mixed;
+  auto R = [](const std::string& text, const char* from, const char* to) {
+    return Replace(text, from, to);
+  };
+  const std::string short_count = R(base, "$Nodes\n5", "$Nodes\n6");
+  const std::string long_count = R(base, "$Nodes\n5", "$Nodes\n4");
+  const std::string truncated = base.substr(0, base.find("4 4 2 7"));
+  const std::string no_tets =
+      R(R(base, "3 4 2 7", "3 2 2 7"), "4 4 2 7 1 3 8 7 12", "4 15 2 0 1 3");
+  const std::string hexes = R(v41, "3 4 4 2", "3 4 5 2");
+  const std::string mixed = R(base, "1 3 8 7 12", "1 3 7 8 12");  // 1 positive, 1 negative
+  const std::string flat = R(base, "12 0 0 -1", "12 1 1 0");      // coplanar with 3 7 8
+  const std::vector<MalformedCase> cases = {
+      {"version 3", R(base, "2.2 0 8", "3.0 0 8"), 2, "$MeshFormat", "unsupported MSH version"},
+      {"version 4.0", R(base, "2.2 0 8", "4 0 8"), 2, "$MeshFormat", "4.0 is not supported"},
+      {"binary", R(base, "2.2 0 8", "2.2 1 8"), 2, "$MeshFormat", "binary"},
+      {"not msh", "solid cube\nendsolid\n", 1, "$MeshFormat", "not a Gmsh MSH file"},
+      {"empty", "", 0, "$MeshFormat", "empty"},
+      {"count too large", short_count, LineOf(base, "$EndNodes"), "$Nodes", "fewer entries"},
+      {"count too small", long_count, LineOf(base, "12 0 0 -1"), "$Nodes", "more entries"},
+      {"premature eof", truncated, NumLines(truncated), "$Elements", "end of file"},
+      {"non-numeric", R(base, "7 1 0 0", "7 1 zero 0"), LineOf(base, "7 1 0 0"), "$Nodes",
+       "'zero'"},
+      {"nan", R(base, "8 0 1 0", "8 0 nan 0"), LineOf(base, "8 0 1 0"), "$Nodes", "not finite"},
+      {"inf", R(base, "9 0 0 1", "9 0 0 -inf"), LineOf(base, "9 0 0 1"), "$Nodes", "not finite"},
+      {"missing node tag", R(base, "1 3 8 7 12", "1 3 8 7 13"), LineOf(base, "1 3 8 7 12"),
+       "$Elements", "node 13"},
+      {"duplicate node tag", R(base, "12 0 0 -1", "8 0 0 -1"), LineOf(base, "12 0 0 -1"), "$Nodes",
+       "duplicate node tag 8"},
+      {"no tetrahedra", no_tets, LineOf(base, "$Elements"), "$Elements", "no 4-node tetrahedra"},
+      {"hexahedra", hexes, LineOf(v41, "3 4 4 2"), "$Elements", "8-node hexahedron"},
+      {"short tet line", R(base, "1 3 7 8 9", "1 3 7 8"), LineOf(base, "1 3 7 8 9"), "$Elements",
+       "expected 9 values"},
+      {"block total", R(v41, "3 6 10 99", "3 7 10 99"), LineOf(v41, "$EndNodes"), "$Nodes",
+       "the blocks hold 6 entries"},
+      {"duplicate 4.1 tag", R(v41, "\n50\n", "\n20\n"), LineOf(v41, "40") + 1, "$Nodes",
+       "duplicate node tag 20"},
+      {"unterminated section", R(v41, "$EndPhysicalNames", ""), LineOf(v41, "$Entities"),
+       "$PhysicalNames", "missing $EndPhysicalNames"},
+      {"inverted tet", mixed, LineOf(base, "4 4 2 7"), "$Elements", "tetrahedron 4 is inverted"},
+      {"degenerate tet", flat, LineOf(base, "4 4 2 7"), "$Elements", "degenerate"},
+  };
+  for (size_t i = 0; i < cases.size(); ++i)
+    ExpectInputError(Write("bad" + std::to_string(i) + ".msh", cases[i].text), cases[i]);
+}
+
+TEST_F(MeshIoTest, InvertedMinorityIsReportedEvenWhenPositiveIsTheMinority) {
+  // Three tets: two negative (the file's convention), one positive: the positive one is wrong.
+  std::string text = Replace(kGmsh22, "$Elements\n4", "$Elements\n5");
+  text = Replace(text, "1 3 7 8 9", "1 3 8 7 9");
+  text = Replace(text, "$EndElements", "5 4 2 7 1 3 7 9 8\n$EndElements");
+  ExpectInputError(Write("minority.msh", text),
+                   {"positive minority", "", LineOf(text, "4 4 2 7"), "$Elements", "inverted"});
+}
+
+TEST_F(MeshIoTest, MalformedTetgenReportsTheLine) {
+  const std::string node = kTetgenNode;
+  const std::string ele = kTetgenEle;
+  auto check = [&](const MalformedCase& c, const std::string& node_text,
+                   const std::string& ele_text, const std::string& file) {
+    Write("m.node", node_text);
+    Write("m.ele", ele_text);
+    ExpectInputError(PathOf(file), c);
+  };
+  check({"gap in numbering", "", LineOf(node, "4   0 0 1"), "point", "consecutively"},
+        Replace(node, "4   0 0 1", "6   0 0 1"), ele, "m.node");
+  check({"missing column", "", LineOf(node, "3   0 1 0"), "point", "expected 7 values"},
+        Replace(node, "0.5 7   0", "0.5 7"), ele, "m.node");
+  check({"eof", "", NumLines(node), "point count", "end of file"},
+        Replace(node, "5  3  2  1", "6  3  2  1"), ele, "m.node");
+  check({"extra point", "", LineOf(node, "5   0 0 -1"), "point count", "more points"},
+        Replace(node, "5  3  2  1", "4  3  2  1"), ele, "m.node");
+  check({"2d", "", LineOf(node, "5  3  2  1"), "dimension", "must be 3"},
+        Replace(node, "5  3  2  1", "5  2  2  1"), ele, "m.node");
+  check({"bad node ref", "", LineOf(ele, "2   1 2 3 5"), "tetrahedron", "node 6"}, node,
+        Replace(ele, "2   1 2 3 5", "2   1 2 3 6"), "m.ele");
+  check({"quadratic", "", 1, "nodes per tetrahedron", "10-node"}, node,
+        Replace(ele, "2  4  1", "2  10  1"), "m.ele");
+  check({"bad token", "", LineOf(ele, "1   1 3 2 4"), "tetrahedron", "'x'"}, node,
+        Replace(ele, "1   1 3 2 4", "1   1 3 x 4"), "m.ele");
+  // The .ele is missing: the error names it, at line 0.
+  fs::remove(PathOf("m.ele"));
+  try {
+    ReadTetgenMesh(PathOf("m.node"));
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), PathOf("m.ele"));
+    EXPECT_EQ(e.line(), 0);
+  }
+}
+
+TEST_F(MeshIoTest, MissingFileAndUnknownExtensionAreLineZero) {
+  ExpectInputError(PathOf("absent.msh"), {"missing", "", 0, nullptr, "file not found"});
+  ExpectInputError(Write("cube.stl", "solid\n"), {"extension", "", 0, nullptr, "extension"});
+}
+
+TEST_F(MeshIoTest, VtkHasHeaderCountsAndFields) {
+  const TetMesh mesh = MakeTwoCubeMesh();
+  const Matrix3Xd displacement_m = Matrix3Xd::Constant(3, mesh.num_nodes(), 1e-3);
+  WriteVtkTetMesh(mesh.rest_positions_m, mesh.tets, {{"displacement_m", &displacement_m}},
+                  PathOf("out.vtk"));
+  const std::string text = ReadText(PathOf("out.vtk"));
+  EXPECT_EQ(text.rfind("# vtk DataFile Version 3.0\n", 0), 0u);
+  for (const char* expected :
+       {"\nASCII\n", "\nDATASET UNSTRUCTURED_GRID\n", "\nPOINTS 12 double\n", "\nCELLS 10 50\n",
+        "\nCELL_TYPES 10\n", "\nPOINT_DATA 12\n", "\nVECTORS displacement_m double\n"})
+    EXPECT_NE(text.find(expected), std::string::npos) << expected;
+  EXPECT_EQ(NumLines(text), 5 + 12 + 1 + 10 + 1 + 10 + 2 + 12);
+  EXPECT_THROW(WriteVtkTetMesh(mesh.rest_positions_m, mesh.tets, {{"bad name", &displacement_m}},
+                               PathOf("bad.vtk")),
+               InputError);
+}
+
+}  // namespace
+}  // namespace hapsim::fem
