@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "fem/mesh_io.h"
+#include "fem/mesh_text_reader.h"
 
 namespace hapsim::fem {
 namespace {

@@ -45,6 +45,7 @@ class TimeStepper {
   const Eigen::VectorXd& external_force_N() const { return external_force_N_; }
   // Element rotations of the last step (at the positions it started from).
   const std::vector<Eigen::Matrix3d>& rotations() const { return rotations_; }
+  const LinearSolver* solver() const { return solver_.get(); }
 
  private:
   StepStats StepImplicit(State* state);

@@ -1,0 +1,66 @@
+#include "config/body_builder.h"
+
+#include <stdexcept>
+
+#include "core/error.h"
+#include "fem/lattice_mesher.h"
+#include "fem/mesh_io.h"
+#include "fem/time_stepper.h"
+
+namespace hapsim::config {
+namespace {
+
+// Rest positions within this distance of a box face count as inside (round-off in lattices).
+constexpr double kBoxTolerance_m = 1e-9;
+
+[[noreturn]] void Fail(const SourceLocation& where, const std::string& message) {
+  throw InputError(where.file, where.line, where.key, message);
+}
+
+fem::TetMesh MakeMesh(const MeshSource& source) {
+  try {
+    switch (source.kind) {
+      case MeshSource::Kind::kBox:
+        return fem::MakeBoxTetMesh(source.box.min_m, source.box.max_m, source.cells);
+      case MeshSource::Kind::kEllipsoid:
+        return fem::MakeImplicitTetMesh(fem::MakeEllipsoidFunction(source.center_m, source.radii_m),
+                                        source.center_m - 1.05 * source.radii_m,
+                                        source.center_m + 1.05 * source.radii_m, source.cell_size_m);
+      case MeshSource::Kind::kFile:
+        return fem::ReadTetMesh(source.file);  // its own errors name the mesh file and line
+    }
+  } catch (const std::invalid_argument& error) {
+    Fail(source.location, error.what());
+  }
+  Fail(source.location, "unknown mesh source");
+}
+
+}  // namespace
+
+Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
+  fem::TetMesh mesh = MakeMesh(scene.mesh);
+  std::vector<int> fixed_nodes;
+  if (scene.fixed) {
+    fixed_nodes = fem::FindNodesInBox(mesh, scene.fixed->min_m, scene.fixed->max_m, kBoxTolerance_m);
+    if (fixed_nodes.empty())
+      Fail(scene.fixed_location, "the fixed box holds no node of the mesh (" +
+                                     std::to_string(mesh.num_nodes()) + " nodes)");
+  }
+  Body body;
+  body.model = fem::MakeModel(std::move(mesh), scene.material, fixed_nodes);
+  body.external_force_N = fem::CalcGravityForce(body.model, gravity_m_s2);
+  for (const NodalLoad& load : scene.loads) {
+    const std::vector<int> nodes =
+        fem::FindNodesInBox(body.model.mesh, load.region.min_m, load.region.max_m, kBoxTolerance_m);
+    if (nodes.empty()) Fail(load.location, "the load box holds no node of the mesh");
+    for (int n : nodes) body.external_force_N.segment<3>(3 * n) += load.total_force_N / nodes.size();
+  }
+  for (const Probe& probe : scene.probes) {
+    const std::optional<fem::ProbeBinding> binding = fem::BindProbe(body.model, probe.position_m);
+    if (!binding) Fail(probe.location, "probe '" + probe.name + "' lies outside the body");
+    body.probes.push_back({probe.name, *binding});
+  }
+  return body;
+}
+
+}  // namespace hapsim::config

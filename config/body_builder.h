@@ -1,0 +1,31 @@
+#pragma once
+// Turns the `body` section of a scene into a ready fem::Model, its constant external force and
+// its probes. Checks that need the mesh (an empty fixed set, a probe outside the body, a load
+// box holding no node) throw InputError at the scene line of the offending key.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "config/scene.h"
+#include "fem/model.h"
+#include "fem/probe.h"
+
+namespace hapsim::config {
+
+struct BoundProbe {
+  std::string name;
+  fem::ProbeBinding binding;
+};
+
+struct Body {
+  fem::Model model;
+  Eigen::VectorXd external_force_N;  // (3N) gravity on lumped masses + nodal loads
+  std::vector<BoundProbe> probes;
+};
+
+// Builds the mesh (lattice, cut lattice or file), the model, the loads and the probes.
+Body MakeBody(const BodyScene& body, const Eigen::Vector3d& gravity_m_s2);
+
+}  // namespace hapsim::config
