@@ -26,7 +26,7 @@
 //     elasticity: corotational         # corotational | linear, default corotational
 //     integrator: implicit             # implicit | explicit, default implicit
 //     solver: {type: cg, preconditioner: lagged_cholesky, relative_tolerance: 1.0e-6,
-//              max_iterations: 1000, refactor_after_iterations: 8}
+//              max_iterations: 1000, refactor_budget_iterations: 50}
 //                                      # type cg | cholmod (default cg); preconditioner
 //                                      # lagged_cholesky | block_jacobi; tol in (0, 1); iters ≥ 1
 //     fixed: {min_m: [..], max_m: [..]}   # optional: nodes inside this box are fixed

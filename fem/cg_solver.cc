@@ -1,5 +1,6 @@
 #include "fem/cg_solver.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Dense>
@@ -21,10 +22,12 @@ void MultiplySymmetric(const Eigen::SparseMatrix<double>& A, const Eigen::Vector
 
 void ConjugateGradientSolver::PreparePreconditioner(const Eigen::SparseMatrix<double>& A) {
   if (options_.preconditioner == PreconditionerKind::kLaggedCholesky) {
-    const bool stale = !factor_.is_factored() || last_iterations_ > options_.refactor_after_iterations;
-    if (stale) {
+    factored_this_solve_ =
+        !factor_.is_factored() || excess_iterations_ >= options_.refactor_budget_iterations;
+    if (factored_this_solve_) {
       ++num_factorizations_;
       factor_.Factorize(A);
+      excess_iterations_ = 0;
     }
     use_factor_ = factor_.is_factored();
     if (use_factor_) return;
@@ -82,7 +85,8 @@ SolveReport ConjugateGradientSolver::Solve(const Eigen::SparseMatrix<double>& A,
     r_norm = r_.norm();
     ++report.iterations;
   }
-  last_iterations_ = report.iterations;
+  if (factored_this_solve_) baseline_iterations_ = report.iterations;
+  excess_iterations_ += std::max(0, report.iterations - baseline_iterations_);
   report.relative_residual = r_norm / b_norm;
   report.converged = r_norm <= target;
   return report;

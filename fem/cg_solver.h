@@ -26,7 +26,9 @@ class ConjugateGradientSolver final : public LinearSolver {
 
   SolverOptions options_;
   bool use_factor_ = false;
-  int last_iterations_ = 0;
+  bool factored_this_solve_ = false;
+  int baseline_iterations_ = 0;  // iterations of the first solve after the last factorisation
+  int excess_iterations_ = 0;    // Σ (iterations − baseline) since then
   int num_factorizations_ = 0;
   CholmodFactor factor_;
   std::vector<Eigen::Matrix3d> block_inverse_;  // block Jacobi: one per node

@@ -14,10 +14,11 @@ enum class IntegratorKind { kImplicitEuler, kExplicitEuler };
 // Linear solver for the implicit step.
 enum class SolverKind { kConjugateGradient, kCholmod };
 
-// Preconditioner for CG. kLaggedCholesky keeps a CHOLMOD factor of an earlier system matrix and
-// refactors only when CG needed more than `refactor_after_iterations` iterations with it (the
-// lazy-update idea of Hecht et al. 2012): the warped stiffness changes slowly, so an old factor
-// is a near-exact inverse for many steps. kBlockJacobi inverts each node's 3×3 diagonal block.
+// Preconditioner for CG. kLaggedCholesky keeps a CHOLMOD factor of an earlier system matrix (the
+// lazy-update idea of Hecht et al. 2012): the warped stiffness changes slowly, so an old factor is
+// a near-exact inverse for many steps. It refactors when the iterations spent beyond those of the
+// first solve after the last factorisation add up to `refactor_budget_iterations`, i.e. when the
+// stale factor has cost about as much as a new one. kBlockJacobi inverts each node's 3×3 block.
 enum class PreconditionerKind { kLaggedCholesky, kBlockJacobi };
 
 struct SolverOptions {
@@ -25,7 +26,10 @@ struct SolverOptions {
   PreconditionerKind preconditioner = PreconditionerKind::kLaggedCholesky;
   double relative_tolerance = 1e-6;  // CG stops at ‖r‖ ≤ tol · ‖b‖
   int max_iterations = 1000;         // CG iteration cap
-  int refactor_after_iterations = 8; // kLaggedCholesky: refactor when a solve took more
+  // kLaggedCholesky: a numeric factorisation costs about as much as 40–60 preconditioned CG
+  // iterations on the reference blocks (measured here: 236 ms vs 6 ms at 28.8k tets, 16 ms vs
+  // 0.27 ms at 3.6k tets), hence the default. Deterministic: counts iterations, not time.
+  int refactor_budget_iterations = 50;
 };
 
 struct FemOptions {
