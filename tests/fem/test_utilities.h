@@ -2,15 +2,14 @@
 // Small helpers shared by the FEM validation tests: a static equilibrium solver, rotations and
 // random numbers, dense views of sparse matrices. Header-only; nothing here is under test.
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-#include <Eigen/SparseCore>
 
 #include "fem/cholmod_factor.h"
 #include "fem/corotational.h"
@@ -21,9 +20,9 @@
 namespace hapsim::fem::test {
 
 struct StaticSolveReport {
-  int iterations = 0;             // quasi-Newton iterations (one factorisation each)
-  double residual_norm_N = 0.0;   // ‖f_ext + f_el(x)‖ over the free dofs at exit
-  double round_off_floor_N = 0.0; // kForceRoundOff · max|K_ii| · ‖x‖ at exit
+  int iterations = 0;              // quasi-Newton iterations (one factorisation each)
+  double residual_norm_N = 0.0;    // ‖f_ext + f_el(x)‖ over the free dofs at exit
+  double round_off_floor_N = 0.0;  // kForceRoundOff · max|K_ii| · ‖x‖ at exit
   bool converged = false;
 };
 
