@@ -22,10 +22,15 @@ fem::TetMesh MakeMesh(const MeshSource& source) {
     switch (source.kind) {
       case MeshSource::Kind::kBox:
         return fem::MakeBoxTetMesh(source.box.min_m, source.box.max_m, source.cells);
-      case MeshSource::Kind::kEllipsoid:
+      case MeshSource::Kind::kEllipsoid: {
+        // A lattice of an even number of cells centred on the ellipsoid, with a margin: the
+        // five-tet cut is then mirror-symmetric about the centre, so is the mesh.
+        const Eigen::Vector3d half_m =
+            (1.05 * source.radii_m / source.cell_size_m).array().ceil() * source.cell_size_m;
         return fem::MakeImplicitTetMesh(fem::MakeEllipsoidFunction(source.center_m, source.radii_m),
-                                        source.center_m - 1.05 * source.radii_m,
-                                        source.center_m + 1.05 * source.radii_m, source.cell_size_m);
+                                        source.center_m - half_m, source.center_m + half_m,
+                                        source.cell_size_m);
+      }
       case MeshSource::Kind::kFile:
         return fem::ReadTetMesh(source.file);  // its own errors name the mesh file and line
     }

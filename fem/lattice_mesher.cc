@@ -117,8 +117,9 @@ TetMesh MakeImplicitTetMesh(const ImplicitFunction& phi, const Eigen::Vector3d& 
   if (!(cell_size_m > 0.0)) throw std::invalid_argument("cell size must be positive");
   if (!((max_m.array() > min_m.array()).all()))
     throw std::invalid_argument("bounding box max must exceed min on every axis");
+  // The 1e-9 keeps a box that is a whole number of cells from gaining a cell to round-off.
   const Eigen::Vector3i cells =
-      ((max_m - min_m) / cell_size_m).array().ceil().cast<int>().max(1).matrix();
+      (((max_m - min_m) / cell_size_m).array() - 1e-9).array().ceil().cast<int>().max(1).matrix();
   const TetMesh lattice = MakeLattice(min_m, Eigen::Vector3d::Constant(cell_size_m), cells);
   std::vector<int> inside;
   for (int t = 0; t < lattice.num_tets(); ++t) {
