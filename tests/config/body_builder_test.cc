@@ -1,0 +1,91 @@
+// Scene body -> model: totals against closed forms (mass ρV, gravity + load), probes against
+// the point they were placed at and a rigid translation, and the mesh-dependent input errors
+// at the scene line of the key.
+#include <gtest/gtest.h>
+
+#include "config/body_builder.h"
+#include "config/scene.h"
+#include "core/error.h"
+
+namespace hapsim::config {
+namespace {
+
+// Line numbers matter: the fixed box is on line 12, the second probe on line 17.
+constexpr const char* kScene = R"(name: body_test
+time: {dt_s: 0.01, num_steps: 1}
+gravity_m_s2: [0, 0, -10]
+body:
+  mesh:
+    box: {min_m: [0, 0, 0], max_m: [0.2, 0.1, 0.1], cells: [4, 2, 2]}
+  material:
+    youngs_modulus_Pa: 1.0e5
+    poisson_ratio: 0.3
+    density_kg_m3: 500
+  # fixed box on the next line
+  fixed: {min_m: [-1, -1, -1], max_m: [0.001, 1, 1]}
+  loads:
+    - {min_m: [0.199, -1, -1], max_m: [1, 1, 1], total_force_N: [3, 0, -2]}
+  probes:
+    - {name: inside, position_m: [0.123, 0.031, 0.077]}
+    - {name: corner, position_m: [0.2, 0.1, 0.1]}
+)";
+
+Body MakeTestBody(const std::string& yaml) {
+  const Scene scene = ParseScene(yaml, "body_test.yaml", ".");
+  return MakeBody(*scene.body, scene.gravity_m_s2);
+}
+
+TEST(BodyBuilder, TotalsMatchClosedForms) {
+  const Body body = MakeTestBody(kScene);
+  const double mass_kg = 500.0 * 0.2 * 0.1 * 0.1;
+  EXPECT_NEAR(body.model.node_mass_kg.sum(), mass_kg, 1e-12);
+  Eigen::Vector3d total_N = Eigen::Vector3d::Zero();
+  for (int n = 0; n < body.model.num_nodes(); ++n) total_N += body.external_force_N.segment<3>(3 * n);
+  EXPECT_NEAR(total_N.x(), 3.0, 1e-12);
+  EXPECT_NEAR(total_N.z(), -10.0 * mass_kg - 2.0, 1e-12);
+  EXPECT_EQ(body.model.num_fixed_nodes(), 3 * 3);  // the x = 0 face of a 4 x 2 x 2 lattice
+}
+
+TEST(BodyBuilder, ProbesInterpolateThePointAndFollowTranslation) {
+  const Body body = MakeTestBody(kScene);
+  ASSERT_EQ(body.probes.size(), 2u);
+  for (const BoundProbe& probe : body.probes) {
+    Eigen::Vector3d p_m = Eigen::Vector3d::Zero();
+    for (int a = 0; a < 4; ++a)
+      p_m += probe.binding.barycentric[a] *
+             body.model.mesh.rest_positions_m.col(body.model.mesh.tets(a, probe.binding.tet));
+    const Eigen::Vector3d expected_m = probe.name == "inside" ? Eigen::Vector3d(0.123, 0.031, 0.077)
+                                                              : Eigen::Vector3d(0.2, 0.1, 0.1);
+    EXPECT_LT((p_m - expected_m).norm(), 1e-14);
+    EXPECT_GE(probe.binding.barycentric.minCoeff(), -1e-9);
+  }
+  fem::State state = fem::MakeRestState(body.model);
+  const Eigen::Vector3d shift_m(0.01, -0.02, 0.005);
+  for (int n = 0; n < body.model.num_nodes(); ++n) state.x_m.segment<3>(3 * n) += shift_m;
+  EXPECT_LT((fem::CalcProbeDisplacement(body.model, state, body.probes[0].binding) - shift_m).norm(), 1e-15);
+}
+
+void ExpectErrorAt(const std::string& yaml, int line, const std::string& key) {
+  try {
+    MakeTestBody(yaml);
+    FAIL() << "expected an InputError at line " << line;
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.line(), line) << error.what();
+    EXPECT_EQ(error.key(), key) << error.what();
+  }
+}
+
+TEST(BodyBuilder, EmptyFixedBoxIsAnErrorAtItsLine) {
+  std::string yaml = kScene;
+  yaml.replace(yaml.find("max_m: [0.001, 1, 1]"), 20, "max_m: [-0.5, 1, 1] ");
+  ExpectErrorAt(yaml, 12, "body.fixed");
+}
+
+TEST(BodyBuilder, ProbeOutsideTheBodyIsAnErrorAtItsLine) {
+  std::string yaml = kScene;
+  yaml.replace(yaml.find("[0.2, 0.1, 0.1]}"), 15, "[0.3, 0.1, 0.1]");
+  ExpectErrorAt(yaml, 17, "body.probes[1]");
+}
+
+}  // namespace
+}  // namespace hapsim::config
