@@ -1,15 +1,17 @@
 #pragma once
-// Small helpers shared by the FEM validation tests: a static equilibrium solver, rotations and
-// random numbers, dense views of sparse matrices. Header-only; nothing here is under test.
+// Small helpers shared by the FEM validation tests: a static equilibrium solver, forces and
+// energies at the current rotations, rigid transforms, deterministic random numbers.
+// Header-only; nothing here is under test.
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
 #include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
 
 #include "fem/cholmod_factor.h"
 #include "fem/corotational.h"
