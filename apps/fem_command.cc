@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
@@ -37,7 +36,8 @@ config::Scene LoadBodyScene(const std::string& path) {
   return scene;
 }
 
-std::vector<double> Column(const std::vector<fem::StepStats>& steps, double fem::StepStats::*field) {
+std::vector<double> Column(const std::vector<fem::StepStats>& steps,
+                           double fem::StepStats::*field) {
   std::vector<double> values;
   for (const fem::StepStats& s : steps) values.push_back(s.*field);
   return values;
@@ -57,42 +57,53 @@ nlohmann::json MakeSummary(const config::Scene& scene, const config::Body& body,
   }
   nlohmann::json probes = nlohmann::json::array();
   for (size_t p = 0; p < body.probes.size(); ++p) {
-    const Eigen::Vector3d u_m = record.probe_displacements_m.back().col(static_cast<Eigen::Index>(p));
-    probes.push_back({{"name", body.probes[p].name}, {"final_displacement_m", {u_m.x(), u_m.y(), u_m.z()}}});
+    const Eigen::Vector3d u_m =
+        record.probe_displacements_m.back().col(static_cast<Eigen::Index>(p));
+    probes.push_back(
+        {{"name", body.probes[p].name}, {"final_displacement_m", {u_m.x(), u_m.y(), u_m.z()}}});
   }
-  return {
-      {"scene", scene.file}, {"name", scene.name},
-      {"num_nodes", body.model.num_nodes()}, {"num_tets", body.model.num_tets()},
-      {"num_dofs", body.model.num_dofs()}, {"num_fixed_nodes", body.model.num_fixed_nodes()},
-      {"num_steps", num_steps}, {"dt_s", scene.dt_s},
-      {"elasticity", fem::ToString(options.elasticity)}, {"integrator", fem::ToString(options.integrator)},
-      {"solver", fem::ToString(options.solver.kind)},
-      {"preconditioner", fem::ToString(options.solver.preconditioner)},
-      {"timings", {{"rotations", StageSummary(Column(record.steps, &fem::StepStats::rotations_s))},
-                   {"assembly", StageSummary(Column(record.steps, &fem::StepStats::assembly_s))},
-                   {"solve", StageSummary(Column(record.steps, &fem::StepStats::solve_s))},
-                   {"total", StageSummary(Column(record.steps, &fem::StepStats::total_s))}}},
-      {"solver_iterations", {{"median", Median(iterations)}, {"mean", Mean(iterations)},
-                             {"max", *std::max_element(iterations.begin(), iterations.end())}}},
-      {"max_relative_residual", *std::max_element(residuals.begin(), residuals.end())},
-      {"num_factorizations", record.num_factorizations},
-      {"probes", probes}};
+  return {{"scene", scene.file},
+          {"name", scene.name},
+          {"num_nodes", body.model.num_nodes()},
+          {"num_tets", body.model.num_tets()},
+          {"num_dofs", body.model.num_dofs()},
+          {"num_fixed_nodes", body.model.num_fixed_nodes()},
+          {"num_steps", num_steps},
+          {"dt_s", scene.dt_s},
+          {"elasticity", fem::ToString(options.elasticity)},
+          {"integrator", fem::ToString(options.integrator)},
+          {"solver", fem::ToString(options.solver.kind)},
+          {"preconditioner", fem::ToString(options.solver.preconditioner)},
+          {"timings",
+           {{"rotations", StageSummary(Column(record.steps, &fem::StepStats::rotations_s))},
+            {"assembly", StageSummary(Column(record.steps, &fem::StepStats::assembly_s))},
+            {"solve", StageSummary(Column(record.steps, &fem::StepStats::solve_s))},
+            {"total", StageSummary(Column(record.steps, &fem::StepStats::total_s))}}},
+          {"solver_iterations",
+           {{"median", Median(iterations)},
+            {"mean", Mean(iterations)},
+            {"max", *std::max_element(iterations.begin(), iterations.end())}}},
+          {"max_relative_residual", *std::max_element(residuals.begin(), residuals.end())},
+          {"num_factorizations", record.num_factorizations},
+          {"probes", probes}};
 }
 
 void WriteStepsCsv(const std::string& path, const config::Body& body, const FemRunRecord& record,
                    double dt_s) {
   WriteFileAtomically(path, [&](std::ostream& out) {
-    out << "step,time_s,rotations_ms,assembly_ms,solve_ms,total_ms,solver_iterations,relative_residual";
+    out << "step,time_s,rotations_ms,assembly_ms,solve_ms,total_ms,solver_iterations,relative_"
+           "residual";
     for (const config::BoundProbe& probe : body.probes)
       out << ',' << probe.name << "_ux_m," << probe.name << "_uy_m," << probe.name << "_uz_m";
     out << '\n';
     for (size_t k = 0; k < record.steps.size(); ++k) {
       const fem::StepStats& s = record.steps[k];
-      out << k + 1 << ',' << (k + 1) * dt_s << ',' << 1e3 * s.rotations_s << ',' << 1e3 * s.assembly_s
-          << ',' << 1e3 * s.solve_s << ',' << 1e3 * s.total_s << ',' << s.solve.iterations << ','
-          << s.solve.relative_residual;
+      out << k + 1 << ',' << (k + 1) * dt_s << ',' << 1e3 * s.rotations_s << ','
+          << 1e3 * s.assembly_s << ',' << 1e3 * s.solve_s << ',' << 1e3 * s.total_s << ','
+          << s.solve.iterations << ',' << s.solve.relative_residual;
       const Eigen::Matrix3Xd& u_m = record.probe_displacements_m[k];
-      for (Eigen::Index p = 0; p < u_m.cols(); ++p) out << ',' << u_m(0, p) << ',' << u_m(1, p) << ',' << u_m(2, p);
+      for (Eigen::Index p = 0; p < u_m.cols(); ++p)
+        out << ',' << u_m(0, p) << ',' << u_m(1, p) << ',' << u_m(2, p);
       out << '\n';
     }
   });
@@ -110,35 +121,45 @@ void RunFemOnce(const FemCommandOptions& options) {
   const config::Scene scene = LoadBodyScene(options.scene_paths[0]);
   const config::Body body = config::MakeBody(*scene.body, scene.gravity_m_s2);
   const int num_steps = options.num_steps > 0 ? options.num_steps : scene.num_steps;
-  std::printf("hapsim fem: %s: %d nodes, %d tets, %d fixed nodes; %d steps of %.6g s (%s, %s, %s)\n",
-              scene.name.c_str(), body.model.num_nodes(), body.model.num_tets(),
-              body.model.num_fixed_nodes(), num_steps, scene.dt_s,
-              fem::ToString(scene.body->options.elasticity), fem::ToString(scene.body->options.integrator),
-              fem::ToString(scene.body->options.solver.kind));
+  std::printf(
+      "hapsim fem: %s: %d nodes, %d tets, %d fixed nodes; %d steps of %.6g s (%s, %s, %s)\n",
+      scene.name.c_str(), body.model.num_nodes(), body.model.num_tets(),
+      body.model.num_fixed_nodes(), num_steps, scene.dt_s,
+      fem::ToString(scene.body->options.elasticity), fem::ToString(scene.body->options.integrator),
+      fem::ToString(scene.body->options.solver.kind));
   FemRunRecord record;
   {
     ProgressBar progress("fem", num_steps);
-    record = RunFem(body, scene.body->options, scene.dt_s, num_steps, [&](int k) { progress.Update(k); });
+    record = RunFem(body, scene.body->options, scene.dt_s, num_steps,
+                    [&](int k) { progress.Update(k); });
   }
   const std::string out_dir = options.out_dir.empty() ? "out/" + scene.name : options.out_dir;
-  const std::string summary_path = options.summary_path.empty() ? out_dir + "/summary.json" : options.summary_path;
+  const std::string summary_path =
+      options.summary_path.empty() ? out_dir + "/summary.json" : options.summary_path;
   CreateDirectories(out_dir);
   WriteStepsCsv(out_dir + "/steps.csv", body, record, scene.dt_s);
-  const Eigen::Map<const Eigen::Matrix3Xd> x_m(record.final_state.x_m.data(), 3, body.model.num_nodes());
+  const Eigen::Map<const Eigen::Matrix3Xd> x_m(record.final_state.x_m.data(), 3,
+                                               body.model.num_nodes());
   const Eigen::Matrix3Xd u_m = x_m - body.model.mesh.rest_positions_m;
-  fem::WriteVtkTetMesh(x_m, body.model.mesh.tets, {{"displacement_m", &u_m}}, out_dir + "/final_mesh.vtk");
+  fem::WriteVtkTetMesh(x_m, body.model.mesh.tets, {{"displacement_m", &u_m}},
+                       out_dir + "/final_mesh.vtk");
   const nlohmann::json summary = MakeSummary(scene, body, record, num_steps);
   if (const auto parent = std::filesystem::path(summary_path).parent_path(); !parent.empty())
     CreateDirectories(parent.string());
   WriteFileAtomically(summary_path, [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
-  std::printf("  step time: median %.3f ms, mean %.3f ms (rotations %.3f, assembly %.3f, solve %.3f ms median)\n",
-              summary["timings"]["total"]["median_ms"].get<double>(), summary["timings"]["total"]["mean_ms"].get<double>(),
-              summary["timings"]["rotations"]["median_ms"].get<double>(),
-              summary["timings"]["assembly"]["median_ms"].get<double>(), summary["timings"]["solve"]["median_ms"].get<double>());
+  std::printf(
+      "  step time: median %.3f ms, mean %.3f ms (rotations %.3f, assembly %.3f, solve %.3f ms "
+      "median)\n",
+      summary["timings"]["total"]["median_ms"].get<double>(),
+      summary["timings"]["total"]["mean_ms"].get<double>(),
+      summary["timings"]["rotations"]["median_ms"].get<double>(),
+      summary["timings"]["assembly"]["median_ms"].get<double>(),
+      summary["timings"]["solve"]["median_ms"].get<double>());
   for (const auto& probe : summary["probes"])
     std::printf("  probe %s: final displacement %s m\n", probe["name"].get<std::string>().c_str(),
                 probe["final_displacement_m"].dump().c_str());
-  std::printf("  wrote %s/steps.csv, %s/final_mesh.vtk, %s\n", out_dir.c_str(), out_dir.c_str(), summary_path.c_str());
+  std::printf("  wrote %s/steps.csv, %s/final_mesh.vtk, %s\n", out_dir.c_str(), out_dir.c_str(),
+              summary_path.c_str());
 }
 
 }  // namespace
@@ -149,11 +170,14 @@ void AddFemCommand(CLI::App* app) {
       "fem",
       "Headless FEM-only run of a scene's deformable body from rest: writes per-step timings and\n"
       "probe displacements (CSV), a JSON summary and the final mesh (legacy VTK, for ParaView).");
-  fem->add_option("scene", options->scene_paths, "Scene file (YAML); several with --bench")->required();
+  fem->add_option("scene", options->scene_paths, "Scene file (YAML); several with --bench")
+      ->required();
   fem->add_option("--out", options->out_dir, "Output folder (default: out/<scene name>)");
-  fem->add_option("--summary", options->summary_path,
-                  "JSON summary file (default: <out>/summary.json; with --bench: <out>/fem_bench.json)");
-  fem->add_option("--steps", options->num_steps, "Number of steps (default: the scene's time.num_steps)")
+  fem->add_option(
+      "--summary", options->summary_path,
+      "JSON summary file (default: <out>/summary.json; with --bench: <out>/fem_bench.json)");
+  fem->add_option("--steps", options->num_steps,
+                  "Number of steps (default: the scene's time.num_steps)")
       ->check(CLI::PositiveNumber);
   fem->add_flag("--bench", options->bench,
                 "Benchmark each scene with every solver (CG + lagged Cholesky, CG + block Jacobi,\n"

@@ -17,9 +17,11 @@ FemRunRecord RunFem(const config::Body& body, const fem::FemOptions& options, do
     record.steps.push_back(stepper.Step(&state));
     if (!state.x_m.allFinite() || !state.v_m_s.allFinite())
       throw std::runtime_error("the simulation diverged at step " + std::to_string(k + 1) +
-                               " (t = " + std::to_string((k + 1) * dt_s) + " s): node positions are no longer finite" +
+                               " (t = " + std::to_string((k + 1) * dt_s) +
+                               " s): node positions are no longer finite" +
                                (options.integrator == fem::IntegratorKind::kExplicitEuler
-                                    ? "; explicit Euler is unstable above dt ≈ 2/ω_max, use the implicit integrator or a smaller dt_s"
+                                    ? "; explicit Euler is unstable above dt ≈ 2/ω_max, use the "
+                                      "implicit integrator or a smaller dt_s"
                                     : ""));
     Eigen::Matrix3Xd probes_m(3, static_cast<Eigen::Index>(body.probes.size()));
     for (size_t p = 0; p < body.probes.size(); ++p)

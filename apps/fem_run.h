@@ -2,10 +2,9 @@
 // A headless FEM-only run of a scene's deformable body: the stepping loop and what it records.
 // Used by `hapsim fem` (outputs) and `hapsim fem --bench` (timings against a second solver).
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "config/body_builder.h"
 #include "config/scene.h"

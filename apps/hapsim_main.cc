@@ -2,10 +2,9 @@
 // main() parses arguments and runs one subcommand; errors become one clear line and an exit code:
 // 2 for bad input (file, line and key named), 1 for a failed run.
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
-
-#include <CLI/CLI.hpp>
 
 #include "apps/commands.h"
 #include "core/error.h"

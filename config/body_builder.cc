@@ -46,7 +46,8 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
   fem::TetMesh mesh = MakeMesh(scene.mesh);
   std::vector<int> fixed_nodes;
   if (scene.fixed) {
-    fixed_nodes = fem::FindNodesInBox(mesh, scene.fixed->min_m, scene.fixed->max_m, kBoxTolerance_m);
+    fixed_nodes =
+        fem::FindNodesInBox(mesh, scene.fixed->min_m, scene.fixed->max_m, kBoxTolerance_m);
     if (fixed_nodes.empty())
       Fail(scene.fixed_location, "the fixed box holds no node of the mesh (" +
                                      std::to_string(mesh.num_nodes()) + " nodes)");
@@ -58,7 +59,8 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
     const std::vector<int> nodes =
         fem::FindNodesInBox(body.model.mesh, load.region.min_m, load.region.max_m, kBoxTolerance_m);
     if (nodes.empty()) Fail(load.location, "the load box holds no node of the mesh");
-    for (int n : nodes) body.external_force_N.segment<3>(3 * n) += load.total_force_N / nodes.size();
+    for (int n : nodes)
+      body.external_force_N.segment<3>(3 * n) += load.total_force_N / nodes.size();
   }
   for (const Probe& probe : scene.probes) {
     const std::optional<fem::ProbeBinding> binding = fem::BindProbe(body.model, probe.position_m);

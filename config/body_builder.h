@@ -3,10 +3,9 @@
 // its probes. Checks that need the mesh (an empty fixed set, a probe outside the body, a load
 // box holding no node) throw InputError at the scene line of the offending key.
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "config/scene.h"
 #include "fem/model.h"

@@ -110,8 +110,8 @@ fem::SolverOptions ReadSolver(const YamlMap& map) {
       {{ToString(PreconditionerKind::kLaggedCholesky), PreconditionerKind::kLaggedCholesky},
        {ToString(PreconditionerKind::kBlockJacobi), PreconditionerKind::kBlockJacobi}},
       solver.preconditioner);
-  solver.refactor_budget_iterations = map.GetIntOr(
-      "refactor_budget_iterations", solver.refactor_budget_iterations, AtLeast(1));
+  solver.refactor_budget_iterations =
+      map.GetIntOr("refactor_budget_iterations", solver.refactor_budget_iterations, AtLeast(1));
   solver.relative_tolerance =
       map.GetDoubleOr("relative_tolerance", solver.relative_tolerance, OpenInterval(0.0, 1.0));
   solver.max_iterations = map.GetIntOr("max_iterations", solver.max_iterations, AtLeast(1));

@@ -30,16 +30,16 @@
 //                                      # type cg | cholmod (default cg); preconditioner
 //                                      # lagged_cholesky | block_jacobi; tol in (0, 1); iters ≥ 1
 //     fixed: {min_m: [..], max_m: [..]}   # optional: nodes inside this box are fixed
-//     loads:                           # optional: total force spread evenly over the nodes in a box
+//     loads:                           # optional: total force spread evenly over the nodes in a
+//     box
 //       - {min_m: [..], max_m: [..], total_force_N: [fx, fy, fz]}
 //     probes:                          # optional: points whose displacement is reported
 //       - {name: top_center, position_m: [0, 0, 0.05]}
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "fem/fem_options.h"
 #include "fem/material.h"
@@ -59,15 +59,16 @@ struct AxisAlignedBox {
   Eigen::Vector3d max_m = Eigen::Vector3d::Zero();
   bool Contains(const Eigen::Vector3d& p_m, double tolerance_m) const {
     return ((p_m.array() >= min_m.array() - tolerance_m) &&
-            (p_m.array() <= max_m.array() + tolerance_m)).all();
+            (p_m.array() <= max_m.array() + tolerance_m))
+        .all();
   }
 };
 
 struct MeshSource {
   enum class Kind { kBox, kEllipsoid, kFile };
   Kind kind = Kind::kBox;
-  AxisAlignedBox box;                               // kBox
-  Eigen::Vector3i cells = Eigen::Vector3i::Ones();  // kBox: lattice cells per axis
+  AxisAlignedBox box;                                  // kBox
+  Eigen::Vector3i cells = Eigen::Vector3i::Ones();     // kBox: lattice cells per axis
   Eigen::Vector3d center_m = Eigen::Vector3d::Zero();  // kEllipsoid
   Eigen::Vector3d radii_m = Eigen::Vector3d::Ones();   // kEllipsoid
   double cell_size_m = 0.0;                            // kEllipsoid: lattice cell edge

@@ -30,5 +30,6 @@ class InputError : public std::runtime_error {
 
 }  // namespace hapsim
 
-#define HAPSIM_INVARIANT(condition) \
-  ((condition) ? static_cast<void>(0) : ::hapsim::AbortOnFailedInvariant(#condition, __FILE__, __LINE__))
+#define HAPSIM_INVARIANT(condition)   \
+  ((condition) ? static_cast<void>(0) \
+               : ::hapsim::AbortOnFailedInvariant(#condition, __FILE__, __LINE__))

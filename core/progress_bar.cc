@@ -33,7 +33,8 @@ void ProgressBar::Draw(long done) {
   constexpr int kWidth = 30;
   const double fraction = std::clamp(static_cast<double>(done) / total_, 0.0, 1.0);
   const int filled = static_cast<int>(fraction * kWidth);
-  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double eta_s = fraction > 0.0 ? elapsed_s * (1.0 - fraction) / fraction : 0.0;
   std::fprintf(stderr, "\r%s [%s%s] %3d%% %ld/%ld  %.1fs elapsed, ~%.1fs left ", label_.c_str(),
                std::string(filled, '#').c_str(), std::string(kWidth - filled, '.').c_str(),

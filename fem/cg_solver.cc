@@ -1,9 +1,8 @@
 #include "fem/cg_solver.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Dense>
 
 namespace hapsim::fem {
 

@@ -70,8 +70,8 @@ bool CholmodFactor::Factorize(const Eigen::SparseMatrix<double>& A) {
 void CholmodFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
   if (!factored_) throw std::logic_error("CholmodFactor::Solve before a successful Factorize");
   cholmod_dense b_view = ViewAsCholmod(b);
-  if (!cholmod_solve2(CHOLMOD_A, factor_, &b_view, nullptr, &solution_, nullptr, &work_y_,
-                      &work_e_, &common_))
+  if (!cholmod_solve2(CHOLMOD_A, factor_, &b_view, nullptr, &solution_, nullptr, &work_y_, &work_e_,
+                      &common_))
     throw std::runtime_error("CHOLMOD solve failed");
   *x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(solution_->x), b.size());
 }

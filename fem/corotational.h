@@ -8,9 +8,8 @@
 //   energy                              E_e = V (μ ε:ε + λ/2 tr(ε)²)
 // With R_e = I this is plain linear FEM, whose force is not invariant under rotation.
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "fem/fem_options.h"
 #include "fem/model.h"

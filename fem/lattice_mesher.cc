@@ -9,11 +9,13 @@ namespace hapsim::fem {
 namespace {
 
 // Corner c of a unit cube has offsets (c & 1, (c >> 1) & 1, (c >> 2) & 1).
-// Even-parity corners {000, 110, 101, 011} = {0, 3, 5, 6}; odd-parity {100, 010, 001, 111} = {1, 2, 4, 7}.
-// Five-tet cut: the central tet on one parity class, and a corner tet at each corner of the other
-// class made of that corner and its three edge neighbours.
-constexpr int kCutEven[5][4] = {{0, 3, 5, 6}, {1, 0, 3, 5}, {2, 0, 3, 6}, {4, 0, 5, 6}, {7, 3, 5, 6}};
-constexpr int kCutOdd[5][4] = {{1, 2, 4, 7}, {0, 1, 2, 4}, {3, 1, 2, 7}, {5, 1, 4, 7}, {6, 2, 4, 7}};
+// Even-parity corners {000, 110, 101, 011} = {0, 3, 5, 6}; odd-parity {100, 010, 001, 111} = {1, 2,
+// 4, 7}. Five-tet cut: the central tet on one parity class, and a corner tet at each corner of the
+// other class made of that corner and its three edge neighbours.
+constexpr int kCutEven[5][4] = {
+    {0, 3, 5, 6}, {1, 0, 3, 5}, {2, 0, 3, 6}, {4, 0, 5, 6}, {7, 3, 5, 6}};
+constexpr int kCutOdd[5][4] = {
+    {1, 2, 4, 7}, {0, 1, 2, 4}, {3, 1, 2, 7}, {5, 1, 4, 7}, {6, 2, 4, 7}};
 
 // Lattice nodes and the five tets of every cell, each tet oriented positively.
 TetMesh MakeLattice(const Eigen::Vector3d& min_m, const Eigen::Vector3d& cell_m,
@@ -58,7 +60,8 @@ TetMesh KeepTets(const TetMesh& lattice, const std::vector<int>& kept_tets) {
   TetMesh mesh;
   mesh.rest_positions_m.resize(3, num_kept_nodes);
   for (int n = 0; n < lattice.num_nodes(); ++n)
-    if (new_index[n] >= 0) mesh.rest_positions_m.col(new_index[n]) = lattice.rest_positions_m.col(n);
+    if (new_index[n] >= 0)
+      mesh.rest_positions_m.col(new_index[n]) = lattice.rest_positions_m.col(n);
   mesh.tets.resize(4, static_cast<Eigen::Index>(kept_tets.size()));
   for (size_t i = 0; i < kept_tets.size(); ++i)
     for (int a = 0; a < 4; ++a)
@@ -94,9 +97,10 @@ void SnapBoundaryNodes(const ImplicitFunction& phi, double cell_size_m, TetMesh*
     const Eigen::Vector3d move_m = -phi(p_m) * gradient / gradient.squaredNorm();
     if (move_m.norm() > 0.5 * cell_size_m) continue;
     mesh->rest_positions_m.col(n) = p_m + move_m;
-    const bool keeps_quality = std::all_of(tets_of_node[n].begin(), tets_of_node[n].end(), [&](int t) {
-      return CalcTetQuality(mesh->rest_positions_m, mesh->tets.col(t)) >= kMinQuality;
-    });
+    const bool keeps_quality =
+        std::all_of(tets_of_node[n].begin(), tets_of_node[n].end(), [&](int t) {
+          return CalcTetQuality(mesh->rest_positions_m, mesh->tets.col(t)) >= kMinQuality;
+        });
     if (!keeps_quality) mesh->rest_positions_m.col(n) = p_m;
   }
 }
@@ -107,7 +111,8 @@ TetMesh MakeBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_
                        const Eigen::Vector3i& cells) {
   if (!((max_m.array() > min_m.array()).all()))
     throw std::invalid_argument("box max must exceed min on every axis");
-  if (!((cells.array() >= 1).all())) throw std::invalid_argument("box needs at least one cell per axis");
+  if (!((cells.array() >= 1).all()))
+    throw std::invalid_argument("box needs at least one cell per axis");
   const Eigen::Vector3d cell_m = (max_m - min_m).cwiseQuotient(cells.cast<double>());
   return MakeLattice(min_m, cell_m, cells);
 }
@@ -124,7 +129,8 @@ TetMesh MakeImplicitTetMesh(const ImplicitFunction& phi, const Eigen::Vector3d& 
   std::vector<int> inside;
   for (int t = 0; t < lattice.num_tets(); ++t) {
     Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();
-    for (int a = 0; a < 4; ++a) centroid_m += 0.25 * lattice.rest_positions_m.col(lattice.tets(a, t));
+    for (int a = 0; a < 4; ++a)
+      centroid_m += 0.25 * lattice.rest_positions_m.col(lattice.tets(a, t));
     if (phi(centroid_m) < 0.0) inside.push_back(t);
   }
   if (inside.empty()) throw std::invalid_argument("the implicit shape contains no lattice tet");

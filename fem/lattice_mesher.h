@@ -5,9 +5,8 @@
 // face diagonals and the mesh is conforming. An nx × ny × nz box has (nx+1)(ny+1)(nz+1) nodes and
 // 5·nx·ny·nz tets (12 × 12 × 5 cells: 1,014 nodes, 3,600 tets, as in DESIGN.md §7).
 
-#include <functional>
-
 #include <Eigen/Core>
+#include <functional>
 
 #include "fem/tet_mesh.h"
 

@@ -2,10 +2,9 @@
 // Solvers for the SPD system of the implicit step, A Δv = Δt F̃ (DESIGN.md §2), chosen once per
 // scene through this small interface; the inner loops run on concrete types.
 
-#include <memory>
-
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <memory>
 
 #include "fem/fem_options.h"
 

@@ -2,17 +2,15 @@
 // Pieces shared by the mesh readers (fem/mesh_io.h): line-numbered text reading, and the
 // conversion of what a reader parsed (file tags, source lines) into a checked TetMesh.
 
+#include <Eigen/Core>
 #include <array>
 #include <fstream>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
 #include "fem/tet_mesh.h"
 
 namespace hapsim::fem::internal {
-
 
 // Reads a text file line by line, keeping the 1-based number of the current line so errors can
 // point at it.

@@ -1,8 +1,7 @@
 #include "fem/model.h"
 
-#include <stdexcept>
-
 #include <Eigen/Dense>
+#include <stdexcept>
 
 namespace hapsim::fem {
 
@@ -28,14 +27,15 @@ Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& 
     const Eigen::Vector4i tet = model.mesh.tets.col(t);
     Eigen::Matrix3d rest_edges_m;
     for (int i = 0; i < 3; ++i)
-      rest_edges_m.col(i) = model.mesh.rest_positions_m.col(tet[i + 1]) -
-                            model.mesh.rest_positions_m.col(tet[0]);
+      rest_edges_m.col(i) =
+          model.mesh.rest_positions_m.col(tet[i + 1]) - model.mesh.rest_positions_m.col(tet[0]);
     const Eigen::Matrix3d inverse_1_m = rest_edges_m.inverse();
     TetRestData& rest = model.tet_rest[t];
     rest.shape_gradients_1_m.rightCols<3>() = inverse_1_m.transpose();
     rest.shape_gradients_1_m.col(0) = -inverse_1_m.transpose().rowwise().sum();
     rest.volume_m3 = rest_edges_m.determinant() / 6.0;
-    for (int a = 0; a < 4; ++a) model.node_mass_kg[tet[a]] += material.density_kg_m3 * rest.volume_m3 / 4.0;
+    for (int a = 0; a < 4; ++a)
+      model.node_mass_kg[tet[a]] += material.density_kg_m3 * rest.volume_m3 / 4.0;
   }
   model.dof_mass_kg = model.node_mass_kg.replicate(1, 3).transpose().reshaped();
 
@@ -52,7 +52,9 @@ std::vector<int> FindNodesInBox(const TetMesh& mesh, const Eigen::Vector3d& min_
   std::vector<int> nodes;
   for (int n = 0; n < mesh.num_nodes(); ++n) {
     const Eigen::Vector3d p_m = mesh.rest_positions_m.col(n);
-    if (((p_m.array() >= min_m.array() - tolerance_m) && (p_m.array() <= max_m.array() + tolerance_m)).all())
+    if (((p_m.array() >= min_m.array() - tolerance_m) &&
+         (p_m.array() <= max_m.array() + tolerance_m))
+            .all())
       nodes.push_back(n);
   }
   return nodes;

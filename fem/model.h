@@ -6,10 +6,9 @@
 // Degrees of freedom are node-major: dof 3n + a is axis a of node n. Positions and velocities
 // are stacked 3N vectors; Eigen::Map them as (3 x N) when a matrix view reads better.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/eigen_types.h"
 #include "fem/material.h"
@@ -26,13 +25,13 @@ struct TetRestData {
 
 struct Model {
   TetMesh mesh;
-  Matrix3Xi surface_triangles;            // (3 x F) outward-oriented boundary faces
+  Matrix3Xi surface_triangles;  // (3 x F) outward-oriented boundary faces
   Material material;
-  std::vector<TetRestData> tet_rest;      // one per tet
-  Eigen::VectorXd node_mass_kg;           // (N) lumped mass: ρV/4 from each incident tet
-  Eigen::VectorXd dof_mass_kg;            // (3N) node_mass_kg repeated per axis
-  std::vector<std::uint8_t> dof_is_fixed; // (3N) 1 for a Dirichlet (fixed) dof
-  Eigen::VectorXd rest_positions_m;       // (3N) stacked rest positions X
+  std::vector<TetRestData> tet_rest;       // one per tet
+  Eigen::VectorXd node_mass_kg;            // (N) lumped mass: ρV/4 from each incident tet
+  Eigen::VectorXd dof_mass_kg;             // (3N) node_mass_kg repeated per axis
+  std::vector<std::uint8_t> dof_is_fixed;  // (3N) 1 for a Dirichlet (fixed) dof
+  Eigen::VectorXd rest_positions_m;        // (3N) stacked rest positions X
 
   int num_nodes() const { return mesh.num_nodes(); }
   int num_dofs() const { return 3 * mesh.num_nodes(); }

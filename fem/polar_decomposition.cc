@@ -1,8 +1,7 @@
 #include "fem/polar_decomposition.h"
 
-#include <cmath>
-
 #include <Eigen/Dense>
+#include <cmath>
 
 namespace hapsim::fem {
 namespace {

@@ -11,8 +11,10 @@ std::optional<ProbeBinding> BindProbe(const Model& model, const Eigen::Vector3d&
   for (int t = 0; t < model.num_tets(); ++t) {
     // b_i are the gradients of the barycentric coordinates: w_i(p) = 1/4 + b_i·(p − centroid).
     Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();
-    for (int a = 0; a < 4; ++a) centroid_m += 0.25 * model.mesh.rest_positions_m.col(model.mesh.tets(a, t));
-    const Eigen::Vector4d weights = Eigen::Vector4d::Constant(0.25) +
+    for (int a = 0; a < 4; ++a)
+      centroid_m += 0.25 * model.mesh.rest_positions_m.col(model.mesh.tets(a, t));
+    const Eigen::Vector4d weights =
+        Eigen::Vector4d::Constant(0.25) +
         model.tet_rest[t].shape_gradients_1_m.transpose() * (p_m - centroid_m);
     if (weights.minCoeff() >= best_min_weight) {
       best_min_weight = weights.minCoeff();
@@ -27,7 +29,8 @@ Eigen::Vector3d CalcProbeDisplacement(const Model& model, const State& state,
   Eigen::Vector3d u_m = Eigen::Vector3d::Zero();
   for (int a = 0; a < 4; ++a) {
     const int node = model.mesh.tets(a, probe.tet);
-    u_m += probe.barycentric[a] * (state.x_m.segment<3>(3 * node) - model.rest_positions_m.segment<3>(3 * node));
+    u_m += probe.barycentric[a] *
+           (state.x_m.segment<3>(3 * node) - model.rest_positions_m.segment<3>(3 * node));
   }
   return u_m;
 }

@@ -3,9 +3,8 @@
 // rest, to the tet that contains it and its barycentric weights; it then moves with that tet
 // (linear interpolation of the node displacements, exact for the linear-tet field).
 
-#include <optional>
-
 #include <Eigen/Core>
+#include <optional>
 
 #include "fem/model.h"
 #include "fem/state.h"

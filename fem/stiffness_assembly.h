@@ -7,11 +7,10 @@
 //   R K_ab Rᵀ = V [ μ (b_a·b_b) I + μ c_b c_aᵀ + λ c_a c_bᵀ ].
 // This is what makes assembly cheap: no 12×12 products per tet.
 
-#include <array>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <array>
+#include <vector>
 
 #include "fem/model.h"
 

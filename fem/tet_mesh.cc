@@ -1,11 +1,10 @@
 #include "fem/tet_mesh.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <unordered_map>
-
-#include <Eigen/Geometry>
 
 namespace hapsim::fem {
 
@@ -70,7 +69,8 @@ Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh) {
   faces.reserve(static_cast<size_t>(mesh.num_tets()) * 4);
   for (int t = 0; t < mesh.num_tets(); ++t) {
     for (const auto& f : kOutwardFaces) {
-      const std::array<int, 3> oriented = {mesh.tets(f[0], t), mesh.tets(f[1], t), mesh.tets(f[2], t)};
+      const std::array<int, 3> oriented = {mesh.tets(f[0], t), mesh.tets(f[1], t),
+                                           mesh.tets(f[2], t)};
       std::array<int, 3> key = oriented;
       std::sort(key.begin(), key.end());
       FaceRecord& record = faces[key];

@@ -2,10 +2,9 @@
 // A linear tetrahedral mesh: rest node positions and tetrahedra. Plain data, built by the lattice
 // mesher or read from Gmsh/TetGen files; fem::Model is built from it.
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
-
-#include <Eigen/Core>
 
 #include "core/eigen_types.h"
 

@@ -60,11 +60,13 @@ StepStats TimeStepper::StepImplicit(State* state) {
   MultiplySymmetric(system_, state->v_m_s, &stiffness_times_v_N_);
   // Δt F̃ = Δt (f_ext + f_el − αM v − (β + Δt) K v)
   rhs_ = h * (external_force_N_ + elastic_force_N_ -
-              alpha * model_.dof_mass_kg.cwiseProduct(state->v_m_s) - (beta + h) * stiffness_times_v_N_);
+              alpha * model_.dof_mass_kg.cwiseProduct(state->v_m_s) -
+              (beta + h) * stiffness_times_v_N_);
   // A = (1 + Δt α) M + (Δt β + Δt²) K, in place over K.
   Eigen::Map<Eigen::VectorXd>(system_.valuePtr(), system_.nonZeros()) *= h * beta + h * h;
   for (int i = 0; i < model_.num_dofs(); ++i)
-    system_.valuePtr()[assembler_.diagonal_value_index()[i]] += (1.0 + h * alpha) * model_.dof_mass_kg[i];
+    system_.valuePtr()[assembler_.diagonal_value_index()[i]] +=
+        (1.0 + h * alpha) * model_.dof_mass_kg[i];
   ApplyFixedDofsToSystem();
   stats.assembly_s = stage.Lap();
 
@@ -89,7 +91,8 @@ StepStats TimeStepper::StepExplicit(State* state) {
   stats.rotations_s = stage.Lap();
 
   CalcElasticForce(model_, state->x_m, rotations_, &elastic_force_N_);
-  rhs_ = external_force_N_ + elastic_force_N_ - alpha * model_.dof_mass_kg.cwiseProduct(state->v_m_s);
+  rhs_ =
+      external_force_N_ + elastic_force_N_ - alpha * model_.dof_mass_kg.cwiseProduct(state->v_m_s);
   if (beta > 0.0) {  // stiffness damping needs K v
     assembler_.Assemble(model_, rotations_, &system_);
     MultiplySymmetric(system_, state->v_m_s, &stiffness_times_v_N_);
@@ -107,7 +110,8 @@ StepStats TimeStepper::StepExplicit(State* state) {
 
 Eigen::VectorXd CalcGravityForce(const Model& model, const Eigen::Vector3d& gravity_m_s2) {
   Eigen::VectorXd force_N(model.num_dofs());
-  for (int n = 0; n < model.num_nodes(); ++n) force_N.segment<3>(3 * n) = model.node_mass_kg[n] * gravity_m_s2;
+  for (int n = 0; n < model.num_nodes(); ++n)
+    force_N.segment<3>(3 * n) = model.node_mass_kg[n] * gravity_m_s2;
   return force_N;
 }
 

@@ -10,11 +10,10 @@
 // show where it fails: it is stable only for Δt below about 2/ω_max.
 // Fixed dofs keep v = 0: their rows and columns of A are replaced by the identity.
 
-#include <memory>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <memory>
+#include <vector>
 
 #include "fem/fem_options.h"
 #include "fem/linear_solver.h"

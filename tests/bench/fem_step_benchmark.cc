@@ -13,7 +13,8 @@
 namespace hapsim {
 namespace {
 
-const char* kScenes[] = {"scenes/block_tiny.yaml", "scenes/block_small.yaml", "scenes/block_large.yaml"};
+const char* kScenes[] = {"scenes/block_tiny.yaml", "scenes/block_small.yaml",
+                         "scenes/block_large.yaml"};
 constexpr int kWarmUpSteps = 30;
 
 struct Fixture {
@@ -29,7 +30,8 @@ const Fixture& GetFixture(int index) {
     auto* f = new Fixture{config::LoadScene(kScenes[index]), {}, {}};
     f->body = config::MakeBody(*f->scene.body, f->scene.gravity_m_s2);
     f->state = fem::MakeRestState(f->body.model);
-    fem::TimeStepper stepper(f->body.model, f->scene.body->options, f->scene.dt_s, f->body.external_force_N);
+    fem::TimeStepper stepper(f->body.model, f->scene.body->options, f->scene.dt_s,
+                             f->body.external_force_N);
     for (int k = 0; k < kWarmUpSteps; ++k) stepper.Step(&f->state);
     fixtures[index] = f;
   }
@@ -45,7 +47,8 @@ void BM_Rotations(benchmark::State& bench) {
   const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
   std::vector<Eigen::Matrix3d> rotations;
   for (auto _ : bench) {
-    fem::CalcElementRotations(f.body.model, f.state.x_m, fem::ElasticityKind::kCorotational, &rotations);
+    fem::CalcElementRotations(f.body.model, f.state.x_m, fem::ElasticityKind::kCorotational,
+                              &rotations);
     benchmark::DoNotOptimize(rotations.data());
   }
   SetCounters(bench, f);
@@ -54,7 +57,8 @@ void BM_Rotations(benchmark::State& bench) {
 void BM_ForcesAndStiffness(benchmark::State& bench) {
   const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
   std::vector<Eigen::Matrix3d> rotations;
-  fem::CalcElementRotations(f.body.model, f.state.x_m, fem::ElasticityKind::kCorotational, &rotations);
+  fem::CalcElementRotations(f.body.model, f.state.x_m, fem::ElasticityKind::kCorotational,
+                            &rotations);
   const fem::StiffnessAssembler assembler(f.body.model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
   Eigen::VectorXd force_N;
@@ -71,7 +75,8 @@ void BM_ForcesAndStiffness(benchmark::State& bench) {
 void BM_ImplicitStep(benchmark::State& bench) {
   const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
   fem::FemOptions options = f.scene.body->options;
-  options.solver.kind = bench.range(1) == 0 ? fem::SolverKind::kConjugateGradient : fem::SolverKind::kCholmod;
+  options.solver.kind =
+      bench.range(1) == 0 ? fem::SolverKind::kConjugateGradient : fem::SolverKind::kCholmod;
   fem::TimeStepper stepper(f.body.model, options, f.scene.dt_s, f.body.external_force_N);
   fem::State state = f.state;
   stepper.Step(&state);  // first step: symbolic analysis and first factorisation

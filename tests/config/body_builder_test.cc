@@ -1,9 +1,10 @@
 // Scene body -> model: totals against closed forms (mass ρV, gravity + load), probes against
 // the point they were placed at and a rigid translation, and the mesh-dependent input errors
 // at the scene line of the key.
+#include "config/body_builder.h"
+
 #include <gtest/gtest.h>
 
-#include "config/body_builder.h"
 #include "config/scene.h"
 #include "core/error.h"
 
@@ -40,7 +41,8 @@ TEST(BodyBuilder, TotalsMatchClosedForms) {
   const double mass_kg = 500.0 * 0.2 * 0.1 * 0.1;
   EXPECT_NEAR(body.model.node_mass_kg.sum(), mass_kg, 1e-12);
   Eigen::Vector3d total_N = Eigen::Vector3d::Zero();
-  for (int n = 0; n < body.model.num_nodes(); ++n) total_N += body.external_force_N.segment<3>(3 * n);
+  for (int n = 0; n < body.model.num_nodes(); ++n)
+    total_N += body.external_force_N.segment<3>(3 * n);
   EXPECT_NEAR(total_N.x(), 3.0, 1e-12);
   EXPECT_NEAR(total_N.z(), -10.0 * mass_kg - 2.0, 1e-12);
   EXPECT_EQ(body.model.num_fixed_nodes(), 3 * 3);  // the x = 0 face of a 4 x 2 x 2 lattice
@@ -62,7 +64,9 @@ TEST(BodyBuilder, ProbesInterpolateThePointAndFollowTranslation) {
   fem::State state = fem::MakeRestState(body.model);
   const Eigen::Vector3d shift_m(0.01, -0.02, 0.005);
   for (int n = 0; n < body.model.num_nodes(); ++n) state.x_m.segment<3>(3 * n) += shift_m;
-  EXPECT_LT((fem::CalcProbeDisplacement(body.model, state, body.probes[0].binding) - shift_m).norm(), 1e-15);
+  EXPECT_LT(
+      (fem::CalcProbeDisplacement(body.model, state, body.probes[0].binding) - shift_m).norm(),
+      1e-15);
 }
 
 void ExpectErrorAt(const std::string& yaml, int line, const std::string& key) {

@@ -4,16 +4,16 @@
 // characterisation R = argmax tr(RᵀF), and a 12×12 element stiffness VBᵀDB built the textbook way.
 #include "fem/corotational.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Dense>
-#include <Eigen/Geometry>
-#include <Eigen/SparseCore>
-#include <gtest/gtest.h>
 
 #include "fem/lattice_mesher.h"
 #include "fem/model.h"

@@ -3,15 +3,14 @@
 // energies at the current rotations, rigid transforms, deterministic random numbers.
 // Header-only; nothing here is under test.
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-#include <Eigen/SparseCore>
 
 #include "fem/cholmod_factor.h"
 #include "fem/corotational.h"

@@ -1,21 +1,23 @@
 // Lattice mesher and mesh utilities against closed-form geometry: counts, volumes (sum of tet
 // volumes vs the box, divergence theorem over the extracted surface), conformity (every interior
 // face shared by exactly two tets), and the ellipsoid volume 4/3 π abc.
+#include "fem/tet_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
 #include <cmath>
 #include <vector>
 
-#include <Eigen/Geometry>
-#include <gtest/gtest.h>
-
 #include "fem/lattice_mesher.h"
-#include "fem/tet_mesh.h"
 
 namespace hapsim::fem {
 namespace {
 
 double SumOfVolumes(const TetMesh& mesh) {
   double volume_m3 = 0.0;
-  for (int t = 0; t < mesh.num_tets(); ++t) volume_m3 += CalcSignedVolume(mesh.rest_positions_m, mesh.tets.col(t));
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    volume_m3 += CalcSignedVolume(mesh.rest_positions_m, mesh.tets.col(t));
   return volume_m3;
 }
 
@@ -43,7 +45,8 @@ TEST(LatticeMesher, VolumesAndSurfaceMatchTheBox) {
   const TetMesh mesh = MakeBoxTetMesh({0.0, 0.0, 0.0}, {0.3, 0.2, 0.1}, {3, 4, 2});
   const double box_volume_m3 = 0.3 * 0.2 * 0.1;
   EXPECT_NEAR(SumOfVolumes(mesh), box_volume_m3, 1e-15);
-  for (int t = 0; t < mesh.num_tets(); ++t) EXPECT_GT(CalcTetQuality(mesh.rest_positions_m, mesh.tets.col(t)), 0.5);
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    EXPECT_GT(CalcTetQuality(mesh.rest_positions_m, mesh.tets.col(t)), 0.5);
   const Matrix3Xi surface = ExtractBoundarySurface(mesh);
   // Each boundary cell face is cut into two triangles: 2·(3·4 + 4·2 + 3·2)·2 faces.
   EXPECT_EQ(surface.cols(), 2 * 2 * (3 * 4 + 4 * 2 + 3 * 2));
@@ -56,8 +59,9 @@ TEST(LatticeMesher, EllipsoidVolumeConvergesToAnalytic) {
   const double exact_m3 = 4.0 / 3.0 * M_PI * radii_m.prod();
   std::vector<double> errors;
   for (double cell_m : {0.012, 0.006, 0.003}) {
-    const TetMesh mesh = MakeImplicitTetMesh(MakeEllipsoidFunction(Eigen::Vector3d::Zero(), radii_m),
-                                             -radii_m * 1.1, radii_m * 1.1, cell_m);
+    const TetMesh mesh =
+        MakeImplicitTetMesh(MakeEllipsoidFunction(Eigen::Vector3d::Zero(), radii_m), -radii_m * 1.1,
+                            radii_m * 1.1, cell_m);
     ASSERT_FALSE(FindRestMeshProblem(mesh).has_value());
     const double error = std::abs(SumOfVolumes(mesh) - exact_m3) / exact_m3;
     EXPECT_NEAR(VolumeFromSurface(mesh, ExtractBoundarySurface(mesh)), SumOfVolumes(mesh), 1e-12);

@@ -5,14 +5,14 @@
 // conservation of linear momentum.
 #include "fem/time_stepper.h"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
-
-#include <Eigen/Dense>
-#include <Eigen/SparseCore>
-#include <gtest/gtest.h>
 
 #include "fem/corotational.h"
 #include "fem/lattice_mesher.h"
