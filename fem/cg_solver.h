@@ -18,7 +18,7 @@ class ConjugateGradientSolver final : public LinearSolver {
 
   // Numeric factorisations done so far (kLaggedCholesky).
   int num_factorizations() const { return num_factorizations_; }
-  const CholmodFactor& factor() const { return factor_; }
+  CholmodFactor* factor() override { return factor_.is_factored() ? &factor_ : nullptr; }
 
  private:
   void PreparePreconditioner(const Eigen::SparseMatrix<double>& A);

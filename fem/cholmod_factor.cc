@@ -76,4 +76,26 @@ void CholmodFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
   *x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(solution_->x), b.size());
 }
 
+Eigen::MatrixXd CholmodFactor::CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J) {
+  if (!factored_) throw std::logic_error("CholmodFactor: no factor");
+  // No body dof involved (every contact on fixed nodes): nothing to solve, and CHOLMOD's sparse
+  // solve refuses an all-zero right-hand side.
+  if (J.nonZeros() == 0) return Eigen::MatrixXd::Zero(J.rows(), J.rows());
+  Eigen::SparseMatrix<double> Jt = J.transpose();
+  Jt.makeCompressed();
+  cholmod_sparse Jt_view = ViewAsCholmod(Jt);
+  Jt_view.stype = 0;  // unsymmetric (rectangular)
+  cholmod_sparse* PJt = cholmod_spsolve(CHOLMOD_P, factor_, &Jt_view, &common_);
+  cholmod_sparse* Z = PJt ? cholmod_spsolve(CHOLMOD_L, factor_, PJt, &common_) : nullptr;
+  cholmod_free_sparse(&PJt, &common_);
+  if (!Z || !cholmod_sort(Z, &common_)) throw std::runtime_error("CHOLMOD sparse solve failed");
+  const Eigen::Map<const Eigen::SparseMatrix<double>> Z_map(
+      static_cast<Eigen::Index>(Z->nrow), static_cast<Eigen::Index>(Z->ncol),
+      static_cast<Eigen::Index>(cholmod_nnz(Z, &common_)), static_cast<const int*>(Z->p),
+      static_cast<const int*>(Z->i), static_cast<const double*>(Z->x));
+  Eigen::MatrixXd result = Eigen::MatrixXd(Z_map.transpose() * Z_map);
+  cholmod_free_sparse(&Z, &common_);
+  return result;
+}
+
 }  // namespace hapsim::fem

@@ -26,6 +26,11 @@ class CholmodFactor {
   // x = A⁻¹ b with the last successful factor. Precondition: Factorize returned true.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
 
+  // J A⁻¹ Jᵀ for sparse J (rows x n): with A = Pᵀ L Lᵀ P it is Zᵀ Z, Z = L⁻¹ P Jᵀ, computed by
+  // sparse forward solves only (each column of Jᵀ has a few entries, so Z stays sparse).
+  // Precondition: Factorize returned true. Returns a dense symmetric (rows x rows) matrix.
+  Eigen::MatrixXd CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J);
+
   bool is_factored() const { return factored_; }
   // From the symbolic analysis (0 before): nonzeros of L, and flops of one numeric factorisation.
   double num_factor_nonzeros() const { return factor_ ? common_.lnz : 0.0; }

@@ -11,7 +11,7 @@ class CholmodSolver final : public LinearSolver {
  public:
   SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
                     Eigen::VectorXd* x) override;
-  const CholmodFactor& factor() const { return factor_; }
+  CholmodFactor* factor() override { return &factor_; }
 
  private:
   CholmodFactor factor_;

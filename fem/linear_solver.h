@@ -6,6 +6,7 @@
 #include <Eigen/SparseCore>
 #include <memory>
 
+#include "fem/cholmod_factor.h"
 #include "fem/fem_options.h"
 
 namespace hapsim::fem {
@@ -24,6 +25,10 @@ class LinearSolver {
   // same between calls (it is analysed once).
   virtual SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
                             Eigen::VectorXd* x) = 0;
+
+  // The Cholesky factor the solver holds, or nullptr: CholmodSolver's is of the last A, CG with
+  // a lagged Cholesky preconditioner holds one of an earlier A. Contact compliance uses it.
+  virtual CholmodFactor* factor() { return nullptr; }
 };
 
 std::unique_ptr<LinearSolver> MakeLinearSolver(const SolverOptions& options);

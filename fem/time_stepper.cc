@@ -32,8 +32,40 @@ TimeStepper::TimeStepper(const Model& model, const FemOptions& options, double d
 }
 
 StepStats TimeStepper::Step(State* state) {
-  return options_.integrator == IntegratorKind::kImplicitEuler ? StepImplicit(state)
-                                                               : StepExplicit(state);
+  Stopwatch total;
+  StepStats stats = CalcFreeVelocityChange(*state, &delta_v_m_s_);
+  Advance(delta_v_m_s_, state);
+  stats.total_s = total.Elapsed();
+  return stats;
+}
+
+StepStats TimeStepper::CalcFreeVelocityChange(const State& state, Eigen::VectorXd* dv_m_s) {
+  return options_.integrator == IntegratorKind::kImplicitEuler
+             ? CalcImplicitVelocityChange(state, dv_m_s)
+             : CalcExplicitVelocityChange(state, dv_m_s);
+}
+
+SolveReport TimeStepper::SolveWithSystemMatrix(const Eigen::VectorXd& rhs, Eigen::VectorXd* x) {
+  if (options_.integrator != IntegratorKind::kImplicitEuler)
+    throw std::logic_error("SolveWithSystemMatrix needs the implicit integrator");
+  scratch_rhs_ = rhs;
+  for (int i : fixed_dofs_) scratch_rhs_[i] = 0.0;
+  return solver_->Solve(system_, scratch_rhs_, x);
+}
+
+Eigen::MatrixXd TimeStepper::CalcCompliance(const Eigen::SparseMatrix<double>& J) {
+  CholmodFactor* factor = solver_->factor();
+  if (options_.integrator != IntegratorKind::kImplicitEuler || factor == nullptr)
+    throw std::logic_error(
+        "contact compliance needs the implicit integrator and a Cholesky factor (solver cholmod "
+        "or cg with the lagged_cholesky preconditioner)");
+  return factor->CalcInverseQuadraticForm(J);
+}
+
+void TimeStepper::Advance(const Eigen::VectorXd& dv_m_s, State* state) const {
+  state->v_m_s += dv_m_s;
+  for (int i : fixed_dofs_) state->v_m_s[i] = 0.0;
+  state->x_m += dt_s_ * state->v_m_s;
 }
 
 void TimeStepper::ApplyFixedDofsToSystem() {
@@ -45,23 +77,23 @@ void TimeStepper::ApplyFixedDofsToSystem() {
   }
 }
 
-StepStats TimeStepper::StepImplicit(State* state) {
+StepStats TimeStepper::CalcImplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s) {
   const double h = dt_s_;
   const double alpha = model_.material.rayleigh_alpha_1_s;
   const double beta = model_.material.rayleigh_beta_s;
   StepStats stats;
   Stopwatch total, stage;
 
-  CalcElementRotations(model_, state->x_m, options_.elasticity, &rotations_);
+  CalcElementRotations(model_, state.x_m, options_.elasticity, &rotations_);
   stats.rotations_s = stage.Lap();
 
   assembler_.Assemble(model_, rotations_, &system_);
-  CalcElasticForce(model_, state->x_m, rotations_, &elastic_force_N_);
-  MultiplySymmetric(system_, state->v_m_s, &stiffness_times_v_N_);
+  CalcElasticForce(model_, state.x_m, rotations_, &elastic_force_N_);
+  MultiplySymmetric(system_, state.v_m_s, &stiffness_times_v_N_);
   // Δt F̃ = Δt (f_ext + f_el − αM v − (β + Δt) K v)
-  rhs_ = h * (external_force_N_ + elastic_force_N_ -
-              alpha * model_.dof_mass_kg.cwiseProduct(state->v_m_s) -
-              (beta + h) * stiffness_times_v_N_);
+  rhs_ = h *
+         (external_force_N_ + elastic_force_N_ -
+          alpha * model_.dof_mass_kg.cwiseProduct(state.v_m_s) - (beta + h) * stiffness_times_v_N_);
   // A = (1 + Δt α) M + (Δt β + Δt²) K, in place over K.
   Eigen::Map<Eigen::VectorXd>(system_.valuePtr(), system_.nonZeros()) *= h * beta + h * h;
   for (int i = 0; i < model_.num_dofs(); ++i)
@@ -70,39 +102,34 @@ StepStats TimeStepper::StepImplicit(State* state) {
   ApplyFixedDofsToSystem();
   stats.assembly_s = stage.Lap();
 
-  stats.solve = solver_->Solve(system_, rhs_, &delta_v_m_s_);  // warm start: previous Δv
+  if (dv_m_s->size() != rhs_.size()) dv_m_s->setZero(rhs_.size());
+  stats.solve = solver_->Solve(system_, rhs_, dv_m_s);  // warm start: the caller's previous Δv
   stats.solve_s = stage.Lap();
-
-  state->v_m_s += delta_v_m_s_;
-  for (int i : fixed_dofs_) state->v_m_s[i] = 0.0;
-  state->x_m += h * state->v_m_s;
   stats.total_s = total.Elapsed();
   return stats;
 }
 
-StepStats TimeStepper::StepExplicit(State* state) {
+StepStats TimeStepper::CalcExplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s) {
   const double h = dt_s_;
   const double alpha = model_.material.rayleigh_alpha_1_s;
   const double beta = model_.material.rayleigh_beta_s;
   StepStats stats;
   Stopwatch total, stage;
 
-  CalcElementRotations(model_, state->x_m, options_.elasticity, &rotations_);
+  CalcElementRotations(model_, state.x_m, options_.elasticity, &rotations_);
   stats.rotations_s = stage.Lap();
 
-  CalcElasticForce(model_, state->x_m, rotations_, &elastic_force_N_);
+  CalcElasticForce(model_, state.x_m, rotations_, &elastic_force_N_);
   rhs_ =
-      external_force_N_ + elastic_force_N_ - alpha * model_.dof_mass_kg.cwiseProduct(state->v_m_s);
+      external_force_N_ + elastic_force_N_ - alpha * model_.dof_mass_kg.cwiseProduct(state.v_m_s);
   if (beta > 0.0) {  // stiffness damping needs K v
     assembler_.Assemble(model_, rotations_, &system_);
-    MultiplySymmetric(system_, state->v_m_s, &stiffness_times_v_N_);
+    MultiplySymmetric(system_, state.v_m_s, &stiffness_times_v_N_);
     rhs_ -= beta * stiffness_times_v_N_;
   }
   stats.assembly_s = stage.Lap();
 
-  state->v_m_s += h * rhs_.cwiseQuotient(model_.dof_mass_kg);
-  for (int i : fixed_dofs_) state->v_m_s[i] = 0.0;
-  state->x_m += h * state->v_m_s;
+  *dv_m_s = h * rhs_.cwiseQuotient(model_.dof_mass_kg);
   stats.solve.converged = true;
   stats.total_s = total.Elapsed();
   return stats;

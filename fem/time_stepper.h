@@ -38,17 +38,33 @@ class TimeStepper {
   TimeStepper(const Model& model, const FemOptions& options, double dt_s,
               Eigen::VectorXd external_force_N);
 
+  // One whole step without contact: CalcFreeVelocityChange, then Advance.
   StepStats Step(State* state);
+
+  // The stages of a step, for the visual frame, which adds contact impulses in between:
+  // Δv_free of the collision-free update (implicit: assembles A and solves A Δv = Δt F̃).
+  StepStats CalcFreeVelocityChange(const State& state, Eigen::VectorXd* dv_m_s);
+  // x = A⁻¹ rhs with the A of the last CalcFreeVelocityChange (implicit integrator only); *x is
+  // the initial guess for CG.
+  SolveReport SolveWithSystemMatrix(const Eigen::VectorXd& rhs, Eigen::VectorXd* x);
+  // J A⁻¹ Jᵀ (rows x rows) with the solver's Cholesky factor: exact for CHOLMOD; for CG with a
+  // lagged Cholesky preconditioner, the factor of an earlier A (an approximation of the same
+  // order as the preconditioner's error). Throws std::logic_error for block Jacobi or explicit.
+  Eigen::MatrixXd CalcCompliance(const Eigen::SparseMatrix<double>& J);
+  // v ← v + Δv (fixed dofs kept at 0), x ← x + Δt v.
+  void Advance(const Eigen::VectorXd& dv_m_s, State* state) const;
 
   double dt_s() const { return dt_s_; }
   const Eigen::VectorXd& external_force_N() const { return external_force_N_; }
   // Element rotations of the last step (at the positions it started from).
   const std::vector<Eigen::Matrix3d>& rotations() const { return rotations_; }
   const LinearSolver* solver() const { return solver_.get(); }
+  // A = M + Δt D + Δt² K of the last CalcFreeVelocityChange (identity rows/columns at fixed dofs).
+  const Eigen::SparseMatrix<double>& system_matrix() const { return system_; }
 
  private:
-  StepStats StepImplicit(State* state);
-  StepStats StepExplicit(State* state);
+  StepStats CalcImplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s);
+  StepStats CalcExplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s);
   void ApplyFixedDofsToSystem();
 
   const Model& model_;
@@ -62,7 +78,7 @@ class TimeStepper {
   // Scratch.
   std::vector<Eigen::Matrix3d> rotations_;
   Eigen::SparseMatrix<double> system_;  // K, then A in place
-  Eigen::VectorXd elastic_force_N_, stiffness_times_v_N_, rhs_, delta_v_m_s_;
+  Eigen::VectorXd elastic_force_N_, stiffness_times_v_N_, rhs_, delta_v_m_s_, scratch_rhs_;
 };
 
 // Gravity on the lumped masses: f = m_n g for every node (3N, N).

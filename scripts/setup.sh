@@ -8,11 +8,12 @@ cd "$(dirname "$0")/.."
 # Why each package: Eigen (linear algebra), SuiteSparse (CHOLMOD sparse Cholesky), OpenBLAS
 # serial (CHOLMOD's supernodal kernels; about 2x faster than the reference BLAS, single-threaded
 # so benchmarks measure one core), yaml-cpp (scenes), CLI11 (command line), GoogleTest and
-# Google Benchmark (tests, benchmarks), nlohmann-json (JSON outputs), matplotlib (charts).
+# Google Benchmark (tests, benchmarks), nlohmann-json (JSON outputs), matplotlib (charts), FCL
+# (collision detection: bounding-volume hierarchy over the body surface, triangle-vs-tool tests).
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas0-serial
-  libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev
+  libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libfcl-dev
   nlohmann-json3-dev python3 python3-matplotlib
 )
 

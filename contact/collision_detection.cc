@@ -1,0 +1,243 @@
+#include "contact/collision_detection.h"
+
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace hapsim::contact {
+namespace {
+
+using Eigen::Vector3d;
+
+// Extra inflation of the broad-phase shape beyond τ. FCL's triangle tests against boxes,
+// capsules and cylinders run libccd's GJK with a 1e-6 m tolerance; 10 µm more makes sure a face
+// that touches the τ-inflated tool is never dropped (the narrow phase decides exactly).
+constexpr double kBroadPhasePad_m = 1e-5;
+
+// A feature point v and the closest point q of a face: the pair counts as a face contact only
+// when v − q lies within 45° of the face normal (lateral offset ≤ |gap|). That rejects a point
+// beside the body's edge (lateral offset, no depth: it is not in front of or behind this face)
+// and accepts a point whose orthogonal projection just misses both faces of a fold (below a
+// valley, or above a ridge, the two faces' normal prisms leave a thin wedge uncovered).
+constexpr double kMaxLateralOverGap = 1.0;
+
+// Normals within 10° count as the same direction when merging duplicates.
+const double kMergeCosine = std::cos(10.0 * M_PI / 180.0);
+
+// Closest point q of face (a, b, c) to v, the face's outward unit normal m and the gap (v − q)·m.
+struct FaceProjection {
+  TrianglePoint closest;
+  Vector3d normal = Vector3d::UnitZ();
+  double gap_m = 0.0;
+  double distance_m = 0.0;  // |v − q|
+};
+
+// False for a degenerate (collapsed) face or when v is too far to the side of the face.
+bool ProjectOntoFace(const Vector3d& v, const Vector3d& a, const Vector3d& b, const Vector3d& c,
+                     FaceProjection* projection) {
+  const Vector3d cross = (b - a).cross(c - a);
+  const double cross_norm = cross.norm();
+  if (!(cross_norm > 0.0)) return false;
+  projection->normal = cross / cross_norm;
+  projection->closest = CalcClosestPointOnTriangle(v, a, b, c);
+  const Vector3d offset = v - projection->closest.point;
+  projection->gap_m = offset.dot(projection->normal);
+  projection->distance_m = offset.norm();
+  const double lateral_m = (offset - projection->gap_m * projection->normal).norm();
+  return lateral_m <= kMaxLateralOverGap * std::abs(projection->gap_m);
+}
+
+void CheckOptions(const DetectionOptions& options) {
+  if (!(options.margin_m >= 0.0))
+    throw std::invalid_argument("DetectionOptions: margin_m must be >= 0");
+  if (!(options.max_feature_penetration_m >= 0.0))
+    throw std::invalid_argument("DetectionOptions: max_feature_penetration_m must be >= 0");
+  if (!(options.feature_merge_distance_m >= 0.0))
+    throw std::invalid_argument("DetectionOptions: feature_merge_distance_m must be >= 0");
+}
+
+}  // namespace
+
+CollisionDetector::CollisionDetector(const fem::Model& body, const ToolShape& tool,
+                                     const DetectionOptions& options, SurfaceBvhKind bvh_kind)
+    : options_(options),
+      num_body_nodes_(body.num_nodes()),
+      surface_triangles_(body.surface_triangles),
+      tool_distance_(tool),
+      tool_features_(MakeToolFeatures(tool)),
+      bvh_(body, bvh_kind),
+      node_visited_(body.num_nodes(), 0) {
+  CheckOptions(options_);
+  if (tool.kind == ToolShape::Kind::kMesh)
+    for (Eigen::Index i = 0; i < tool.mesh.vertices_m.cols(); ++i)
+      mesh_box_T_m_.extend(Vector3d(tool.mesh.vertices_m.col(i)));
+}
+
+void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
+                               const Eigen::Isometry3d& X_WT_start, const Eigen::VectorXd& x_end_m,
+                               const Eigen::Isometry3d& X_WT_end, std::vector<Contact>* contacts) {
+  const Eigen::Index expected = 3 * static_cast<Eigen::Index>(num_body_nodes_);
+  if (x_start_m.size() != expected || (options_.continuous && x_end_m.size() != expected))
+    throw std::invalid_argument("CollisionDetector::Detect: positions must have " +
+                                std::to_string(expected) + " entries");
+  contacts->clear();
+  statistics_ = DetectionStatistics();
+  if (options_.continuous)
+    statistics_.sweep_bound_m = CalcSweepBound(x_start_m, X_WT_start, x_end_m, X_WT_end);
+  statistics_.threshold_m = options_.margin_m + statistics_.sweep_bound_m;
+
+  bvh_.Refit(x_start_m);
+  FindCandidateTriangles(X_WT_start, statistics_.threshold_m + kBroadPhasePad_m);
+  statistics_.num_candidate_triangles = static_cast<int>(candidate_triangles_.size());
+
+  AddNodeContacts(x_start_m, X_WT_start, contacts);
+  const int first_feature_contact = static_cast<int>(contacts->size());
+  AddFeatureContacts(x_start_m, X_WT_start, contacts);
+  statistics_.num_node_contacts = first_feature_contact;
+  statistics_.num_contacts_before_merge = static_cast<int>(contacts->size());
+  statistics_.num_feature_contacts = statistics_.num_contacts_before_merge - first_feature_contact;
+  MergeDuplicates(first_feature_contact, contacts);
+  statistics_.num_contacts_after_merge = static_cast<int>(contacts->size());
+}
+
+double CollisionDetector::CalcSweepBound(const Eigen::VectorXd& x_start_m,
+                                         const Eigen::Isometry3d& X_WT_start,
+                                         const Eigen::VectorXd& x_end_m,
+                                         const Eigen::Isometry3d& X_WT_end) const {
+  const double translation_m = (X_WT_end.translation() - X_WT_start.translation()).norm();
+  const double angle_rad =
+      Eigen::AngleAxisd(X_WT_start.linear().transpose() * X_WT_end.linear()).angle();
+  double node_displacement_m = 0.0;
+  for (int n : bvh_.surface_nodes())
+    node_displacement_m = std::max(
+        node_displacement_m, (x_end_m.segment<3>(3 * n) - x_start_m.segment<3>(3 * n)).norm());
+  return translation_m + angle_rad * tool_distance_.bounding_radius_m() + node_displacement_m;
+}
+
+void CollisionDetector::FindCandidateTriangles(const Eigen::Isometry3d& X_WT, double inflation_m) {
+  const ToolShape& tool = tool_distance_.shape();
+  const double r = tool.radius_m + inflation_m;
+  switch (tool.kind) {
+    case ToolShape::Kind::kSphere:
+      bvh_.FindIntersectingTriangles(fcl::Sphered(r), X_WT, &candidate_triangles_);
+      return;
+    case ToolShape::Kind::kCapsule:  // the exact Minkowski sum with a ball
+      bvh_.FindIntersectingTriangles(fcl::Capsuled(r, tool.length_m), X_WT, &candidate_triangles_);
+      return;
+    case ToolShape::Kind::kCylinder:  // holds the Minkowski sum (its rim is rounded)
+      bvh_.FindIntersectingTriangles(fcl::Cylinderd(r, tool.length_m + 2.0 * inflation_m), X_WT,
+                                     &candidate_triangles_);
+      return;
+    case ToolShape::Kind::kBox:  // holds the Minkowski sum (its edges are rounded)
+      bvh_.FindIntersectingTriangles(
+          fcl::Boxd(2.0 * (tool.half_extents_m.array() + inflation_m).matrix()), X_WT,
+          &candidate_triangles_);
+      return;
+    case ToolShape::Kind::kMesh: {
+      const Eigen::Isometry3d X_WB = X_WT * Eigen::Translation3d(mesh_box_T_m_.center());
+      bvh_.FindIntersectingTriangles(
+          fcl::Boxd(mesh_box_T_m_.sizes() + Vector3d::Constant(2.0 * inflation_m)), X_WB,
+          &candidate_triangles_);
+      return;
+    }
+  }
+}
+
+void CollisionDetector::AddNodeContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
+                                        std::vector<Contact>* contacts) {
+  if (++frame_stamp_ == std::numeric_limits<int>::max()) {
+    std::fill(node_visited_.begin(), node_visited_.end(), 0);
+    frame_stamp_ = 1;
+  }
+  const Eigen::Isometry3d X_TW = X_WT.inverse();
+  for (int f : candidate_triangles_)
+    for (int k = 0; k < 3; ++k) {
+      const int node = surface_triangles_(k, f);
+      if (node_visited_[node] == frame_stamp_) continue;
+      node_visited_[node] = frame_stamp_;
+      const Vector3d p_W = x_m.segment<3>(3 * node);
+      const ToolDistance distance = tool_distance_.Calc(X_TW * p_W);
+      if (distance.distance_m > statistics_.threshold_m) continue;
+      Contact contact;
+      contact.p_tool_W_m = X_WT * distance.closest_T_m;
+      contact.p_body_W_m = p_W;
+      contact.n_W = X_WT.linear() * distance.normal_T;
+      contact.gap_m = distance.distance_m;
+      contact.nodes = {node, -1, -1};
+      contact.weights = {1.0, 0.0, 0.0};
+      contacts->push_back(contact);
+    }
+}
+
+void CollisionDetector::AddFeatureContacts(const Eigen::VectorXd& x_m,
+                                           const Eigen::Isometry3d& X_WT,
+                                           std::vector<Contact>* contacts) {
+  const Eigen::Index num_features = tool_features_.vertices_T_m.cols();
+  if (num_features == 0 || candidate_triangles_.empty()) return;
+  const double threshold_m = statistics_.threshold_m;
+  for (Eigen::Index i = 0; i < num_features; ++i) {
+    const Vector3d v_W = X_WT * tool_features_.vertices_T_m.col(i);
+    const Vector3d axis_W = X_WT.linear() * tool_features_.vertex_normals_T.col(i);
+    FaceProjection best, projection;
+    int best_face = -1;
+    for (int f : candidate_triangles_) {
+      const Eigen::Vector3i tri = surface_triangles_.col(f);
+      if (!ProjectOntoFace(v_W, x_m.segment<3>(3 * tri[0]), x_m.segment<3>(3 * tri[1]),
+                           x_m.segment<3>(3 * tri[2]), &projection))
+        continue;
+      // Back faces: the point can only touch a face whose outward normal opposes its cone axis.
+      if (projection.normal.dot(axis_W) >= 0.0) continue;
+      if (projection.gap_m < -options_.max_feature_penetration_m) continue;
+      if (best_face < 0 || projection.distance_m < best.distance_m) {
+        best = projection;
+        best_face = f;
+      }
+    }
+    if (best_face < 0 || best.gap_m > threshold_m) continue;
+    Contact contact;
+    contact.p_tool_W_m = v_W;
+    contact.p_body_W_m = best.closest.point;
+    contact.n_W = -best.normal;
+    contact.gap_m = best.gap_m;
+    for (int k = 0; k < 3; ++k) {
+      contact.nodes[k] = surface_triangles_(k, best_face);
+      contact.weights[k] = best.closest.weights[k];
+    }
+    contacts->push_back(contact);
+  }
+}
+
+void CollisionDetector::MergeDuplicates(int first_feature_contact, std::vector<Contact>* contacts) {
+  const int num_contacts = static_cast<int>(contacts->size());
+  merged_away_.assign(num_contacts, 0);
+  const double radius_m = options_.feature_merge_distance_m;
+  for (int i = first_feature_contact; i < num_contacts; ++i) {
+    const Contact& feature = (*contacts)[i];
+    for (int j = 0; j < i; ++j) {
+      if (merged_away_[j]) continue;
+      const Contact& other = (*contacts)[j];
+      if ((feature.p_body_W_m - other.p_body_W_m).norm() > radius_m ||
+          feature.n_W.dot(other.n_W) < kMergeCosine)
+        continue;
+      if (feature.gap_m < other.gap_m) {
+        merged_away_[j] = 1;
+      } else {
+        merged_away_[i] = 1;
+        break;
+      }
+    }
+  }
+  int kept = 0;
+  for (int i = 0; i < num_contacts; ++i)
+    if (!merged_away_[i]) (*contacts)[kept++] = (*contacts)[i];
+  contacts->resize(kept);
+}
+
+}  // namespace hapsim::contact

@@ -1,0 +1,113 @@
+#pragma once
+// Collision detection between the rigid tool and the deformable body's surface (DESIGN.md §4,
+// stage 4 of the visual frame): node-versus-tool and tool-feature-versus-face contacts, with a
+// swept (speculative) search region so that a fast tool does not tunnel through a thin body.
+//
+// Pipeline of Detect():
+//   1. refit the surface BVH at the start positions;
+//   2. broad phase: FCL collide of the BVH against the tool primitive inflated by the threshold
+//      τ = margin + sweep bound (a mesh tool: its bounding box inflated by τ) → candidate faces;
+//   3. narrow phase (a) node versus tool: every node of a candidate face, once, with the exact
+//      signed distance to the tool at the start pose; a contact when φ ≤ τ;
+//   4. narrow phase (b) tool feature versus face: every tool feature point v (box corner,
+//      cylinder rim point, mesh vertex) against the candidate faces that face it (outward normal
+//      m opposite to the point's normal-cone axis): the nearest such face whose closest point q
+//      has v − q within 45° of ±m gives φ = (v − q)·m (negative behind the face) and a contact
+//      when φ ≤ τ, distributed to the face's nodes with the barycentric weights of q;
+//   5. merge: a feature contact whose body point lies within feature_merge_distance of another
+//      contact's body point with normals within 10° is a duplicate: only the deeper one stays.
+// Edge-versus-edge contacts are not generated: a tool edge (box edge, rim segment, mesh edge)
+// pressed across a body face between its end points, with no body node inside the tool, sinks
+// in until a node or a feature point meets the other side; the error is bounded by the body's
+// mesh spacing (likewise a smooth tool between nodes sinks by up to the sagitta over one face).
+//
+// Speculative contacts: with `continuous`, the sweep bound is |Δx_tool| + θ·R_tool + max|Δx_node|
+// (θ the rotation angle between the two poses, R_tool the tool's bounding radius), an upper
+// bound on how far any tool or surface point can move within the frame. Contacts are reported
+// up to that distance; their gap is measured at the start, and the solver allows closing at
+// most the gap within the frame (c ≥ −φ/Δt), so nothing crosses even when the free update would.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "contact/contact.h"
+#include "contact/surface_bvh.h"
+#include "contact/tool_distance.h"
+#include "core/tool_shape.h"
+#include "fem/model.h"
+
+namespace hapsim::contact {
+
+struct DetectionOptions {
+  double margin_m = 1e-3;                  // contacts are reported up to this gap (≥ 0), m
+  bool continuous = true;                  // widen the search to the sweep start → end
+  double feature_merge_distance_m = 1e-4;  // duplicate detection radius (≥ 0), m
+  // A tool feature point lying behind a body face deeper than this is not touching that face:
+  // behind-the-plane alone does not mean inside the body (a corner above a thin slab is behind
+  // its bottom face). Penetrations are corrected every frame, so real ones stay shallow. m.
+  double max_feature_penetration_m = 5e-3;
+};
+
+// What the last Detect() call did.
+struct DetectionStatistics {
+  int num_candidate_triangles = 0;    // faces returned by the broad phase
+  int num_node_contacts = 0;          // node-versus-tool contacts, before merging
+  int num_feature_contacts = 0;       // tool-feature-versus-face contacts, before merging
+  int num_contacts_before_merge = 0;  // node + feature contacts
+  int num_contacts_after_merge = 0;   // contacts returned
+  double sweep_bound_m = 0.0;         // 0 without `continuous`
+  double threshold_m = 0.0;           // margin + sweep bound
+};
+
+class CollisionDetector {
+ public:
+  // Keeps its own copies (the body's surface, the tool shape); `body` need not outlive it.
+  // Throws std::invalid_argument for a negative margin or merge distance, a bad tool shape, or a
+  // body without surface triangles.
+  CollisionDetector(const fem::Model& body, const ToolShape& tool, const DetectionOptions& options,
+                    SurfaceBvhKind bvh_kind = SurfaceBvhKind::kAabb);
+
+  // Contacts of the tool against the body surface for one visual frame. Gaps and normals are
+  // measured at the START configuration (x_start_m, X_WT_start); with `continuous` the search
+  // region covers the sweep to the END configuration (x_end_m, X_WT_end: the free,
+  // collision-free update). A contact is reported when φ ≤ margin + sweep bound. Without
+  // `continuous`, the end configuration is ignored (φ ≤ margin). Clears and fills *contacts;
+  // allocates only while its scratch buffers grow.
+  // x_start_m, x_end_m: (3N) stacked node positions, world, m. Throws std::invalid_argument on a
+  // size mismatch.
+  void Detect(const Eigen::VectorXd& x_start_m, const Eigen::Isometry3d& X_WT_start,
+              const Eigen::VectorXd& x_end_m, const Eigen::Isometry3d& X_WT_end,
+              std::vector<Contact>* contacts);
+
+  const DetectionStatistics& statistics() const { return statistics_; }
+  const DetectionOptions& options() const { return options_; }
+  const ToolDistanceField& tool_distance() const { return tool_distance_; }
+  const ToolFeatures& tool_features() const { return tool_features_; }
+
+ private:
+  double CalcSweepBound(const Eigen::VectorXd& x_start_m, const Eigen::Isometry3d& X_WT_start,
+                        const Eigen::VectorXd& x_end_m, const Eigen::Isometry3d& X_WT_end) const;
+  void FindCandidateTriangles(const Eigen::Isometry3d& X_WT, double inflation_m);
+  void AddNodeContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
+                       std::vector<Contact>* contacts);
+  void AddFeatureContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
+                          std::vector<Contact>* contacts);
+  void MergeDuplicates(int first_feature_contact, std::vector<Contact>* contacts);
+
+  DetectionOptions options_;
+  int num_body_nodes_ = 0;
+  Matrix3Xi surface_triangles_;
+  ToolDistanceField tool_distance_;
+  ToolFeatures tool_features_;
+  Eigen::AlignedBox3d mesh_box_T_m_;  // kMesh: bounding box of the tool mesh in T
+  SurfaceBvh bvh_;
+  DetectionStatistics statistics_;
+  // Scratch, reused between calls.
+  std::vector<int> candidate_triangles_;
+  std::vector<int> node_visited_;  // frame stamp per body node
+  std::vector<char> merged_away_;  // per contact of the current call
+  int frame_stamp_ = 0;
+};
+
+}  // namespace hapsim::contact

@@ -1,0 +1,25 @@
+#pragma once
+// One contact between the rigid tool and the deformable body (DESIGN.md §4), as collision
+// detection produces it and the constraint solver consumes it.
+//
+// Sign conventions: n_W points out of the tool, towards the body. The gap is measured along n_W
+// from the tool surface to the body point, gap = (p_body − p_tool)·n, negative when they
+// interpenetrate. The body point is a combination of up to three nodes with barycentric weights
+// (one node with weight 1 for a node-versus-tool contact; a face's three nodes for a tool vertex
+// or edge against a face).
+
+#include <Eigen/Core>
+#include <array>
+
+namespace hapsim::contact {
+
+struct Contact {
+  Eigen::Vector3d p_tool_W_m = Eigen::Vector3d::Zero();  // point on the tool surface, world, m
+  Eigen::Vector3d p_body_W_m = Eigen::Vector3d::Zero();  // point on the body, world, m
+  Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();        // unit normal out of the tool
+  double gap_m = 0.0;                                    // signed gap along n_W, m
+  std::array<int, 3> nodes = {-1, -1, -1};               // body nodes; -1 = unused slot
+  std::array<double, 3> weights = {0.0, 0.0, 0.0};       // barycentric weights, sum 1
+};
+
+}  // namespace hapsim::contact

@@ -1,0 +1,159 @@
+#include "contact/contact_solver.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace hapsim::contact {
+namespace {
+
+ContactSolveReport SolveEquality(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
+                                 Eigen::VectorXd* lambda) {
+  ContactSolveReport report;
+  *lambda = Eigen::PartialPivLU<Eigen::MatrixXd>(dt_s * W).solve(rhs);
+  const double rhs_norm = rhs.norm();
+  report.residual = rhs_norm > 0.0 ? (dt_s * W * *lambda - rhs).norm() / rhs_norm : 0.0;
+  report.converged = lambda->allFinite();
+  return report;
+}
+
+// Complementarity residual of the normal rows, max_i |min(λ_i, c_i / (Δt W_ii))|, in impulse
+// units, relative to the largest |λ| (or absolute when λ = 0).
+double CalcNormalResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
+                          int stride, const Eigen::VectorXd& lambda) {
+  double residual = 0.0;
+  for (Eigen::Index row = 0; row < lambda.size(); row += stride) {
+    const double c = dt_s * W.row(row).dot(lambda) - rhs[row];
+    residual = std::max(residual, std::abs(std::min(lambda[row], c / (dt_s * W(row, row)))));
+  }
+  const double scale = lambda.lpNorm<Eigen::Infinity>();
+  return scale > 0.0 ? residual / scale : residual;
+}
+
+// Projected Gauss–Seidel. For each contact: the normal row gets λ_n ← max(0, λ_n − r_n/(ΔtW_nn));
+// with friction, then each tangent row is relaxed and (λ_t1, λ_t2) projected onto the disc of
+// radius μ λ_n (Jean & Moreau's non-smooth contact dynamics, in its simplest blocked form).
+ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
+                                             double dt_s, int stride, double mu,
+                                             const ContactSolveOptions& options,
+                                             Eigen::VectorXd* lambda) {
+  ContactSolveReport report;
+  const Eigen::Index rows = rhs.size();
+  for (report.iterations = 1; report.iterations <= options.max_iterations; ++report.iterations) {
+    for (Eigen::Index normal = 0; normal < rows; normal += stride) {
+      for (int d = 0; d < stride; ++d) {
+        const Eigen::Index row = normal + d;
+        // Residual of row `row` of ΔtWλ = rhs, solved for λ_row with the others fixed.
+        const double r = dt_s * W.row(row).dot(*lambda) - rhs[row];
+        (*lambda)[row] -= r / (dt_s * W(row, row));
+      }
+      (*lambda)[normal] = std::max(0.0, (*lambda)[normal]);
+      if (stride == 3) {
+        const double limit = mu * (*lambda)[normal];
+        const double tangential = std::hypot((*lambda)[normal + 1], (*lambda)[normal + 2]);
+        if (tangential > limit) {
+          const double scale = tangential > 0.0 ? limit / tangential : 0.0;
+          (*lambda)[normal + 1] *= scale;
+          (*lambda)[normal + 2] *= scale;
+        }
+      }
+    }
+    report.residual = CalcNormalResidual(W, rhs, dt_s, stride, *lambda);
+    if (report.residual <= options.tolerance) {
+      report.converged = true;
+      break;
+    }
+  }
+  report.iterations = std::min(report.iterations, options.max_iterations);
+  return report;
+}
+
+// Frictionless unilateral contact as the convex QP  min ½ λᵀ(ΔtW)λ − rhsᵀλ  s.t. λ ≥ 0, whose
+// optimality conditions are the LCP. Primal active-set method in the manner of Lawson & Hanson's
+// NNLS: add the most violated row to the free set, solve the equality on the free set, and step
+// back along the segment (ratio test) when a free λ would turn negative. Finite and exact to
+// round-off, unlike Gauss–Seidel, which crawls when many contacts are nearly redundant (a stiff
+// body under a flat tool: W is close to the rank-6 tool part).
+ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
+                                  const ContactSolveOptions& options, Eigen::VectorXd* lambda) {
+  const Eigen::Index n = rhs.size();
+  const Eigen::MatrixXd M = dt_s * W;
+  const double tolerance = options.tolerance * std::max(1.0, rhs.lpNorm<Eigen::Infinity>());
+  std::vector<Eigen::Index> free_rows;
+  std::vector<bool> is_free(n, false);
+  lambda->setZero(n);
+  ContactSolveReport report;
+  Eigen::VectorXd w = -rhs;  // w = Mλ − rhs
+  for (; report.iterations < 3 * n + 10; ++report.iterations) {
+    Eigen::Index entering = -1;
+    double most_violated = -tolerance;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!is_free[i] && w[i] < most_violated) most_violated = w[i], entering = i;
+    if (entering < 0) break;
+    free_rows.push_back(entering);
+    is_free[entering] = true;
+    while (true) {
+      const Eigen::Index k = static_cast<Eigen::Index>(free_rows.size());
+      Eigen::MatrixXd M_ff(k, k);
+      Eigen::VectorXd rhs_f(k);
+      for (Eigen::Index a = 0; a < k; ++a) {
+        rhs_f[a] = rhs[free_rows[a]];
+        for (Eigen::Index b = 0; b < k; ++b) M_ff(a, b) = M(free_rows[a], free_rows[b]);
+      }
+      const Eigen::VectorXd z = M_ff.partialPivLu().solve(rhs_f);
+      double step = 1.0;
+      for (Eigen::Index a = 0; a < k; ++a) {
+        const double current = (*lambda)[free_rows[a]];
+        if (z[a] <= 0.0) step = std::min(step, current / (current - z[a]));
+      }
+      for (Eigen::Index a = 0; a < k; ++a)
+        (*lambda)[free_rows[a]] += step * (z[a] - (*lambda)[free_rows[a]]);
+      if (step >= 1.0) break;
+      // Rows that reached zero leave the free set.
+      std::vector<Eigen::Index> kept;
+      for (Eigen::Index row : free_rows) {
+        if ((*lambda)[row] > 0.0) {
+          kept.push_back(row);
+        } else {
+          (*lambda)[row] = 0.0;
+          is_free[row] = false;
+        }
+      }
+      free_rows.swap(kept);
+      if (free_rows.empty()) break;
+    }
+    w = M * *lambda - rhs;
+  }
+  report.residual = CalcNormalResidual(W, rhs, dt_s, 1, *lambda);
+  report.converged = report.residual <= std::max(options.tolerance, 1e-9);
+  return report;
+}
+
+}  // namespace
+
+ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
+                                        double dt_s, int rows_per_contact,
+                                        const ContactSolveOptions& options,
+                                        Eigen::VectorXd* lambda) {
+  if (W.rows() != rhs.size() || W.cols() != rhs.size())
+    throw std::invalid_argument("W must be square with one row per constraint row");
+  if (lambda->size() != rhs.size()) lambda->setZero(rhs.size());
+  if (rhs.size() == 0) return ContactSolveReport{0, 0.0, true};
+  switch (options.law) {
+    case ContactLaw::kEquality:
+      return SolveEquality(W, rhs, dt_s, lambda);
+    case ContactLaw::kUnilateral:
+      if (rows_per_contact != 1)
+        throw std::invalid_argument("unilateral contact uses normal rows only");
+      return SolveActiveSet(W, rhs, dt_s, options, lambda);
+    case ContactLaw::kFriction:
+      if (rows_per_contact != 3) throw std::invalid_argument("friction needs 3 rows per contact");
+      return SolveProjectedGaussSeidel(W, rhs, dt_s, 3, options.friction_coefficient, options,
+                                       lambda);
+  }
+  throw std::invalid_argument("unknown contact law");
+}
+
+}  // namespace hapsim::contact

@@ -1,0 +1,44 @@
+#pragma once
+// Contact impulses from the Delassus matrix (DESIGN.md §4), three laws behind one function:
+//
+//   equality   (the paper)      Δt W λ = b − c_free                    dense LU
+//   unilateral (Signorini)      c = c_free − b + Δt W λ ≥ 0,  λ ≥ 0,  cᵀλ = 0   projected
+//   Gauss–Seidel friction   (Coulomb)        normal rows as unilateral; per contact the tangential
+//   impulse is
+//                               projected onto the disc |λ_t| ≤ μ λ_n     blocked projected
+//                               Gauss–Seidel
+//
+// W is (rows x rows) with W = J_v A_v⁻¹ J_vᵀ + J_ω M⁻¹ A_L⁻¹ J_ωᵀ + J_u A_u⁻¹ J_uᵀ. It is symmetric
+// only when the coupling's torque Jacobian is (zero rotation error), so the equality solve uses
+// partial-pivoting LU rather than LDLᵀ. `rhs` = b − c_free, with b the position stabilisation
+// −β φ/Δt plus any restitution target.
+
+#include <Eigen/Core>
+
+#include "contact/contact_jacobian.h"
+
+namespace hapsim::contact {
+
+enum class ContactLaw { kEquality, kUnilateral, kFriction };
+
+struct ContactSolveOptions {
+  ContactLaw law = ContactLaw::kUnilateral;
+  double friction_coefficient = 0.0;  // μ ≥ 0, kFriction only
+  int max_iterations = 500;           // Gauss–Seidel sweeps
+  double tolerance = 1e-12;           // on the complementarity residual, relative (see below)
+};
+
+struct ContactSolveReport {
+  int iterations = 0;  // Gauss–Seidel sweeps (0 for the direct equality solve)
+  double residual = 0.0;  // max_i |min(λ_i, c_i)|·Δt‖W‖-scaled, or ‖ΔtWλ − rhs‖/‖rhs‖ for equality
+  bool converged = false;
+};
+
+// Solves for the impulses λ (rows). On entry *lambda is the initial guess for Gauss–Seidel
+// (warm start; resized and zeroed if its size is wrong). rows_per_contact must be 3 for kFriction.
+ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
+                                        double dt_s, int rows_per_contact,
+                                        const ContactSolveOptions& options,
+                                        Eigen::VectorXd* lambda);
+
+}  // namespace hapsim::contact

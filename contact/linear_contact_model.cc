@@ -1,0 +1,49 @@
+#include "contact/linear_contact_model.h"
+
+#include <Eigen/LU>
+#include <stdexcept>
+
+namespace hapsim::contact {
+
+Eigen::MatrixXd CalcToolDelassus(const ContactJacobian& J, const ToolStepSystem& tool) {
+  const Eigen::Matrix3d A_v_inv = tool.A_v.inverse();
+  const Eigen::Matrix3d M_inv_A_L_inv = tool.M_inv_W * tool.A_L.inverse();
+  return J.J_v * A_v_inv * J.J_v.transpose() + J.J_w * M_inv_A_L_inv * J.J_w.transpose();
+}
+
+LinearContactModel MakeLinearContactModel(const ContactJacobian& J, const Eigen::MatrixXd& W,
+                                          const ToolStepSystem& tool,
+                                          const Eigen::VectorXd& body_rhs) {
+  LinearContactModel model;
+  model.num_contacts = J.num_rows() / J.rows_per_contact;
+  if (J.num_rows() == 0) return model;
+  const Eigen::PartialPivLU<Eigen::MatrixXd> W_lu(W);
+  if (!(std::abs(W_lu.determinant()) > 0.0)) throw std::runtime_error("singular Delassus matrix");
+  const Eigen::MatrixX3d Y_v = W_lu.solve(J.J_v);  // W⁻¹ J_v  (three solves)
+  const Eigen::MatrixX3d Y_w = W_lu.solve(J.J_w);  // W⁻¹ J_ω  (three solves)
+  const Eigen::VectorXd y_0 = W_lu.solve(body_rhs) / tool.dt_s;
+  const Eigen::Matrix3d A_v_inv = tool.A_v.inverse();
+  const Eigen::Matrix3d M_inv_A_L_inv = tool.M_inv_W * tool.A_L.inverse();
+  model.F_c0_N = J.J_v.transpose() * y_0;
+  model.T_c0_N_m = J.J_w.transpose() * y_0;
+  model.dFc_dF = -J.J_v.transpose() * Y_v * A_v_inv;
+  model.dTc_dF = -J.J_w.transpose() * Y_v * A_v_inv;
+  model.dFc_dT = -J.J_v.transpose() * Y_w * M_inv_A_L_inv;
+  model.dTc_dT = -J.J_w.transpose() * Y_w * M_inv_A_L_inv;
+  return model;
+}
+
+void EvaluateLinearContactModel(const LinearContactModel& model, const Eigen::Vector3d& F_hat_N,
+                                const Eigen::Vector3d& T_hat_N_m, Eigen::Vector3d* F_c_N,
+                                Eigen::Vector3d* T_c_N_m) {
+  *F_c_N = model.F_c0_N + model.dFc_dF * F_hat_N + model.dFc_dT * T_hat_N_m;
+  *T_c_N_m = model.T_c0_N_m + model.dTc_dF * F_hat_N + model.dTc_dT * T_hat_N_m;
+}
+
+void CalcDiscreteTimeWrench(const ToolStepSystem& tool, const ToolState& state,
+                            Eigen::Vector3d* F_hat_N, Eigen::Vector3d* T_hat_N_m) {
+  *F_hat_N = tool.F_tilde_N + tool.A_v * state.v_W_m_s / tool.dt_s;
+  *T_hat_N_m = tool.T_tilde_N_m + tool.A_L * state.L_W_kg_m2_s / tool.dt_s;
+}
+
+}  // namespace hapsim::contact

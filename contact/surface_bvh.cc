@@ -1,0 +1,103 @@
+#include "contact/surface_bvh.h"
+
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/AABB.h>
+#include <fcl/math/bv/OBBRSS.h>
+#include <fcl/narrowphase/collision.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "core/error.h"
+
+namespace hapsim::contact {
+namespace {
+
+template <typename BV>
+std::unique_ptr<fcl::BVHModel<BV>> MakeModel(const std::vector<fcl::Vector3d>& vertices,
+                                             const std::vector<fcl::Triangle>& triangles) {
+  auto model = std::make_unique<fcl::BVHModel<BV>>();
+  model->beginModel(static_cast<int>(triangles.size()), static_cast<int>(vertices.size()));
+  model->addSubModel(vertices, triangles);
+  HAPSIM_INVARIANT(model->endModel() == fcl::BVH_OK);
+  return model;
+}
+
+template <typename BV>
+void RefitModel(const std::vector<int>& surface_nodes, const Eigen::VectorXd& x_m,
+                fcl::BVHModel<BV>* model) {
+  HAPSIM_INVARIANT(model->beginReplaceModel() == fcl::BVH_OK);
+  for (int node : surface_nodes) model->replaceVertex(x_m.segment<3>(3 * node));
+  HAPSIM_INVARIANT(model->endReplaceModel(/*refit=*/true, /*bottomup=*/true) == fcl::BVH_OK);
+}
+
+}  // namespace
+
+struct SurfaceBvh::Impl {
+  std::unique_ptr<fcl::BVHModel<fcl::AABBd>> aabb;
+  std::unique_ptr<fcl::BVHModel<fcl::OBBRSSd>> obbrss;
+  fcl::CollisionRequestd request;
+  fcl::CollisionResultd result;
+  int num_triangles = 0;
+};
+
+SurfaceBvh::SurfaceBvh(const fem::Model& body, SurfaceBvhKind kind)
+    : kind_(kind), num_body_nodes_(body.num_nodes()), impl_(std::make_unique<Impl>()) {
+  const Matrix3Xi& faces = body.surface_triangles;
+  if (faces.cols() == 0) throw std::invalid_argument("SurfaceBvh: body has no surface triangles");
+  std::vector<int> local_index(body.num_nodes(), -1);
+  for (Eigen::Index f = 0; f < faces.cols(); ++f)
+    for (int k = 0; k < 3; ++k) local_index.at(faces(k, f)) = 0;
+  for (int n = 0; n < body.num_nodes(); ++n)
+    if (local_index[n] == 0) {
+      local_index[n] = static_cast<int>(surface_nodes_.size());
+      surface_nodes_.push_back(n);
+    }
+  std::vector<fcl::Vector3d> vertices;
+  vertices.reserve(surface_nodes_.size());
+  for (int n : surface_nodes_) vertices.push_back(body.rest_positions_m.segment<3>(3 * n));
+  std::vector<fcl::Triangle> triangles;
+  triangles.reserve(faces.cols());
+  for (Eigen::Index f = 0; f < faces.cols(); ++f)
+    triangles.emplace_back(local_index[faces(0, f)], local_index[faces(1, f)],
+                           local_index[faces(2, f)]);
+  impl_->num_triangles = static_cast<int>(faces.cols());
+  if (kind_ == SurfaceBvhKind::kAabb)
+    impl_->aabb = MakeModel<fcl::AABBd>(vertices, triangles);
+  else
+    impl_->obbrss = MakeModel<fcl::OBBRSSd>(vertices, triangles);
+  // Every intersecting triangle is wanted; contact points and depths are not.
+  impl_->request.num_max_contacts = static_cast<size_t>(faces.cols());
+  impl_->request.enable_contact = false;
+}
+
+SurfaceBvh::~SurfaceBvh() = default;
+
+int SurfaceBvh::num_triangles() const { return impl_->num_triangles; }
+
+void SurfaceBvh::Refit(const Eigen::VectorXd& x_m) {
+  if (x_m.size() != 3 * num_body_nodes_)
+    throw std::invalid_argument("SurfaceBvh::Refit: x_m has " + std::to_string(x_m.size()) +
+                                " entries, expected " + std::to_string(3 * num_body_nodes_));
+  if (impl_->aabb)
+    RefitModel(surface_nodes_, x_m, impl_->aabb.get());
+  else
+    RefitModel(surface_nodes_, x_m, impl_->obbrss.get());
+}
+
+void SurfaceBvh::FindIntersectingTriangles(const fcl::CollisionGeometry<double>& shape,
+                                           const Eigen::Isometry3d& X_WS,
+                                           std::vector<int>* triangles) {
+  triangles->clear();
+  impl_->result.clear();
+  const fcl::CollisionGeometryd* body =
+      impl_->aabb ? static_cast<const fcl::CollisionGeometryd*>(impl_->aabb.get())
+                  : static_cast<const fcl::CollisionGeometryd*>(impl_->obbrss.get());
+  fcl::collide(body, fcl::Transform3d::Identity(), &shape, X_WS, impl_->request, impl_->result);
+  for (size_t i = 0; i < impl_->result.numContacts(); ++i)
+    triangles->push_back(static_cast<int>(impl_->result.getContact(i).b1));
+  std::sort(triangles->begin(), triangles->end());
+}
+
+}  // namespace hapsim::contact

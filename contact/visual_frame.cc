@@ -1,0 +1,115 @@
+#include "contact/visual_frame.h"
+
+#include <Eigen/Dense>
+
+#include "core/stopwatch.h"
+
+namespace hapsim::contact {
+namespace {
+
+// c = J_v v + J_ω ω + J_u u̇ for every row.
+Eigen::VectorXd CalcSeparatingVelocity(const ContactJacobian& J, const Eigen::Vector3d& v_W_m_s,
+                                       const Eigen::Vector3d& w_W_rad_s,
+                                       const Eigen::VectorXd& u_dot_m_s) {
+  return J.J_v * v_W_m_s + J.J_w * w_W_rad_s + J.J_u * u_dot_m_s;
+}
+
+}  // namespace
+
+VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_options,
+                         Eigen::VectorXd body_external_force_N, ToolModel tool,
+                         const VisualFrameOptions& options)
+    : body_(body),
+      tool_(std::move(tool)),
+      options_(options),
+      rows_per_contact_(options.response.solve.law == ContactLaw::kFriction ? 3 : 1),
+      stepper_(body, fem_options, options.dt_s, std::move(body_external_force_N)),
+      detector_(body, tool_.shape, options.detection) {}
+
+VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, ToolState* tool) {
+  VisualFrameStats stats;
+  Stopwatch total, stage;
+  // 1. Virtual coupling between the device and the visual tool.
+  wrench_ = CalcCouplingWrench(options_.coupling, device, *tool, CalcAngularVelocity(tool_, *tool));
+  stats.coupling_s = stage.Lap();
+  // 2. Collision-free tool update (linearised implicit Euler).
+  tool_system_ = CalcToolStepSystem(tool_, *tool, wrench_, options_.gravity_m_s2, options_.dt_s);
+  CalcFreeVelocityChange(tool_system_, &dv_tool_, &dL_tool_);
+  stats.free_tool_s = stage.Lap();
+  // 3. Collision-free FEM update.
+  stats.fem = stepper_.CalcFreeVelocityChange(*body, &du_body_);
+  stats.free_fem_s = stage.Lap();
+  // 4. Collision detection, swept from the start to the free configuration.
+  DetectContacts(*body, *tool);
+  stats.num_candidates = static_cast<int>(contacts_.size());
+  stats.detection_s = stage.Lap();
+  // 5. Constraint solve and post-collision state of tool and body.
+  SolveResponse(*tool, *body);
+  stats.solve = last_solve_;
+  const Eigen::Isometry3d X_WT_start = CalcPose(*tool);
+  AdvanceTool(tool_, options_.dt_s, dv_tool_, dL_tool_, tool);
+  stepper_.Advance(du_body_, body);
+  stats.num_contacts = static_cast<int>(contacts_.size());
+  for (int row = 0; row < lambda_.size(); row += rows_per_contact_)
+    stats.num_active += lambda_[row] > 0.0;
+  stats.response_s = stage.Lap();
+  // 6. Linear contact model for the haptic step, at the post-collision state.
+  BuildLinearModel(device, X_WT_start, *tool, *body);
+  stats.model_s = stage.Lap();
+  // 7. Sanity pass: nodes still inside the tool are moved to its surface.
+  stats.num_sanity_corrections = RunSanityPass(*tool, body);
+  stats.sanity_s = stage.Lap();
+  stats.total_s = total.Elapsed();
+  return stats;
+}
+
+void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) {
+  const Eigen::VectorXd x_end_m = body.x_m + options_.dt_s * (body.v_m_s + du_body_);
+  ToolState tool_end = tool;
+  AdvanceTool(tool_, options_.dt_s, dv_tool_, dL_tool_, &tool_end);
+  detector_.Detect(body.x_m, CalcPose(tool), x_end_m, CalcPose(tool_end), &contacts_);
+}
+
+void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
+  const double dt = options_.dt_s;
+  const Eigen::Vector3d v_free = tool.v_W_m_s + dv_tool_;
+  const Eigen::Vector3d w_free = tool_system_.M_inv_W * (tool.L_W_kg_m2_s + dL_tool_);
+  const Eigen::VectorXd u_free = body.v_m_s + du_body_;
+  jacobian_ = CalcContactJacobian(contacts_, tool.x_W_m, rows_per_contact_, body_.num_dofs(),
+                                  body_.dof_is_fixed);
+  Eigen::VectorXd c_free = CalcSeparatingVelocity(jacobian_, v_free, w_free, u_free);
+  if (options_.response.solve.law == ContactLaw::kEquality) {
+    std::vector<Contact> colliding;
+    for (int i : SelectCollidingContacts(contacts_, c_free, rows_per_contact_, dt, 0.0))
+      colliding.push_back(contacts_[i]);
+    contacts_.swap(colliding);
+    jacobian_ = CalcContactJacobian(contacts_, tool.x_W_m, rows_per_contact_, body_.num_dofs(),
+                                    body_.dof_is_fixed);
+    c_free = CalcSeparatingVelocity(jacobian_, v_free, w_free, u_free);
+  }
+  const Eigen::VectorXd c_pre = CalcSeparatingVelocity(
+      jacobian_, tool.v_W_m_s, tool_system_.M_inv_W * tool.L_W_kg_m2_s, body.v_m_s);
+  b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
+  W_body_ = stepper_.CalcCompliance(jacobian_.J_u);
+  const Eigen::MatrixXd W = CalcToolDelassus(jacobian_, tool_system_) + W_body_;
+  lambda_.setZero(jacobian_.num_rows());
+  last_solve_ = SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve,
+                                     &lambda_);
+  // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.
+  dv_tool_ += tool_system_.A_v.inverse() * (dt * jacobian_.J_v.transpose() * lambda_);
+  dL_tool_ += tool_system_.A_L.inverse() * (dt * jacobian_.J_w.transpose() * lambda_);
+  if (jacobian_.num_rows() > 0) {
+    Eigen::VectorXd du_contact = Eigen::VectorXd::Zero(body_.num_dofs());
+    stepper_.SolveWithSystemMatrix(dt * (jacobian_.J_u.transpose() * lambda_), &du_contact);
+    du_body_ += du_contact;
+  }
+  c_post_ = c_free + dt * W * lambda_;
+}
+
+Eigen::Vector3d VisualFrame::contact_force_N() const { return jacobian_.J_v.transpose() * lambda_; }
+
+Eigen::Vector3d VisualFrame::contact_torque_N_m() const {
+  return jacobian_.J_w.transpose() * lambda_;
+}
+
+}  // namespace hapsim::contact

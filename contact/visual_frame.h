@@ -1,0 +1,95 @@
+#pragma once
+// One frame of the visual process (DESIGN.md §1), the seven stages in order:
+//   1 coupling to the visual tool   2 free tool update   3 free FEM update
+//   4 collision detection           5 constraint solve + post-collision state
+//   6 linear contact model          7 sanity pass on nodes left inside the tool
+// Step() reads top to bottom as that pipeline. Model data (body model, tool model, options) is
+// fixed at construction; the body and tool states are passed in and updated.
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "contact/collision_detection.h"
+#include "contact/collision_response.h"
+#include "contact/contact_jacobian.h"
+#include "contact/linear_contact_model.h"
+#include "core/rigid_tool.h"
+#include "core/tool_integrator.h"
+#include "core/virtual_coupling.h"
+#include "fem/model.h"
+#include "fem/state.h"
+#include "fem/time_stepper.h"
+
+namespace hapsim::contact {
+
+struct VisualFrameOptions {
+  double dt_s = 1.0 / 30.0;   // visual step
+  double haptic_dt_s = 1e-3;  // step the linear contact model is built for
+  Eigen::Vector3d gravity_m_s2{0.0, 0.0, -9.81};
+  CouplingParams coupling;
+  DetectionOptions detection;
+  ResponseOptions response;
+  double sanity_tolerance_m = 1e-4;  // nodes deeper than this inside the tool are moved out
+};
+
+// Wall time of each stage, seconds, and what the frame found.
+struct VisualFrameStats {
+  double coupling_s = 0.0, free_tool_s = 0.0, free_fem_s = 0.0, detection_s = 0.0;
+  double response_s = 0.0, model_s = 0.0, sanity_s = 0.0, total_s = 0.0;
+  int num_candidates = 0;  // contacts detected
+  int num_contacts = 0;    // contacts made constraints
+  int num_active = 0;      // constraints with λ > 0
+  int num_sanity_corrections = 0;
+  ContactSolveReport solve;
+  fem::StepStats fem;
+};
+
+class VisualFrame {
+ public:
+  // `body` must outlive the frame. body_external_force_N (3N): gravity on the body and loads.
+  VisualFrame(const fem::Model& body, const fem::FemOptions& fem_options,
+              Eigen::VectorXd body_external_force_N, ToolModel tool,
+              const VisualFrameOptions& options);
+
+  VisualFrameStats Step(const DeviceState& device, fem::State* body, ToolState* tool);
+
+  // Results of the last Step.
+  const LinearContactModel& linear_model() const { return linear_model_; }
+  const std::vector<Contact>& contacts() const { return contacts_; }
+  const ContactJacobian& jacobian() const { return jacobian_; }
+  const Eigen::VectorXd& impulses() const { return lambda_; }  // λ per row, N
+  // Contact force on the tool, J_vᵀλ, and torque J_ωᵀλ of the last frame, world.
+  Eigen::Vector3d contact_force_N() const;
+  Eigen::Vector3d contact_torque_N_m() const;
+  const ToolModel& tool_model() const { return tool_; }
+  const VisualFrameOptions& options() const { return options_; }
+
+ private:
+  void DetectContacts(const fem::State& body, const ToolState& tool);
+  void SolveResponse(const ToolState& tool, const fem::State& body);
+  void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
+                        const ToolState& tool, const fem::State& body);
+  int RunSanityPass(const ToolState& tool, fem::State* body) const;
+
+  const fem::Model& body_;
+  ToolModel tool_;
+  VisualFrameOptions options_;
+  int rows_per_contact_;
+  fem::TimeStepper stepper_;
+  CollisionDetector detector_;
+  // Frame data, in stage order.
+  CouplingWrench wrench_;
+  ToolStepSystem tool_system_;
+  Eigen::Vector3d dv_tool_, dL_tool_;
+  Eigen::VectorXd du_body_;
+  std::vector<Contact> contacts_;
+  ContactJacobian jacobian_;
+  Eigen::MatrixXd W_body_;  // J_u A_u⁻¹ J_uᵀ at the visual step, kept for the linear model
+  Eigen::VectorXd b_, lambda_;
+  Eigen::VectorXd c_post_;  // separating velocity of each row after the response
+  ContactSolveReport last_solve_;
+  LinearContactModel linear_model_;
+};
+
+}  // namespace hapsim::contact

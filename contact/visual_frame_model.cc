@@ -1,0 +1,75 @@
+// Stages 6 and 7 of the visual frame: the linear contact model handed to the haptic step, and
+// the sanity pass.
+#include <Eigen/Dense>
+
+#include "contact/visual_frame.h"
+
+namespace hapsim::contact {
+
+// The model is linearised at the post-collision state, for the haptic step: the tool matrices
+// use the haptic Δt and the coupling at the new tool pose; the body's compliance is the one of
+// the visual step (the paper's choice; DESIGN.md §4 leaves open whether a haptic-step compliance
+// is better). Only active constraints (λ > 0) enter: an inactive unilateral contact would
+// otherwise act as an equality and pull the tool.
+void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
+                                   const ToolState& tool, const fem::State& body) {
+  const Eigen::Isometry3d motion = CalcPose(tool) * X_WT_start.inverse();
+  std::vector<Contact> active;
+  std::vector<int> active_rows;
+  for (size_t i = 0; i < contacts_.size(); ++i) {
+    const int row = rows_per_contact_ * static_cast<int>(i);
+    if (!(lambda_[row] > 0.0)) continue;
+    Contact moved = contacts_[i];
+    moved.p_tool_W_m = motion * moved.p_tool_W_m;  // contact points ride with the tool
+    moved.n_W = motion.linear() * moved.n_W;
+    moved.gap_m += options_.dt_s * c_post_[row];  // gap at the end of the frame, to first order
+    active.push_back(moved);
+    for (int d = 0; d < rows_per_contact_; ++d) active_rows.push_back(row + d);
+  }
+  const ContactJacobian J = CalcContactJacobian(active, tool.x_W_m, rows_per_contact_,
+                                                body_.num_dofs(), body_.dof_is_fixed);
+  const CouplingWrench wrench =
+      CalcCouplingWrench(options_.coupling, device, tool, CalcAngularVelocity(tool_, tool));
+  const ToolStepSystem haptic =
+      CalcToolStepSystem(tool_, tool, wrench, options_.gravity_m_s2, options_.haptic_dt_s);
+  Eigen::MatrixXd W = CalcToolDelassus(J, haptic);
+  for (size_t r = 0; r < active_rows.size(); ++r)
+    for (size_t c = 0; c < active_rows.size(); ++c)
+      W(r, c) += W_body_(active_rows[r], active_rows[c]);
+  // Targets at the haptic step: close a remaining gap within one haptic step, or undo a
+  // penetration at the visual rate of stabilisation.
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(J.num_rows());
+  for (size_t i = 0; i < active.size(); ++i) {
+    const double gap_m = active[i].gap_m;
+    b[rows_per_contact_ * static_cast<int>(i)] =
+        gap_m >= 0.0 ? -gap_m / options_.haptic_dt_s
+                     : -options_.response.stabilization_beta * gap_m / options_.dt_s;
+  }
+  linear_model_ = MakeLinearContactModel(J, W, haptic, b - J.J_u * body.v_m_s);
+}
+
+int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body) const {
+  const Eigen::Isometry3d X_WT = CalcPose(tool);
+  const Eigen::Isometry3d X_TW = X_WT.inverse();
+  const Eigen::Vector3d w_W = CalcAngularVelocity(tool_, tool);
+  int corrections = 0;
+  for (const Contact& contact : contacts_) {
+    for (int k = 0; k < 3; ++k) {
+      const int node = contact.nodes[k];
+      if (node < 0 || body_.dof_is_fixed[3 * node]) continue;
+      const Eigen::Vector3d p_W = body->x_m.segment<3>(3 * node);
+      const ToolDistance d = detector_.tool_distance().Calc(X_TW * p_W);
+      if (d.distance_m >= -options_.sanity_tolerance_m) continue;
+      const Eigen::Vector3d n_W = X_WT.linear() * d.normal_T;
+      body->x_m.segment<3>(3 * node) = X_WT * d.closest_T_m;
+      // Remove the velocity that would carry the node back into the tool.
+      const Eigen::Vector3d v_tool_W = tool.v_W_m_s + w_W.cross(p_W - tool.x_W_m);
+      const double closing = (body->v_m_s.segment<3>(3 * node) - v_tool_W).dot(n_W);
+      if (closing < 0.0) body->v_m_s.segment<3>(3 * node) -= closing * n_W;
+      ++corrections;
+    }
+  }
+  return corrections;
+}
+
+}  // namespace hapsim::contact

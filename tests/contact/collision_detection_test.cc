@@ -1,0 +1,390 @@
+// Collision detection (contact/collision_detection.h) against brute force over every surface
+// node with closed-form signed distances, and against hand-computed contacts.
+
+#include "contact/collision_detection.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include "fem/lattice_mesher.h"
+#include "fem/model.h"
+
+namespace hapsim::contact {
+namespace {
+
+using Eigen::Isometry3d;
+using Eigen::Vector3d;
+
+constexpr double kExactTolerance_m = 1e-12;  // round-off on O(10 cm) coordinates
+
+fem::Model MakeBlock(const Vector3d& max_m, const Eigen::Vector3i& cells) {
+  return fem::MakeModel(fem::MakeBoxTetMesh(Vector3d::Zero(), max_m, cells), fem::Material{}, {});
+}
+
+// The 10 × 10 × 5 cm block with 1 cm cells; top face z = 0.05.
+fem::Model MakeReferenceBlock() { return MakeBlock(Vector3d(0.1, 0.1, 0.05), {10, 10, 5}); }
+
+std::set<int> SurfaceNodes(const fem::Model& body) {
+  const Matrix3Xi& faces = body.surface_triangles;
+  return std::set<int>(faces.data(), faces.data() + faces.size());
+}
+
+Isometry3d Pose(const Eigen::Matrix3d& R, const Vector3d& t) {
+  Isometry3d X = Isometry3d::Identity();
+  X.linear() = R;
+  X.translation() = t;
+  return X;
+}
+
+// Closed-form signed distances in the tool frame (independent of contact/tool_distance.cc).
+double ToolSdf(const ToolShape& tool, const Vector3d& p) {
+  switch (tool.kind) {
+    case ToolShape::Kind::kSphere:
+      return p.norm() - tool.radius_m;
+    case ToolShape::Kind::kCapsule: {
+      const double z = std::max(std::abs(p.z()) - 0.5 * tool.length_m, 0.0);
+      return Vector3d(p.x(), p.y(), z).norm() - tool.radius_m;
+    }
+    case ToolShape::Kind::kCylinder: {
+      const Eigen::Vector2d d(std::hypot(p.x(), p.y()) - tool.radius_m,
+                              std::abs(p.z()) - 0.5 * tool.length_m);
+      return std::min(d.maxCoeff(), 0.0) + d.cwiseMax(0.0).norm();
+    }
+    case ToolShape::Kind::kBox: {
+      const Vector3d q = p.cwiseAbs() - tool.half_extents_m;
+      return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+    }
+    case ToolShape::Kind::kMesh:
+      break;
+  }
+  throw std::logic_error("no closed form for a mesh");
+}
+
+// Radius of the smallest sphere about the tool origin holding the tool.
+double BoundingRadius(const ToolShape& tool) {
+  switch (tool.kind) {
+    case ToolShape::Kind::kSphere:
+      return tool.radius_m;
+    case ToolShape::Kind::kCapsule:
+      return tool.radius_m + 0.5 * tool.length_m;
+    case ToolShape::Kind::kCylinder:
+      return std::hypot(tool.radius_m, 0.5 * tool.length_m);
+    case ToolShape::Kind::kBox:
+      return tool.half_extents_m.norm();
+    case ToolShape::Kind::kMesh:
+      break;
+  }
+  throw std::logic_error("not a primitive");
+}
+
+// node → gap of the node-versus-tool contacts (weights {1, 0, 0}).
+std::map<int, double> NodeContactGaps(const std::vector<Contact>& contacts) {
+  std::map<int, double> gaps;
+  for (const Contact& c : contacts)
+    if (c.nodes[1] < 0) {
+      EXPECT_TRUE(gaps.emplace(c.nodes[0], c.gap_m).second) << "node twice";
+    }
+  return gaps;
+}
+
+std::map<int, double> BruteForceGaps(const fem::Model& body, const Eigen::VectorXd& x_m,
+                                     const ToolShape& tool, const Isometry3d& X_WT,
+                                     double threshold_m) {
+  std::map<int, double> gaps;
+  for (int n : SurfaceNodes(body)) {
+    const double gap = ToolSdf(tool, X_WT.inverse() * Vector3d(x_m.segment<3>(3 * n)));
+    if (gap <= threshold_m) gaps[n] = gap;
+  }
+  return gaps;
+}
+
+void ExpectSameGaps(const std::map<int, double>& actual, const std::map<int, double>& expected) {
+  ASSERT_EQ(actual.size(), expected.size());
+  for (const auto& [node, gap] : expected) {
+    ASSERT_EQ(actual.count(node), 1u) << "missing node " << node;
+    EXPECT_NEAR(actual.at(node), gap, kExactTolerance_m) << node;
+  }
+}
+
+TEST(CollisionDetectionTest, SphereRestingOnBlockFindsExactlyTheNodesInside) {
+  const fem::Model body = MakeReferenceBlock();
+  ToolShape sphere;
+  sphere.radius_m = 0.02;
+  const Vector3d c(0.052, 0.047, 0.05 + 0.02 - 0.004);  // 4 mm penetration
+  const Isometry3d X_WT = Pose(Eigen::Matrix3d::Identity(), c);
+  DetectionOptions options;
+  options.continuous = false;
+  CollisionDetector detector(body, sphere, options);
+  std::vector<Contact> contacts;
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  detector.Detect(x, X_WT, x, X_WT, &contacts);
+
+  int num_inside = 0;  // every node of the mesh, interior ones included
+  for (int n = 0; n < body.num_nodes(); ++n)
+    if ((x.segment<3>(3 * n) - c).norm() < sphere.radius_m) ++num_inside;
+  EXPECT_GE(num_inside, 3);
+  EXPECT_EQ(std::count_if(contacts.begin(), contacts.end(),
+                          [](const Contact& k) { return k.gap_m < 0.0; }),
+            num_inside);
+  ExpectSameGaps(NodeContactGaps(contacts),
+                 BruteForceGaps(body, x, sphere, X_WT, options.margin_m));
+  for (const Contact& k : contacts) {
+    ASSERT_LT(k.nodes[1], 0) << "a sphere has no features";
+    const Vector3d p = x.segment<3>(3 * k.nodes[0]);
+    const Vector3d n = (p - c).normalized();
+    EXPECT_NEAR(k.gap_m, (p - c).norm() - sphere.radius_m, kExactTolerance_m);
+    EXPECT_LT((k.n_W - n).norm(), 1e-12);
+    EXPECT_LT((k.p_tool_W_m - (c + sphere.radius_m * n)).norm(), kExactTolerance_m);
+    EXPECT_TRUE(k.p_body_W_m == p);
+    EXPECT_NEAR(k.gap_m, (k.p_body_W_m - k.p_tool_W_m).dot(k.n_W), kExactTolerance_m);
+  }
+  EXPECT_EQ(detector.statistics().num_contacts_after_merge, static_cast<int>(contacts.size()));
+}
+
+// After a large deformation the refitted BVH must still find every node: each tool kind, at a
+// random orientation, against brute force over all surface nodes, with and without the sweep.
+TEST(CollisionDetectionTest, DeformedBodyMatchesBruteForceForEveryPrimitive) {
+  const fem::Model body = MakeBlock(Vector3d(0.1, 0.1, 0.05), {20, 20, 10});  // 5 mm cells
+  int top_node = 0;  // the node at the top centre
+  for (int n = 0; n < body.num_nodes(); ++n)
+    if ((body.rest_positions_m.segment<3>(3 * n) - Vector3d(0.05, 0.05, 0.05)).norm() < 1e-12)
+      top_node = n;
+  std::mt19937 engine(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd x = body.rest_positions_m;
+  for (int n = 0; n < body.num_nodes(); ++n) {
+    const Vector3d X = body.rest_positions_m.segment<3>(3 * n);
+    const double bump = 0.01 * std::sin(M_PI * X.x() / 0.1) * std::sin(M_PI * X.y() / 0.1);
+    x.segment<3>(3 * n) += Vector3d(0.004 * X.z() / 0.05, 0.0, bump * X.z() / 0.05) +
+                           5e-4 * Vector3d(u(engine), u(engine), u(engine));
+  }
+  std::vector<ToolShape> tools(4);
+  tools[0].radius_m = 0.015;
+  tools[1].kind = ToolShape::Kind::kCapsule;
+  tools[1].radius_m = 0.006;
+  tools[1].length_m = 0.03;
+  tools[2].kind = ToolShape::Kind::kCylinder;
+  tools[2].radius_m = 0.008;
+  tools[2].length_m = 0.02;
+  tools[3].kind = ToolShape::Kind::kBox;
+  tools[3].half_extents_m = Vector3d(0.012, 0.008, 0.006);
+  DetectionOptions options;
+  options.margin_m = 2e-3;
+  options.feature_merge_distance_m = 0.0;  // keep every node contact for the comparison
+  for (const ToolShape& tool : tools) {
+    for (int variant = 0; variant < 3; ++variant) {  // discrete; continuous, AABB and OBBRSS
+      const bool continuous = variant > 0;
+      options.continuous = continuous;
+      const SurfaceBvhKind bvh = variant == 2 ? SurfaceBvhKind::kObbrss : SurfaceBvhKind::kAabb;
+      SCOPED_TRACE("tool kind " + std::to_string(static_cast<int>(tool.kind)) + ", variant " +
+                   std::to_string(variant));
+      CollisionDetector detector(body, tool, options, bvh);
+      std::vector<Contact> contacts;
+      const Eigen::Matrix3d R =
+          Eigen::AngleAxisd(2.0, Vector3d(u(engine), u(engine), 1.0).normalized()).matrix();
+      const Isometry3d X_start = Pose(R, Vector3d(0.045, 0.052, 0.056));
+      // A first frame at rest, so that the second one exercises the refit.
+      detector.Detect(body.rest_positions_m, X_start, body.rest_positions_m, X_start, &contacts);
+      const Eigen::Matrix3d dR = Eigen::AngleAxisd(0.05, Vector3d::UnitX()).matrix();
+      const Isometry3d X_end = Pose(dR * R, X_start.translation() + Vector3d(0.0, 0.002, -0.004));
+      Eigen::VectorXd x_end = x;
+      x_end.segment<3>(3 * top_node) += Vector3d(0.0, 0.0, 0.003);  // the largest move, 3 mm
+      detector.Detect(x, X_start, x_end, X_end, &contacts);
+      // Tool translation + rotation angle × bounding radius + max node displacement.
+      const double sweep_m =
+          continuous ? std::hypot(0.002, 0.004) + 0.05 * BoundingRadius(tool) + 0.003 : 0.0;
+      EXPECT_NEAR(detector.statistics().sweep_bound_m, sweep_m, 1e-12);
+      const std::map<int, double> expected =
+          BruteForceGaps(body, x, tool, X_start, options.margin_m + sweep_m);
+      EXPECT_GE(expected.size(), 8u);
+      ExpectSameGaps(NodeContactGaps(contacts), expected);
+    }
+  }
+}
+
+// A sphere that the free update carries 16 cm through a 1 cm slab in one frame: the end pose is
+// collision-free, so only the swept search sees the slab.
+TEST(CollisionDetectionTest, FastSphereDoesNotTunnelThroughThinSlab) {
+  const fem::Model slab = MakeBlock(Vector3d(0.1, 0.1, 0.01), {10, 10, 2});
+  ToolShape sphere;
+  sphere.radius_m = 0.01;
+  const Isometry3d X_start = Pose(Eigen::Matrix3d::Identity(), Vector3d(0.05, 0.05, 0.03));
+  const Isometry3d X_end = Pose(Eigen::Matrix3d::Identity(), Vector3d(0.05, 0.05, -0.13));
+  const Eigen::VectorXd& x = slab.rest_positions_m;
+  DetectionOptions options;
+  std::vector<Contact> contacts;
+
+  options.continuous = false;
+  CollisionDetector discrete(slab, sphere, options);
+  discrete.Detect(x, X_start, x, X_end, &contacts);
+  EXPECT_TRUE(contacts.empty());
+  discrete.Detect(x, X_end, x, X_end, &contacts);  // nor at the end: the sphere tunnelled
+  EXPECT_TRUE(contacts.empty());
+
+  options.continuous = true;
+  CollisionDetector swept(slab, sphere, options);
+  swept.Detect(x, X_start, x, X_end, &contacts);
+  EXPECT_NEAR(swept.statistics().sweep_bound_m, 0.16, 1e-15);
+  ASSERT_FALSE(contacts.empty());
+  const auto nearest =
+      std::min_element(contacts.begin(), contacts.end(),
+                       [](const Contact& a, const Contact& b) { return a.gap_m < b.gap_m; });
+  EXPECT_NEAR(nearest->gap_m, 0.01, kExactTolerance_m);  // node (0.05, 0.05, 0.01) below
+  EXPECT_LT((nearest->p_body_W_m - Vector3d(0.05, 0.05, 0.01)).norm(), kExactTolerance_m);
+  EXPECT_LT((nearest->n_W - Vector3d(0.0, 0.0, -1.0)).norm(), 1e-12);
+  int near_face = 0;
+  for (const Contact& k : contacts)
+    if (k.gap_m < 0.015) {  // every contact the solver would act on first is on the near face
+      EXPECT_NEAR(k.p_body_W_m.z(), 0.01, kExactTolerance_m);
+      EXPECT_LT(k.n_W.z(), 0.0);
+      ++near_face;
+    }
+  EXPECT_GE(near_face, 5);
+}
+
+// A cube standing on a corner, pressed 2 mm into the top face away from any node.
+TEST(CollisionDetectionTest, BoxCornerIntoFaceGivesBarycentricFeatureContact) {
+  const fem::Model body = MakeReferenceBlock();
+  ToolShape box;
+  box.kind = ToolShape::Kind::kBox;
+  box.half_extents_m = Vector3d::Constant(0.01);
+  const Eigen::Matrix3d R =
+      Eigen::Quaterniond::FromTwoVectors(Vector3d::Ones(), Vector3d::UnitZ()).matrix();
+  const Vector3d corner_W(0.0234, 0.0371, 0.05 - 0.002);  // corner (−,−,−) ends up lowest
+  const Isometry3d X_WT = Pose(R, corner_W + Vector3d(0.0, 0.0, std::sqrt(3.0) * 0.01));
+  ASSERT_LT((X_WT * Vector3d::Constant(-0.01) - corner_W).norm(), 1e-15);
+  CollisionDetector detector(body, box, DetectionOptions{});
+  std::vector<Contact> contacts;
+  detector.Detect(body.rest_positions_m, X_WT, body.rest_positions_m, X_WT, &contacts);
+  std::vector<Contact> features;
+  for (const Contact& k : contacts)
+    if (k.nodes[1] >= 0) features.push_back(k);
+  ASSERT_EQ(features.size(), 1u);
+  const Contact& k = features.front();
+  EXPECT_LT((k.p_tool_W_m - corner_W).norm(), kExactTolerance_m);
+  EXPECT_LT((k.p_body_W_m - Vector3d(0.0234, 0.0371, 0.05)).norm(), kExactTolerance_m);
+  EXPECT_LT((k.n_W - Vector3d(0.0, 0.0, -1.0)).norm(), 1e-12);
+  EXPECT_NEAR(k.gap_m, -0.002, kExactTolerance_m);
+  EXPECT_NEAR(k.weights[0] + k.weights[1] + k.weights[2], 1.0, 1e-15);
+  Vector3d combination = Vector3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_GE(k.weights[i], 0.0);
+    const Vector3d node = body.rest_positions_m.segment<3>(3 * k.nodes[i]);
+    EXPECT_NEAR(node.z(), 0.05, 1e-15);  // a top-face triangle
+    combination += k.weights[i] * node;
+  }
+  EXPECT_LT((combination - k.p_body_W_m).norm(), kExactTolerance_m);
+}
+
+// A box whose corner sits 0.07 mm (< feature_merge_distance) from a top node that is itself
+// inside the box: the node contact and the corner contact are the same constraint.
+void CheckDuplicateMerged(double node_lift_m, bool node_contact_survives) {
+  const fem::Model body = MakeReferenceBlock();
+  ToolShape box;
+  box.kind = ToolShape::Kind::kBox;
+  box.half_extents_m = Vector3d(0.0123, 0.0087, 0.006);
+  const Vector3d node_W(0.03, 0.04, 0.05);
+  int node = -1;
+  for (int n = 0; n < body.num_nodes(); ++n)
+    if ((body.rest_positions_m.segment<3>(3 * n) - node_W).norm() < 1e-12) node = n;
+  ASSERT_GE(node, 0);
+  const Vector3d corner_W = node_W + Vector3d(5e-5, 5e-5, -2e-5);  // corner (+,+,−)
+  const Isometry3d X_WT = Pose(Eigen::Matrix3d::Identity(),
+                               corner_W - box.half_extents_m.cwiseProduct(Vector3d(1, 1, -1)));
+  Eigen::VectorXd x = body.rest_positions_m;
+  x[3 * node + 2] += node_lift_m;
+  CollisionDetector detector(body, box, DetectionOptions{});
+  std::vector<Contact> contacts;
+  detector.Detect(x, X_WT, x, X_WT, &contacts);
+  const DetectionStatistics& statistics = detector.statistics();
+  EXPECT_EQ(statistics.num_contacts_before_merge - statistics.num_contacts_after_merge, 1);
+  int node_contacts = 0, corner_contacts = 0;
+  for (const Contact& k : contacts) {
+    if ((k.p_body_W_m - Vector3d(x.segment<3>(3 * node))).norm() > 1e-4) continue;
+    EXPECT_LT((k.n_W - Vector3d(0.0, 0.0, -1.0)).norm(), 1e-3);
+    (k.nodes[1] < 0 ? node_contacts : corner_contacts)++;
+  }
+  EXPECT_EQ(node_contacts, node_contact_survives ? 1 : 0);
+  EXPECT_EQ(corner_contacts, node_contact_survives ? 0 : 1);
+}
+
+TEST(CollisionDetectionTest, DuplicateKeepsTheDeeperNodeContact) {
+  CheckDuplicateMerged(5e-6, /*node_contact_survives=*/true);  // node 2.5e-5 deep, corner 2e-5
+}
+
+TEST(CollisionDetectionTest, DuplicateKeepsTheDeeperFeatureContact) {
+  CheckDuplicateMerged(-5e-6, /*node_contact_survives=*/false);  // node 1.5e-5 deep, corner 2e-5
+}
+
+// A box given as a 12-triangle mesh yields the same contacts as the box primitive.
+TEST(CollisionDetectionTest, MeshToolMatchesPrimitive) {
+  const fem::Model body = MakeReferenceBlock();
+  ToolShape box;
+  box.kind = ToolShape::Kind::kBox;
+  box.half_extents_m = Vector3d(0.012, 0.008, 0.006);
+  ToolShape mesh;
+  mesh.kind = ToolShape::Kind::kMesh;
+  mesh.mesh.vertices_m.resize(3, 8);
+  for (int c = 0; c < 8; ++c)
+    mesh.mesh.vertices_m.col(c) = Vector3d((c & 1) ? 1 : -1, (c & 2) ? 1 : -1, (c & 4) ? 1 : -1)
+                                      .cwiseProduct(box.half_extents_m);
+  mesh.mesh.triangles.resize(3, 12);
+  int f = 0;  // each face: the 4 corners with one bit fixed, split along the 0–3 diagonal
+  for (int bit : {1, 2, 4})
+    for (int value : {0, bit}) {
+      std::vector<int> q;
+      for (int c = 0; c < 8; ++c)
+        if ((c & bit) == value) q.push_back(c);
+      for (const Eigen::Vector3i& t :
+           {Eigen::Vector3i(q[0], q[1], q[3]), Eigen::Vector3i(q[0], q[3], q[2])}) {
+        const auto v = [&](int k) { return Vector3d(mesh.mesh.vertices_m.col(t[k])); };
+        const bool outward = (v(1) - v(0)).cross(v(2) - v(0)).dot(v(0)) > 0.0;
+        mesh.mesh.triangles.col(f++) = outward ? t : Eigen::Vector3i(t[0], t[2], t[1]);
+      }
+    }
+  const Isometry3d X_WT =
+      Pose(Eigen::AngleAxisd(0.7, Vector3d(1.0, -2.0, 0.5).normalized()).matrix(),
+           Vector3d(0.047, 0.053, 0.054));
+  DetectionOptions options;
+  options.margin_m = 3e-3;
+  options.max_feature_penetration_m = 0.05;  // this pose buries a corner deeper than the default
+  std::vector<Contact> from_box, from_mesh;
+  CollisionDetector(body, box, options)
+      .Detect(body.rest_positions_m, X_WT, body.rest_positions_m, X_WT, &from_box);
+  CollisionDetector(body, mesh, options)
+      .Detect(body.rest_positions_m, X_WT, body.rest_positions_m, X_WT, &from_mesh);
+  ASSERT_GT(from_box.size(), 5u);
+  ASSERT_EQ(from_mesh.size(), from_box.size());
+  for (size_t i = 0; i < from_box.size(); ++i) {
+    EXPECT_EQ(from_mesh[i].nodes, from_box[i].nodes);
+    EXPECT_NEAR(from_mesh[i].gap_m, from_box[i].gap_m, kExactTolerance_m);
+    EXPECT_LT((from_mesh[i].p_tool_W_m - from_box[i].p_tool_W_m).norm(), kExactTolerance_m);
+    EXPECT_LT((from_mesh[i].n_W - from_box[i].n_W).norm(), 1e-9);
+  }
+}
+
+TEST(CollisionDetectionTest, RejectsBadInput) {
+  const fem::Model body = MakeBlock(Vector3d::Constant(0.01), {1, 1, 1});
+  ToolShape sphere;
+  sphere.radius_m = 0.01;
+  DetectionOptions options;
+  options.margin_m = -1e-3;
+  EXPECT_THROW(CollisionDetector(body, sphere, options), std::invalid_argument);
+  CollisionDetector detector(body, sphere, DetectionOptions{});
+  std::vector<Contact> contacts;
+  const Eigen::VectorXd too_short = Eigen::VectorXd::Zero(3);
+  EXPECT_THROW(detector.Detect(too_short, Isometry3d::Identity(), too_short, Isometry3d::Identity(),
+                               &contacts),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hapsim::contact

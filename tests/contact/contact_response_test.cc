@@ -1,0 +1,218 @@
+// Contact response and the linear contact model against independent values:
+//  - the equality solve through W against the paper's full KKT system (eq. 10) solved densely;
+//  - projected Gauss–Seidel against an exhaustive enumeration of LCP active sets;
+//  - Coulomb friction on a decoupled contact against its closed form (stick / slide);
+//  - the linear contact model against re-solving the constraints under perturbed F̂, T̂.
+// Small synthetic systems: a 4-node "body" with a random SPD A_u, a tool with a hand-set
+// ToolStepSystem, contacts with random normals and points.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <random>
+#include <vector>
+
+#include "contact/contact_jacobian.h"
+#include "contact/contact_solver.h"
+#include "contact/linear_contact_model.h"
+
+namespace hapsim::contact {
+namespace {
+
+constexpr int kNumNodes = 4;
+constexpr int kNumDofs = 3 * kNumNodes;
+constexpr double kDt_s = 1e-3;
+
+struct Problem {
+  ToolStepSystem tool;
+  ToolState tool_state;
+  Eigen::MatrixXd A_u;            // body system matrix (dense, SPD)
+  Eigen::VectorXd u_dot_m_s;      // body velocities (frozen)
+  Eigen::VectorXd body_force_dt;  // Δt F̃_u
+  std::vector<Contact> contacts;
+  Eigen::VectorXd b;  // stabilisation targets
+};
+
+// A reproducible random problem. `symmetric_tool` makes A_L's coupling term symmetric so W is
+// symmetric (needed for the LCP enumeration to be a fair reference for PGS).
+Problem MakeProblem(int num_contacts, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  auto random3 = [&] { return Eigen::Vector3d(unit(rng), unit(rng), unit(rng)); };
+  Problem p;
+  p.tool.dt_s = kDt_s;
+  const double m_kg = 0.05, k_N_m = 2000.0, b_N_s_m = 2.0;
+  p.tool.A_v = (m_kg + kDt_s * b_N_s_m + kDt_s * kDt_s * k_N_m) * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d inertia = Eigen::Vector3d(2e-5, 3e-5, 1e-5).asDiagonal();
+  p.tool.M_inv_W = inertia.inverse();
+  const Eigen::Matrix3d C = (kDt_s * 0.01 + kDt_s * kDt_s * 1.0) * Eigen::Matrix3d::Identity();
+  p.tool.A_L = Eigen::Matrix3d::Identity() + C * p.tool.M_inv_W;
+  p.tool.F_tilde_N = Eigen::Vector3d(0.3, -0.2, -3.0);
+  p.tool.T_tilde_N_m = Eigen::Vector3d(0.01, 0.02, -0.005);
+  p.tool_state.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.02);
+  p.tool_state.v_W_m_s = 0.05 * random3();
+  p.tool_state.L_W_kg_m2_s = 1e-6 * random3();
+  const Eigen::MatrixXd R = Eigen::MatrixXd::Random(kNumDofs, kNumDofs);
+  p.A_u = R * R.transpose() * 1e-3 + 1e-2 * Eigen::MatrixXd::Identity(kNumDofs, kNumDofs);
+  p.u_dot_m_s = 0.01 * Eigen::VectorXd::Random(kNumDofs);
+  p.body_force_dt = 1e-4 * Eigen::VectorXd::Random(kNumDofs);
+  for (int i = 0; i < num_contacts; ++i) {
+    Contact c;
+    c.n_W = (random3() + Eigen::Vector3d(0, 0, -2.0)).normalized();  // tool pressing down
+    c.p_tool_W_m = p.tool_state.x_W_m + 0.01 * random3();
+    c.nodes = {i % kNumNodes, (i + 1) % kNumNodes, -1};
+    const double w = 0.5 + 0.4 * unit(rng);
+    c.weights = {w, 1.0 - w, 0.0};
+    c.gap_m = 1e-4 * unit(rng);
+    p.contacts.push_back(c);
+    p.b.conservativeResize(i + 1);
+    p.b[i] = -0.2 * c.gap_m / kDt_s;
+  }
+  return p;
+}
+
+struct Assembled {
+  ContactJacobian J;
+  Eigen::MatrixXd W;
+  Eigen::VectorXd c_free;  // separating velocity after the collision-free update
+};
+
+Assembled Assemble(const Problem& p, int rows_per_contact) {
+  Assembled a;
+  a.J = CalcContactJacobian(p.contacts, p.tool_state.x_W_m, rows_per_contact, kNumDofs,
+                            std::vector<std::uint8_t>(kNumDofs, 0));
+  const Eigen::MatrixXd J_u = Eigen::MatrixXd(a.J.J_u);
+  a.W = CalcToolDelassus(a.J, p.tool) + J_u * p.A_u.ldlt().solve(J_u.transpose());
+  const Eigen::Vector3d v_free =
+      p.tool.A_v.inverse() * kDt_s * p.tool.F_tilde_N + p.tool_state.v_W_m_s;
+  const Eigen::Vector3d L_free =
+      p.tool.A_L.inverse() * kDt_s * p.tool.T_tilde_N_m + p.tool_state.L_W_kg_m2_s;
+  const Eigen::VectorXd u_free = p.u_dot_m_s + p.A_u.ldlt().solve(p.body_force_dt);
+  a.c_free = a.J.J_v * v_free + a.J.J_w * p.tool.M_inv_W * L_free + J_u * u_free;
+  return a;
+}
+
+TEST(ContactResponse, EqualitySolveMatchesFullKktSystem) {
+  const Problem p = MakeProblem(5, 1);
+  const Assembled a = Assemble(p, 1);
+  Eigen::VectorXd lambda;
+  const ContactSolveReport report =
+      SolveContactImpulses(a.W, p.b - a.c_free, kDt_s, 1, {ContactLaw::kEquality}, &lambda);
+  EXPECT_LT(report.residual, 1e-12);
+
+  // The paper's eq. (10): unknowns (Δv, ΔL, Δu̇, λ), assembled and solved densely.
+  const int n = 5, size = 6 + kNumDofs + n;
+  const Eigen::MatrixXd J_u = Eigen::MatrixXd(a.J.J_u);
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(size, size);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(size);
+  K.block<3, 3>(0, 0) = p.tool.A_v;
+  K.block(0, 6 + kNumDofs, 3, n) = -kDt_s * a.J.J_v.transpose();
+  K.block<3, 3>(3, 3) = p.tool.A_L;
+  K.block(3, 6 + kNumDofs, 3, n) = -kDt_s * a.J.J_w.transpose();
+  K.block(6, 6, kNumDofs, kNumDofs) = p.A_u;
+  K.block(6, 6 + kNumDofs, kNumDofs, n) = -kDt_s * J_u.transpose();
+  K.block(6 + kNumDofs, 0, n, 3) = a.J.J_v;
+  K.block(6 + kNumDofs, 3, n, 3) = a.J.J_w * p.tool.M_inv_W;
+  K.block(6 + kNumDofs, 6, n, kNumDofs) = J_u;
+  rhs.segment<3>(0) = kDt_s * p.tool.F_tilde_N;
+  rhs.segment<3>(3) = kDt_s * p.tool.T_tilde_N_m;
+  rhs.segment(6, kNumDofs) = p.body_force_dt;
+  rhs.tail(n) = p.b - a.J.J_v * p.tool_state.v_W_m_s -
+                a.J.J_w * p.tool.M_inv_W * p.tool_state.L_W_kg_m2_s - J_u * p.u_dot_m_s;
+  const Eigen::VectorXd solution = K.fullPivLu().solve(rhs);
+  EXPECT_LT((solution.tail(n) - lambda).norm(), 1e-9 * lambda.norm());
+}
+
+// Exact LCP solution by trying every active set: λ_A = (ΔtW_AA)⁻¹ rhs_A, λ_rest = 0, and keep the
+// one with λ ≥ 0 and c = ΔtWλ − rhs ≥ 0.
+Eigen::VectorXd SolveLcpByEnumeration(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs) {
+  const int n = static_cast<int>(rhs.size());
+  for (int mask = 0; mask < (1 << n); ++mask) {
+    std::vector<int> active;
+    for (int i = 0; i < n; ++i)
+      if (mask & (1 << i)) active.push_back(i);
+    Eigen::VectorXd lambda = Eigen::VectorXd::Zero(n);
+    if (!active.empty()) {
+      Eigen::MatrixXd W_aa(active.size(), active.size());
+      Eigen::VectorXd r_a(active.size());
+      for (size_t i = 0; i < active.size(); ++i) {
+        r_a[i] = rhs[active[i]];
+        for (size_t j = 0; j < active.size(); ++j) W_aa(i, j) = kDt_s * W(active[i], active[j]);
+      }
+      const Eigen::VectorXd l_a = W_aa.lu().solve(r_a);
+      for (size_t i = 0; i < active.size(); ++i) lambda[active[i]] = l_a[i];
+    }
+    const Eigen::VectorXd c = kDt_s * W * lambda - rhs;
+    if (lambda.minCoeff() >= -1e-12 && c.minCoeff() >= -1e-12 * rhs.norm()) return lambda;
+  }
+  ADD_FAILURE() << "no active set solves the LCP";
+  return Eigen::VectorXd::Zero(n);
+}
+
+TEST(ContactResponse, ProjectedGaussSeidelMatchesEnumeratedLcp) {
+  for (unsigned seed = 2; seed < 12; ++seed) {
+    Problem p = MakeProblem(6, seed);
+    // Mixed signs so that some contacts separate: the active set is not all of them.
+    for (int i = 0; i < 6; i += 2) p.b[i] -= 5.0;
+    const Assembled a = Assemble(p, 1);
+    const Eigen::VectorXd rhs = p.b - a.c_free;
+    Eigen::VectorXd lambda;
+    ContactSolveOptions options{ContactLaw::kUnilateral};
+    options.max_iterations = 20000;
+    const ContactSolveReport report = SolveContactImpulses(a.W, rhs, kDt_s, 1, options, &lambda);
+    EXPECT_TRUE(report.converged) << "seed " << seed << " residual " << report.residual;
+    const Eigen::VectorXd exact = SolveLcpByEnumeration(a.W, rhs);
+    EXPECT_LT((lambda - exact).norm(), 1e-8 * std::max(1.0, exact.norm())) << "seed " << seed;
+  }
+}
+
+TEST(ContactResponse, CoulombFrictionSticksInsideTheConeAndSlidesOnIt) {
+  // One contact whose rows are decoupled (W diagonal): the closed form is λ_n = rhs_n/(ΔtW_nn),
+  // λ_t = rhs_t/(ΔtW_tt) if |λ_t| ≤ μλ_n (stick), else μλ_n along it (slide).
+  const Eigen::Matrix3d W = Eigen::Vector3d(2.0, 3.0, 3.0).asDiagonal();
+  const double mu = 0.5;
+  ContactSolveOptions options{ContactLaw::kFriction, mu};
+  for (const double tangential : {0.3e-3, 3e-3}) {  // stick, then slide
+    const Eigen::Vector3d rhs(4e-3, tangential, -0.5 * tangential);
+    Eigen::VectorXd lambda;
+    SolveContactImpulses(W, rhs, kDt_s, 3, options, &lambda);
+    const double normal = rhs[0] / (kDt_s * W(0, 0));
+    const Eigen::Vector2d stick = rhs.tail<2>() / (kDt_s * 3.0);
+    const Eigen::Vector2d expected =
+        stick.norm() <= mu * normal ? stick : (mu * normal) * stick.normalized();
+    EXPECT_NEAR(lambda[0], normal, 1e-12 * normal);
+    EXPECT_LT((lambda.tail<2>() - expected).norm(), 1e-12 * normal);
+  }
+}
+
+TEST(LinearContactModel, ReproducesTheEqualitySolveAtAndAwayFromItsLinearisation) {
+  const Problem p = MakeProblem(7, 21);
+  const Assembled a = Assemble(p, 1);
+  const Eigen::MatrixXd J_u = Eigen::MatrixXd(a.J.J_u);
+  const Eigen::VectorXd u_free = p.u_dot_m_s + p.A_u.ldlt().solve(p.body_force_dt);
+  const LinearContactModel model = MakeLinearContactModel(a.J, a.W, p.tool, p.b - J_u * u_free);
+  Eigen::Vector3d F_hat, T_hat;
+  CalcDiscreteTimeWrench(p.tool, p.tool_state, &F_hat, &T_hat);
+  // Perturb F̂, T̂ as the user's motion would between visual frames.
+  for (const double scale : {0.0, 1.0, 10.0}) {
+    const Eigen::Vector3d dF = scale * Eigen::Vector3d(0.5, -1.0, 2.0);
+    const Eigen::Vector3d dT = scale * Eigen::Vector3d(-0.01, 0.02, 0.005);
+    ToolStepSystem tool = p.tool;
+    tool.F_tilde_N += dF;
+    tool.T_tilde_N_m += dT;
+    // Full re-solve with the perturbed free velocities.
+    const Eigen::Vector3d v_free = tool.A_v.inverse() * kDt_s * (F_hat + dF);
+    const Eigen::Vector3d w_free = tool.M_inv_W * tool.A_L.inverse() * kDt_s * (T_hat + dT);
+    const Eigen::VectorXd c_free = a.J.J_v * v_free + a.J.J_w * w_free + J_u * u_free;
+    Eigen::VectorXd lambda;
+    SolveContactImpulses(a.W, p.b - c_free, kDt_s, 1, {ContactLaw::kEquality}, &lambda);
+    const Eigen::Vector3d F_solve = a.J.J_v.transpose() * lambda;
+    const Eigen::Vector3d T_solve = a.J.J_w.transpose() * lambda;
+    Eigen::Vector3d F_model, T_model;
+    EvaluateLinearContactModel(model, F_hat + dF, T_hat + dT, &F_model, &T_model);
+    EXPECT_LT((F_model - F_solve).norm(), 1e-9 * F_solve.norm()) << "scale " << scale;
+    EXPECT_LT((T_model - T_solve).norm(), 1e-9 * T_solve.norm()) << "scale " << scale;
+  }
+}
+
+}  // namespace
+}  // namespace hapsim::contact

@@ -1,0 +1,93 @@
+// The body's contact compliance J A⁻¹ Jᵀ and extra solves with the step's system matrix, against
+// a dense factorisation of the same A (a second method). With CG + lagged Cholesky the compliance
+// comes from an older factor: the test bounds that approximation after the body has moved.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <random>
+
+#include "fem/lattice_mesher.h"
+#include "fem/model.h"
+#include "fem/time_stepper.h"
+
+namespace hapsim::fem {
+namespace {
+
+Model MakeBlock() {
+  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {4, 4, 2});
+  Material material;
+  material.youngs_modulus_Pa = 5e4;
+  return MakeModel(mesh, material, FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0.0));
+}
+
+// Rows like contact rows: a unit direction spread over three free nodes with barycentric weights.
+Eigen::SparseMatrix<double> MakeContactRows(const Model& model, int rows, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> node(0, model.num_nodes() - 1);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int r = 0; r < rows; ++r) {
+    const Eigen::Vector3d n = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
+    for (int k = 0; k < 3; ++k) {
+      const int nd = node(rng);
+      for (int a = 0; a < 3; ++a)
+        if (!model.dof_is_fixed[3 * nd + a]) entries.emplace_back(r, 3 * nd + a, n[a] / 3.0);
+    }
+  }
+  Eigen::SparseMatrix<double> J(rows, model.num_dofs());
+  J.setFromTriplets(entries.begin(), entries.end());
+  return J;
+}
+
+TEST(ContactCompliance, CholmodMatchesDenseInverse) {
+  const Model model = MakeBlock();
+  FemOptions options;
+  options.solver.kind = SolverKind::kCholmod;
+  TimeStepper stepper(model, options, 1.0 / 60.0, CalcGravityForce(model, {0, 0, -9.81}));
+  State state = MakeRestState(model);
+  for (int k = 0; k < 5; ++k) stepper.Step(&state);
+  Eigen::VectorXd dv;
+  stepper.CalcFreeVelocityChange(state, &dv);
+  const Eigen::SparseMatrix<double> J = MakeContactRows(model, 12, 3);
+  const Eigen::MatrixXd W = stepper.CalcCompliance(J);
+  const Eigen::MatrixXd A = Eigen::MatrixXd(stepper.system_matrix());
+  const Eigen::MatrixXd Jd = Eigen::MatrixXd(J);
+  const Eigen::MatrixXd expected = Jd * A.ldlt().solve(Jd.transpose());
+  EXPECT_LT((W - expected).norm(), 1e-10 * expected.norm());
+
+  const Eigen::VectorXd rhs = Jd.transpose() * Eigen::VectorXd::Ones(12);
+  Eigen::VectorXd x;
+  stepper.SolveWithSystemMatrix(rhs, &x);
+  EXPECT_LT((x - A.ldlt().solve(rhs)).norm(), 1e-10 * x.norm());
+}
+
+TEST(ContactCompliance, LaggedFactorApproximatesTheCurrentCompliance) {
+  const Model model = MakeBlock();
+  FemOptions options;  // CG + lagged Cholesky
+  TimeStepper stepper(model, options, 1.0 / 60.0, CalcGravityForce(model, {0, 0, -9.81}));
+  State state = MakeRestState(model);
+  // Bend the block a visible amount so the warped stiffness has moved away from the rest one.
+  for (int n = 0; n < model.num_nodes(); ++n) {
+    const double z_m = model.mesh.rest_positions_m(2, n);
+    state.x_m[3 * n] += 0.05 * z_m * z_m / 0.02;  // top face rotated by atan(0.1) ≈ 6°
+  }
+  Eigen::VectorXd dv;
+  stepper.CalcFreeVelocityChange(MakeRestState(model), &dv);  // factor at rest
+  stepper.CalcFreeVelocityChange(state, &dv);                 // A at the bent state
+  const Eigen::SparseMatrix<double> J = MakeContactRows(model, 12, 4);
+  const Eigen::MatrixXd A = Eigen::MatrixXd(stepper.system_matrix());
+  const Eigen::MatrixXd Jd = Eigen::MatrixXd(J);
+  const Eigen::MatrixXd exact = Jd * A.ldlt().solve(Jd.transpose());
+  const double relative_error = (stepper.CalcCompliance(J) - exact).norm() / exact.norm();
+  // Non-zero (the factor is stale) but small: element rotations of up to 6° change K by a few %.
+  EXPECT_GT(relative_error, 1e-8);
+  EXPECT_LT(relative_error, 0.05);
+  // An exact solve with the current A still goes through CG.
+  const Eigen::VectorXd rhs = Jd.transpose() * Eigen::VectorXd::Ones(12);
+  Eigen::VectorXd x;
+  stepper.SolveWithSystemMatrix(rhs, &x);
+  EXPECT_LT((x - A.ldlt().solve(rhs)).norm(), 1e-5 * x.norm());
+}
+
+}  // namespace
+}  // namespace hapsim::fem
