@@ -1,6 +1,7 @@
 // The scene schema (documented in config/scene.h), read top to bottom with the checked getters of
 // config/yaml_reader.h. Range checks that involve more than one value (box max > min, exactly one
-// mesh source, unique probe names, the mesh file on disk) are made here.
+// mesh source, unique probe names, the mesh file on disk) are made here; the simulation sections
+// (tool, coupling, contact, haptic, device) are read in simulation_sections.cc.
 
 #include "config/scene.h"
 
@@ -8,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "config/simulation_sections.h"
 #include "config/yaml_reader.h"
 #include "core/error.h"
 
@@ -189,7 +191,8 @@ BodyScene ReadBody(const YamlMap& map, const std::string& base_dir) {
 Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
                  const std::string& base_dir) {
   const YamlMap root = YamlMap::Parse(yaml_text, file_label);
-  root.CheckKeys({"name", "description", "gravity_m_s2", "time", "body"});
+  root.CheckKeys({"name", "description", "gravity_m_s2", "time", "body", "tool", "coupling",
+                  "contact", "haptic", "device"});
   Scene scene;
   scene.file = file_label;
   scene.name = root.GetString("name");
@@ -205,6 +208,7 @@ Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
   if (const std::optional<YamlMap> body = root.FindMap("body")) {
     scene.body = ReadBody(*body, base_dir);
   }
+  ReadSimulationSections(root, time, base_dir, &scene);
   return scene;
 }
 

@@ -2,14 +2,15 @@
 // A scene file (YAML, scenes/*.yaml) parsed and validated into plain structs, SI units.
 //
 // Every error names the file, the 1-based line and the key: an unknown key, a wrong type, an
-// out-of-range value (E ≤ 0, ν outside (−1, 0.5), dt ≤ 0, …). Later issues add `tool`,
-// `device`, `contact` and `haptic` sections; a scene without `body` builds no FEM.
+// out-of-range value (E ≤ 0, ν outside (−1, 0.5), dt ≤ 0, …). A scene without `body` builds no
+// FEM; a scene without `tool` has no tool, coupling, contact, haptic or device. An error inside
+// a tool mesh file names that file and its line.
 //
 //   name: block_small                  # required, string
 //   description: "…"                   # optional
 //   gravity_m_s2: [0, 0, -9.81]        # optional, default (0, 0, -9.81)
 //   time:
-//     dt_s: 0.016666666666666666       # required, > 0
+//     dt_s: 0.016666666666666666       # required, > 0 (the visual frame)
 //     num_steps: 200                   # required, ≥ 1
 //   body:                              # optional: the deformable body
 //     mesh:                            # exactly one of box / ellipsoid / file
@@ -30,17 +31,50 @@
 //                                      # type cg | cholmod (default cg); preconditioner
 //                                      # lagged_cholesky | block_jacobi; tol in (0, 1); iters ≥ 1
 //     fixed: {min_m: [..], max_m: [..]}   # optional: nodes inside this box are fixed
-//     loads:                           # optional: total force spread evenly over the nodes in a
-//     box
+//     loads:                           # optional: each total force spread evenly over the
+//                                      # nodes in its box
 //       - {min_m: [..], max_m: [..], total_force_N: [fx, fy, fz]}
 //     probes:                          # optional: points whose displacement is reported
 //       - {name: top_center, position_m: [0, 0, 0.05]}
+//   tool:                              # optional: the rigid tool (DESIGN.md §3); needs coupling
+//                                      # and device
+//     shape:                           # exactly one of (tool frame T: origin at the COM, z the
+//                                      # axis of a capsule or cylinder):
+//       sphere: {radius_m: 0.01}                        # > 0
+//       capsule: {radius_m: 0.005, length_m: 0.05}      # radius > 0, length ≥ 0 (cap centres)
+//       cylinder: {radius_m: 0.01, length_m: 0.06}      # > 0 each (full height)
+//       box: {half_extents_m: [0.01, 0.01, 0.02]}       # > 0 each
+//       mesh: {file: tools/probe.stl}  # closed OBJ/STL in metres, relative to the scene file's
+//                                      # folder; re-centred on its centre of mass
+//     mass_kg: 0.05                    # exactly one of mass_kg / density_kg_m3, > 0
+//     position_m: [0, 0, 0.09]         # initial centre of mass, world; default 0
+//     rotation_vector_rad: [0, 0, 0]   # initial orientation q_WT = exp(axis · angle); default 0
+//   coupling:                          # required with a tool: the virtual coupling, ≥ 0 each
+//     {k_lin_N_m: 2000, b_lin_N_s_m: 5, k_ang_N_m_rad: 2, b_ang_N_m_s_rad: 0.01}
+//   contact:                           # optional (with a tool), defaults as shown
+//     law: unilateral                  # equality | unilateral | friction
+//     friction_coefficient: 0.3        # ≥ 0; required with friction, an error with other laws
+//     stabilization_beta: 0.2          # in [0, 1]: fraction of a penetration undone per frame
+//     restitution: 0.0                 # in [0, 1]
+//     margin_m: 0.001                  # ≥ 0: contacts are detected up to this gap
+//   haptic:                            # optional (with a tool), defaults as shown
+//     rate_hz: 1000                    # > 0; rate_hz · dt_s must be an integer ≥ 1 (to 1e-9):
+//                                      # the number of haptic steps per visual frame
+//     mode: linear                     # linear | lcp | coupling | reference
+//   device:                            # required with a tool
+//     trajectory:                      # scripted device motion (device/scripted_trajectory.h)
+//       - {t_s: 0.0, position_m: [0, 0, 0.09], rotation_vector_rad: [0, 0, 0]}
+//                                      # ≥ 1 waypoint; t_s ≥ 0 and strictly increasing;
+//                                      # rotation_vector_rad optional, default 0
 
 #include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/rigid_tool.h"
+#include "core/virtual_coupling.h"
+#include "device/scripted_trajectory.h"
 #include "fem/fem_options.h"
 #include "fem/material.h"
 
@@ -98,6 +132,46 @@ struct BodyScene {
   std::vector<Probe> probes;
 };
 
+// The rigid tool, resolved: a mesh file read, mass properties computed.
+struct ToolScene {
+  ToolModel model;          // shape in T, mass, body inertia (MakeToolModel / …WithMass)
+  ToolState initial_state;  // at rest at position_m, q_WT = exp(rotation_vector_rad)
+  std::string mesh_file;    // ToolShape::Kind::kMesh: the file read (resolved path)
+  SourceLocation location;  // the `tool` section
+};
+
+// Tool–body contact law (mirrors contact::ContactLaw; config does not depend on contact/, the
+// caller converts).
+enum class ContactLaw { kEquality, kUnilateral, kFriction };
+
+// Defaults are those of contact::ResponseOptions and contact::DetectionOptions.
+struct ContactScene {
+  ContactLaw law = ContactLaw::kUnilateral;
+  double friction_coefficient = 0.0;  // μ, kFriction only
+  double stabilization_beta = 0.2;    // in [0, 1]
+  double restitution = 0.0;           // e in [0, 1]
+  double margin_m = 1e-3;             // detection margin, m
+};
+
+// What the haptic process renders (DESIGN.md §4–6):
+//   kLinear     the paper's linear contact model of the last visual frame, evaluated at 1 kHz
+//   kLcp        the per-contact rows of the last visual frame, the small LCP solved at 1 kHz
+//   kCoupling   standard multirate rendering: only the virtual coupling to the visual tool
+//   kReference  everything at the haptic step (the ground truth)
+enum class HapticMode { kLinear, kLcp, kCoupling, kReference };
+
+struct HapticScene {
+  double rate_hz = 1000.0;
+  HapticMode mode = HapticMode::kLinear;
+  int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
+};
+
+const char* ToString(ContactLaw law);   // "equality", "unilateral", "friction"
+const char* ToString(HapticMode mode);  // "linear", "lcp", "coupling", "reference"
+// The value ToString names `name`, or nullopt (for command-line overrides).
+std::optional<ContactLaw> ParseContactLaw(const std::string& name);
+std::optional<HapticMode> ParseHapticMode(const std::string& name);
+
 struct Scene {
   std::string file;  // the path it was loaded from
   std::string name;
@@ -106,6 +180,13 @@ struct Scene {
   double dt_s = 0.0;
   int num_steps = 0;
   std::optional<BodyScene> body;
+  // The simulation sections. All of them need a tool; with a tool, coupling and a device
+  // trajectory are required and contact and haptic take their defaults when absent.
+  std::optional<ToolScene> tool;
+  CouplingParams coupling;
+  ContactScene contact;
+  HapticScene haptic;
+  std::vector<device::Waypoint> trajectory;  // device.trajectory, times strictly increasing
 };
 
 // Loads and validates a scene file. Throws hapsim::InputError naming file, line and key.

@@ -39,6 +39,9 @@ inline Bounds Any() { return Bounds{}; }
 inline Bounds Above(double lower) { return Bounds{lower, Any().upper, true, false}; }
 inline Bounds AtLeast(double lower) { return Bounds{lower, Any().upper, false, false}; }
 inline Bounds OpenInterval(double lower, double upper) { return Bounds{lower, upper, true, true}; }
+inline Bounds ClosedInterval(double lower, double upper) {
+  return Bounds{lower, upper, false, false};
+}
 
 // A YAML mapping together with where it sits: the file, its dotted key path and its line.
 // Cheap to copy (YAML::Node is a handle).

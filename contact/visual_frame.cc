@@ -26,7 +26,8 @@ VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_opti
       stepper_(body, fem_options, options.dt_s, std::move(body_external_force_N)),
       detector_(body, tool_.shape, options.detection) {}
 
-VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, ToolState* tool) {
+VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, ToolState* tool,
+                                   const ToolState* haptic_tool) {
   VisualFrameStats stats;
   Stopwatch total, stage;
   // 1. Virtual coupling between the device and the visual tool.
@@ -54,7 +55,7 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
     stats.num_active += lambda_[row] > 0.0;
   stats.response_s = stage.Lap();
   // 6. Linear contact model for the haptic step, at the post-collision state.
-  BuildLinearModel(device, X_WT_start, *tool, *body);
+  BuildLinearModel(device, X_WT_start, *tool, haptic_tool ? *haptic_tool : *tool, *body);
   stats.model_s = stage.Lap();
   // 7. Sanity pass: nodes still inside the tool are moved to its surface.
   stats.num_sanity_corrections = RunSanityPass(*tool, body);

@@ -52,7 +52,11 @@ class VisualFrame {
               Eigen::VectorXd body_external_force_N, ToolModel tool,
               const VisualFrameOptions& options);
 
-  VisualFrameStats Step(const DeviceState& device, fem::State* body, ToolState* tool);
+  // `haptic_tool`, if given, is the haptic loop's instance of the tool: the linear contact model is
+  // then linearised at its state (coupling, tool matrices, and gaps shifted by its offset from
+  // the visual tool), so that the haptic tool's drift from the visual one is corrected every frame.
+  VisualFrameStats Step(const DeviceState& device, fem::State* body, ToolState* tool,
+                        const ToolState* haptic_tool = nullptr);
 
   // Results of the last Step.
   const LinearContactModel& linear_model() const { return linear_model_; }
@@ -69,7 +73,8 @@ class VisualFrame {
   void DetectContacts(const fem::State& body, const ToolState& tool);
   void SolveResponse(const ToolState& tool, const fem::State& body);
   void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
-                        const ToolState& tool, const fem::State& body);
+                        const ToolState& tool, const ToolState& haptic_tool,
+                        const fem::State& body);
   int RunSanityPass(const ToolState& tool, fem::State* body) const;
 
   const fem::Model& body_;

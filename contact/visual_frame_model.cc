@@ -12,17 +12,24 @@ namespace hapsim::contact {
 // is better). Only active constraints (λ > 0) enter: an inactive unilateral contact would
 // otherwise act as an equality and pull the tool.
 void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
-                                   const ToolState& tool, const fem::State& body) {
+                                   const ToolState& visual_tool, const ToolState& tool,
+                                   const fem::State& body) {
+  // Contact points ride with the visual tool over the frame, then over to the haptic tool (the
+  // identity when the model is linearised at the visual tool). Moving a tool point p by δp
+  // changes the gap by −n·δp, so the gaps follow the same motion.
   const Eigen::Isometry3d motion = CalcPose(tool) * X_WT_start.inverse();
+  const Eigen::Isometry3d visual_motion = CalcPose(visual_tool) * X_WT_start.inverse();
   std::vector<Contact> active;
   std::vector<int> active_rows;
   for (size_t i = 0; i < contacts_.size(); ++i) {
     const int row = rows_per_contact_ * static_cast<int>(i);
     if (!(lambda_[row] > 0.0)) continue;
     Contact moved = contacts_[i];
-    moved.p_tool_W_m = motion * moved.p_tool_W_m;  // contact points ride with the tool
+    const Eigen::Vector3d p_visual_W_m = visual_motion * moved.p_tool_W_m;
+    moved.p_tool_W_m = motion * moved.p_tool_W_m;
     moved.n_W = motion.linear() * moved.n_W;
     moved.gap_m += options_.dt_s * c_post_[row];  // gap at the end of the frame, to first order
+    moved.gap_m -= moved.n_W.dot(moved.p_tool_W_m - p_visual_W_m);  // haptic tool's offset
     active.push_back(moved);
     for (int d = 0; d < rows_per_contact_; ++d) active_rows.push_back(row + d);
   }
@@ -36,14 +43,14 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   for (size_t r = 0; r < active_rows.size(); ++r)
     for (size_t c = 0; c < active_rows.size(); ++c)
       W(r, c) += W_body_(active_rows[r], active_rows[c]);
-  // Targets at the haptic step: close a remaining gap within one haptic step, or undo a
-  // penetration at the visual rate of stabilisation.
+  // Targets are velocities the model holds for a whole visual frame (until the next model): close
+  // a gap over that frame, or undo a fraction β of a penetration over it. A one-haptic-step
+  // target (−φ/Δt_haptic) would drive the tool through the body over the 33 steps it is held.
   Eigen::VectorXd b = Eigen::VectorXd::Zero(J.num_rows());
   for (size_t i = 0; i < active.size(); ++i) {
     const double gap_m = active[i].gap_m;
-    b[rows_per_contact_ * static_cast<int>(i)] =
-        gap_m >= 0.0 ? -gap_m / options_.haptic_dt_s
-                     : -options_.response.stabilization_beta * gap_m / options_.dt_s;
+    const double fraction = gap_m >= 0.0 ? 1.0 : options_.response.stabilization_beta;
+    b[rows_per_contact_ * static_cast<int>(i)] = -fraction * gap_m / options_.dt_s;
   }
   linear_model_ = MakeLinearContactModel(J, W, haptic, b - J.J_u * body.v_m_s);
 }

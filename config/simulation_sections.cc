@@ -1,0 +1,269 @@
+// The simulation sections of the scene schema (config/scene.h), read with the checked getters of
+// config/yaml_reader.h. Checks involving more than one value are made here: exactly one tool shape
+// and one of mass / density, the tool mesh on disk, friction_coefficient only with friction,
+// whole haptic steps per visual frame, strictly increasing waypoint times, and which sections
+// need which.
+
+#include "config/simulation_sections.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "core/rigid_tool.h"
+#include "core/triangle_mesh_io.h"
+
+namespace hapsim::config {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr ContactLaw kContactLaws[] = {ContactLaw::kEquality, ContactLaw::kUnilateral,
+                                       ContactLaw::kFriction};
+constexpr HapticMode kHapticModes[] = {HapticMode::kLinear, HapticMode::kLcp, HapticMode::kCoupling,
+                                       HapticMode::kReference};
+
+// (name, value) pairs for YamlMap::GetEnumOr, in declaration order.
+template <typename Enum, std::size_t N>
+std::vector<std::pair<std::string, Enum>> Choices(const Enum (&values)[N]) {
+  std::vector<std::pair<std::string, Enum>> choices;
+  for (const Enum value : values) choices.emplace_back(ToString(value), value);
+  return choices;
+}
+
+template <typename Enum, std::size_t N>
+std::optional<Enum> Parse(const Enum (&values)[N], const std::string& name) {
+  for (const Enum value : values) {
+    if (name == ToString(value)) return value;
+  }
+  return std::nullopt;
+}
+
+SourceLocation LocationOf(const YamlMap& map) { return {map.file(), map.line(), map.path()}; }
+
+// Resolves tool.shape.mesh.file against base_dir and checks its extension and that it exists.
+std::string ResolveToolMeshFile(const YamlMap& mesh, const std::string& base_dir) {
+  const fs::path given = mesh.GetString("file");
+  const fs::path path = given.is_absolute() ? given : fs::path(base_dir) / given;
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".obj" && extension != ".stl") {
+    mesh.FailKey("file", "must be a Wavefront .obj or an .stl file, got '" + given.string() + "'");
+  }
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) mesh.FailKey("file", "no such file: " + path.string());
+  return path.string();
+}
+
+// The one shape of tool.shape. A mesh is read here (errors in it name the mesh file and line).
+ToolShape ReadToolShape(const YamlMap& map, const std::string& base_dir, std::string* mesh_file) {
+  map.CheckKeys({"sphere", "capsule", "cylinder", "box", "mesh"});
+  const int num_shapes = map.Has("sphere") + map.Has("capsule") + map.Has("cylinder") +
+                         map.Has("box") + map.Has("mesh");
+  if (num_shapes != 1) {
+    map.Fail("must give exactly one of sphere, capsule, cylinder, box, mesh; got " +
+             std::to_string(num_shapes));
+  }
+  ToolShape shape;
+  if (const std::optional<YamlMap> sphere = map.FindMap("sphere")) {
+    sphere->CheckKeys({"radius_m"});
+    shape.kind = ToolShape::Kind::kSphere;
+    shape.radius_m = sphere->GetDouble("radius_m", Above(0.0));
+  } else if (const std::optional<YamlMap> capsule = map.FindMap("capsule")) {
+    capsule->CheckKeys({"radius_m", "length_m"});
+    shape.kind = ToolShape::Kind::kCapsule;
+    shape.radius_m = capsule->GetDouble("radius_m", Above(0.0));
+    shape.length_m = capsule->GetDouble("length_m", AtLeast(0.0));
+  } else if (const std::optional<YamlMap> cylinder = map.FindMap("cylinder")) {
+    cylinder->CheckKeys({"radius_m", "length_m"});
+    shape.kind = ToolShape::Kind::kCylinder;
+    shape.radius_m = cylinder->GetDouble("radius_m", Above(0.0));
+    shape.length_m = cylinder->GetDouble("length_m", Above(0.0));
+  } else if (const std::optional<YamlMap> box = map.FindMap("box")) {
+    box->CheckKeys({"half_extents_m"});
+    shape.kind = ToolShape::Kind::kBox;
+    shape.half_extents_m = box->GetVector3("half_extents_m", Above(0.0));
+  } else {
+    const YamlMap mesh = map.GetMap("mesh");
+    mesh.CheckKeys({"file"});
+    shape.kind = ToolShape::Kind::kMesh;
+    *mesh_file = ResolveToolMeshFile(mesh, base_dir);
+    shape.mesh = ReadTriangleMesh(*mesh_file);
+  }
+  return shape;
+}
+
+ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
+  map.CheckKeys({"shape", "mass_kg", "density_kg_m3", "position_m", "rotation_vector_rad"});
+  ToolScene tool;
+  tool.location = LocationOf(map);
+  const YamlMap shape_map = map.GetMap("shape");
+  ToolShape shape = ReadToolShape(shape_map, base_dir, &tool.mesh_file);
+  const int num_masses = map.Has("mass_kg") + map.Has("density_kg_m3");
+  if (num_masses != 1) {
+    map.Fail("must give exactly one of mass_kg, density_kg_m3; got " + std::to_string(num_masses));
+  }
+  const bool by_mass = map.Has("mass_kg");
+  const double value =
+      by_mass ? map.GetDouble("mass_kg", Above(0.0)) : map.GetDouble("density_kg_m3", Above(0.0));
+  try {
+    tool.model = by_mass ? MakeToolModelWithMass(std::move(shape), value)
+                         : MakeToolModel(std::move(shape), value);
+  } catch (const std::invalid_argument& error) {  // a shape the checks above let through
+    shape_map.Fail(error.what());
+  }
+  tool.initial_state.x_W_m = map.GetVector3Or("position_m", Eigen::Vector3d::Zero());
+  tool.initial_state.q_WT =
+      CalcQuaternionExp(map.GetVector3Or("rotation_vector_rad", Eigen::Vector3d::Zero()));
+  return tool;
+}
+
+CouplingParams ReadCoupling(const YamlMap& map) {
+  map.CheckKeys({"k_lin_N_m", "b_lin_N_s_m", "k_ang_N_m_rad", "b_ang_N_m_s_rad"});
+  CouplingParams coupling;
+  coupling.k_lin_N_m = map.GetDouble("k_lin_N_m", AtLeast(0.0));
+  coupling.b_lin_N_s_m = map.GetDouble("b_lin_N_s_m", AtLeast(0.0));
+  coupling.k_ang_N_m_rad = map.GetDouble("k_ang_N_m_rad", AtLeast(0.0));
+  coupling.b_ang_N_m_s_rad = map.GetDouble("b_ang_N_m_s_rad", AtLeast(0.0));
+  return coupling;
+}
+
+ContactScene ReadContact(const YamlMap& map) {
+  map.CheckKeys({"law", "friction_coefficient", "stabilization_beta", "restitution", "margin_m"});
+  ContactScene contact;
+  contact.law = map.GetEnumOr("law", Choices(kContactLaws), contact.law);
+  if (contact.law == ContactLaw::kFriction) {
+    contact.friction_coefficient = map.GetDouble("friction_coefficient", AtLeast(0.0));
+  } else if (map.Has("friction_coefficient")) {
+    map.FailKey(
+        "friction_coefficient",
+        std::string("is used only with law: friction; the law is ") + ToString(contact.law));
+  }
+  contact.stabilization_beta =
+      map.GetDoubleOr("stabilization_beta", contact.stabilization_beta, ClosedInterval(0.0, 1.0));
+  contact.restitution =
+      map.GetDoubleOr("restitution", contact.restitution, ClosedInterval(0.0, 1.0));
+  contact.margin_m = map.GetDoubleOr("margin_m", contact.margin_m, AtLeast(0.0));
+  return contact;
+}
+
+// The haptic steps per visual frame, rate_hz · dt_s, which must be a whole number ≥ 1. An error
+// names haptic.rate_hz, or time.dt_s when the haptic section (and so the rate) is left out.
+int CalcStepsPerFrame(double rate_hz, const YamlMap& time, const std::optional<YamlMap>& haptic) {
+  constexpr double kWholeTolerance = 1e-9;  // dt_s = 1/60 written in decimal is off by ~1e-17
+  const double steps = rate_hz * time.GetDouble("dt_s");
+  const double whole = std::round(steps);
+  if (whole >= 1.0 && whole <= 1e9 && std::abs(steps - whole) <= kWholeTolerance) {
+    return static_cast<int>(whole);
+  }
+  std::ostringstream message;
+  message << "haptic.rate_hz * time.dt_s = " << rate_hz << " * " << time.GetDouble("dt_s") << " = "
+          << steps << " haptic steps per visual frame; it must be a whole number >= 1";
+  if (haptic.has_value() && haptic->Has("rate_hz")) haptic->FailKey("rate_hz", message.str());
+  time.FailKey("dt_s", message.str() + " (haptic.rate_hz is not given: 1000 Hz by default)");
+}
+
+HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time) {
+  HapticScene haptic;
+  if (map.has_value()) {
+    map->CheckKeys({"rate_hz", "mode"});
+    haptic.rate_hz = map->GetDoubleOr("rate_hz", haptic.rate_hz, Above(0.0));
+    haptic.mode = map->GetEnumOr("mode", Choices(kHapticModes), haptic.mode);
+  }
+  haptic.steps_per_frame = CalcStepsPerFrame(haptic.rate_hz, time, map);
+  return haptic;
+}
+
+std::vector<device::Waypoint> ReadTrajectory(const YamlMap& device) {
+  device.CheckKeys({"trajectory"});
+  if (!device.Has("trajectory")) device.FailKey("trajectory", "missing required key");
+  const std::vector<YamlMap> items = device.GetMapList("trajectory");
+  if (items.empty()) device.FailKey("trajectory", "must hold at least one waypoint");
+  std::vector<device::Waypoint> trajectory;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const YamlMap& item = items[i];
+    item.CheckKeys({"t_s", "position_m", "rotation_vector_rad"});
+    device::Waypoint waypoint;
+    waypoint.t_s = item.GetDouble("t_s", AtLeast(0.0));
+    if (i > 0 && waypoint.t_s <= trajectory.back().t_s) {
+      std::ostringstream message;
+      message << "must be later than the waypoint before it (t_s " << trajectory.back().t_s
+              << " on line " << items[i - 1].line() << "), got " << waypoint.t_s;
+      item.FailKey("t_s", message.str());
+    }
+    waypoint.x_W_m = item.GetVector3("position_m");
+    waypoint.q_WD =
+        CalcQuaternionExp(item.GetVector3Or("rotation_vector_rad", Eigen::Vector3d::Zero()));
+    trajectory.push_back(waypoint);
+  }
+  return trajectory;
+}
+
+}  // namespace
+
+void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std::string& base_dir,
+                            Scene* scene) {
+  const std::optional<YamlMap> tool = root.FindMap("tool");
+  if (!tool.has_value()) {
+    for (const char* key : {"coupling", "contact", "haptic", "device"}) {
+      if (root.Has(key)) root.FailKey(key, "applies only to a scene with a tool; there is none");
+    }
+    return;
+  }
+  scene->tool = ReadTool(*tool, base_dir);
+  for (const char* key : {"coupling", "device"}) {
+    if (!root.Has(key)) {
+      root.FailKey(key, "missing required key: the tool (line " + std::to_string(tool->line()) +
+                            ") needs it");
+    }
+  }
+  scene->coupling = ReadCoupling(root.GetMap("coupling"));
+  if (const std::optional<YamlMap> contact = root.FindMap("contact")) {
+    scene->contact = ReadContact(*contact);
+  }
+  scene->haptic = ReadHaptic(root.FindMap("haptic"), time);
+  scene->trajectory = ReadTrajectory(root.GetMap("device"));
+}
+
+const char* ToString(ContactLaw law) {
+  switch (law) {
+    case ContactLaw::kEquality:
+      return "equality";
+    case ContactLaw::kUnilateral:
+      return "unilateral";
+    case ContactLaw::kFriction:
+      return "friction";
+  }
+  return "unknown";
+}
+
+const char* ToString(HapticMode mode) {
+  switch (mode) {
+    case HapticMode::kLinear:
+      return "linear";
+    case HapticMode::kLcp:
+      return "lcp";
+    case HapticMode::kCoupling:
+      return "coupling";
+    case HapticMode::kReference:
+      return "reference";
+  }
+  return "unknown";
+}
+
+std::optional<ContactLaw> ParseContactLaw(const std::string& name) {
+  return Parse(kContactLaws, name);
+}
+
+std::optional<HapticMode> ParseHapticMode(const std::string& name) {
+  return Parse(kHapticModes, name);
+}
+
+}  // namespace hapsim::config

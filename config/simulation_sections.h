@@ -1,0 +1,19 @@
+#pragma once
+// Reading of the simulation sections of a scene file: tool, coupling, contact, haptic, device
+// (schema in config/scene.h). Internal to the scene loader (config/scene.cc).
+
+#include <string>
+
+#include "config/scene.h"
+#include "config/yaml_reader.h"
+
+namespace hapsim::config {
+
+// Reads tool, coupling, contact, haptic and device from the document root into *scene, with the
+// checks between sections: everything but `tool` needs a tool; a tool needs coupling and device;
+// haptic.rate_hz · time.dt_s must be a whole number ≥ 1 (`time` is the checked time section).
+// Throws InputError naming file, line and key; errors in a tool mesh file name that file.
+void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std::string& base_dir,
+                            Scene* scene);
+
+}  // namespace hapsim::config

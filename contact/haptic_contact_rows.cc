@@ -1,0 +1,510 @@
+#include "contact/haptic_contact_rows.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+
+namespace hapsim::contact {
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using MatrixX6d = Eigen::Matrix<double, Eigen::Dynamic, 6>;
+
+// Border capacity: rows that entered or left the active set since the base was factorised.
+// Past it the base is refactorised. 32 keeps the border system (≤ 38 × 38, fixed capacity, on
+// the stack) cheap next to the O(n²) complementarity check.
+constexpr int kMaxItems = 32;
+constexpr int kMaxBorder = 6 + kMaxItems;
+using BorderMatrix =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxBorder, kMaxBorder>;
+using BorderVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxBorder, 1>;
+
+// A row enters when c_i < −kEnteringTolerance · max(1, ‖rhs‖∞), as in SolveContactImpulses.
+constexpr double kEnteringTolerance = 1e-12;
+// W_body is accepted as symmetric when |W_ij − W_ji| ≤ this × max |W|.
+constexpr double kSymmetryTolerance = 1e-9;
+
+// S̄: the symmetric part of a 3×3 compliance block if positive definite, else a multiple of the
+// identity of the same size (any symmetric positive definite choice is exact; close to S keeps
+// ΔS small).
+Eigen::Matrix3d CalcSymmetricPositive(const Eigen::Matrix3d& S) {
+  const Eigen::Matrix3d symmetric = 0.5 * (S + S.transpose());
+  const Eigen::LLT<Eigen::Matrix3d> llt(symmetric);
+  if (llt.info() == Eigen::Success) return symmetric;
+  return (S.norm() / std::sqrt(3.0)) * Eigen::Matrix3d::Identity();
+}
+
+}  // namespace
+
+ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body,
+                            const Eigen::VectorXd& body_rhs) {
+  std::vector<int> rows(J.num_rows());
+  for (int i = 0; i < J.num_rows(); ++i) rows[i] = i;
+  return MakeContactRows(J, W_body, rows, body_rhs);
+}
+
+ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body_all,
+                            const std::vector<int>& rows, const Eigen::VectorXd& body_rhs) {
+  if (J.rows_per_contact != 1)
+    throw std::invalid_argument("MakeContactRows: the lcp mode takes normal rows only");
+  const int n = J.num_rows();
+  if (static_cast<int>(rows.size()) != n || body_rhs.size() != n || J.J_w.rows() != n)
+    throw std::invalid_argument("MakeContactRows: J, rows and body_rhs differ in size");
+  if (W_body_all.rows() != W_body_all.cols())
+    throw std::invalid_argument("MakeContactRows: W_body must be square");
+  for (int row : rows)
+    if (row < 0 || row >= W_body_all.rows())
+      throw std::invalid_argument("MakeContactRows: row index outside W_body");
+  ContactRows out;
+  out.J_v = J.J_v;
+  out.J_w = J.J_w;
+  out.body_rhs = body_rhs;
+  out.W_body.resize(n, n);
+  for (int c = 0; c < n; ++c)
+    for (int r = 0; r < n; ++r)
+      out.W_body(r, c) = 0.5 * (W_body_all(rows[r], rows[c]) + W_body_all(rows[c], rows[r]));
+  return out;
+}
+
+// All scratch, sized once for max_rows. Notation: n rows, x = Δt λ (so the LCP reads
+// w = W x − r ≥ 0, x ≥ 0, xᵀw = 0 with r = rhs), A the active set, B the base rows (sorted), k0
+// = |B|, K0 = W̄_BB = L Lᵀ. The border lists "items": rows that entered A from outside B
+// (column V = W̄_Bj) and rows of B that left A (column V = e_i). With y = ΔS Uᵀx the equality
+// W(t)_AA x_A = r_A is the bordered system
+//
+//   [ K0        U_B    V      ] [x_B]   [r_B]      (rows of B; a left row's equation is
+//   [ ΔS U_Bᵀ   −I     ΔS U_Eᵀ] [ y ] = [ 0 ]       absorbed by its multiplier ξ)
+//   [ H         U_E    D      ] [ ξ ]   [r_E; 0]   (entered rows: W̄_jB, U_j, W̄_EE; left rows:
+//                                                   e_iᵀ x_B = 0)
+//
+// whose Schur complement on K0 is m × m, m = 6 + items. Z = K0⁻¹[U_B V] and P = [U_B V]ᵀ Z
+// (symmetric since K0 is) and q = [U_B V]ᵀ g, g = K0⁻¹ body_rhs_B, do not depend on the step and
+// are updated one column per change; with r_B = body_rhs_B − U_B s_free everything step-dependent
+// is 6-dimensional.
+struct HapticLcpSolver::Workspace {
+  explicit Workspace(int max_rows_in)
+      : max_rows(max_rows_in),
+        W(max_rows_in, max_rows_in),
+        U(max_rows_in, 6),
+        body_rhs(max_rows_in),
+        U_bar(max_rows_in, 6),
+        base_rows(max_rows_in, -1),
+        base_pos(max_rows_in, -1),
+        item_of_row(max_rows_in, -1),
+        L(max_rows_in, max_rows_in),
+        U_B(max_rows_in, 6),
+        U_bar_B(max_rows_in, 6),
+        g(max_rows_in),
+        Z(max_rows_in, kMaxBorder),
+        P(kMaxBorder, kMaxBorder),
+        q(kMaxBorder),
+        active(max_rows_in, 0),
+        r(max_rows_in),
+        x(max_rows_in),
+        z(max_rows_in),
+        w(max_rows_in),
+        column(max_rows_in),
+        C(kMaxBorder, kMaxBorder),
+        rho(kMaxBorder),
+        xi(kMaxBorder),
+        coef(kMaxBorder),
+        C_lu(kMaxBorder) {
+    W.setZero();
+    L.setZero();
+    Z.setZero();
+    P.setZero();
+    x.setZero();
+  }
+
+  // W̄_ij = W_body,ij (lower triangle) + U_i S̄ U_jᵀ.
+  double W_lower(int i, int j) const { return i >= j ? W(i, j) : W(j, i); }
+  double W_bar(int i, int j) const { return W_lower(i, j) + U_bar.row(i).dot(U.row(j)); }
+
+  bool SameRows(const ContactRows& rows) const;
+  bool CopyRows(const ContactRows& rows);
+  bool Rebase();
+  void SolveBaseInPlace(Eigen::Ref<Eigen::VectorXd> v) const;
+  void AddEnteredRow(int j);
+  void AddLeftRow(int i);
+  void RemoveItem(int t);
+  void Activate(int i);
+  void Deactivate(int i);
+  bool SolveOnActiveSet();
+  void CalcSlack();
+
+  const int max_rows;
+  // The rows of the last call (the cache key); n = −1 before the first.
+  int n = -1;
+  Eigen::MatrixXd W;  // (max x max) W_body
+  MatrixX6d U;        // (max x 6) [J_v J_ω]
+  Eigen::VectorXd body_rhs;
+  // This step's tool: S = blockdiag(A_v⁻¹, M⁻¹A_L⁻¹), s_free = (v_free, ω_free).
+  Matrix6d S = Matrix6d::Zero();
+  Vector6d s_free = Vector6d::Zero();
+  // The base.
+  Matrix6d S_bar = Matrix6d::Zero();
+  MatrixX6d U_bar;  // (max x 6) U S̄
+  int k0 = 0;
+  std::vector<int> base_rows;    // (max) the k0 base rows, ascending
+  std::vector<int> base_pos;     // (max) position in the base, −1 outside
+  std::vector<int> item_of_row;  // (max) border item of a row, −1 none
+  Eigen::MatrixXd L;             // (max x max) lower triangle: Cholesky factor of K0
+  MatrixX6d U_B, U_bar_B;        // (max x 6) U and U S̄ gathered at the base rows
+  Eigen::VectorXd g;             // (max) K0⁻¹ body_rhs_B
+  Eigen::MatrixXd Z;             // (max x kMaxBorder) K0⁻¹ [U_B V]
+  BorderMatrix P;                // [U_B V]ᵀ K0⁻¹ [U_B V]
+  BorderVector q;                // [U_B V]ᵀ g
+  int num_items = 0;
+  std::array<int, kMaxItems> item_row{};
+  std::array<bool, kMaxItems> item_entered{};
+  bool rebase_pending = true;
+  int num_factorizations = 0;
+  // Active set and iterates (rows).
+  std::vector<std::uint8_t> active;  // (max)
+  Eigen::VectorXd r, x, z, w, column;
+  // Border system of one solve.
+  BorderMatrix C;
+  BorderVector rho, xi, coef;
+  Eigen::PartialPivLU<BorderMatrix> C_lu;
+};
+
+bool HapticLcpSolver::Workspace::SameRows(const ContactRows& rows) const {
+  const int m = rows.num_rows();
+  return m == n && body_rhs.head(m) == rows.body_rhs && U.topLeftCorner(m, 3) == rows.J_v &&
+         U.topRightCorner(m, 3) == rows.J_w && W.topLeftCorner(m, m) == rows.W_body;
+}
+
+bool HapticLcpSolver::Workspace::CopyRows(const ContactRows& rows) {
+  n = rows.num_rows();
+  body_rhs.head(n) = rows.body_rhs;
+  U.topLeftCorner(n, 3) = rows.J_v;
+  U.topRightCorner(n, 3) = rows.J_w;
+  W.topLeftCorner(n, n) = rows.W_body;
+  const double scale = W.topLeftCorner(n, n).cwiseAbs().maxCoeff();
+  bool ok = body_rhs.head(n).allFinite() && U.topRows(n).allFinite() && std::isfinite(scale);
+  for (int j = 0; ok && j < n; ++j)
+    for (int i = j + 1; i < n; ++i)
+      if (std::abs(W(i, j) - W(j, i)) > kSymmetryTolerance * scale) ok = false;
+  if (!ok) n = -1;  // nothing cached
+  return ok;
+}
+
+void HapticLcpSolver::Workspace::SolveBaseInPlace(Eigen::Ref<Eigen::VectorXd> v) const {
+  if (k0 == 0) return;
+  const auto factor = L.topLeftCorner(k0, k0);
+  factor.triangularView<Eigen::Lower>().solveInPlace(v);
+  factor.triangularView<Eigen::Lower>().adjoint().solveInPlace(v);
+}
+
+// Makes the current active set the base: K0 = W̄_AA, S̄ from this step's S, border cleared.
+// Returns false (and leaves an empty base, with every row inactive) if K0 is not positive
+// definite, i.e. the active rows are dependent: W(t)_AA is then singular too, whatever S.
+bool HapticLcpSolver::Workspace::Rebase() {
+  rebase_pending = false;
+  for (int t = 0; t < num_items; ++t) item_of_row[item_row[t]] = -1;
+  num_items = 0;
+  S_bar.setZero();
+  S_bar.topLeftCorner<3, 3>() = CalcSymmetricPositive(S.topLeftCorner<3, 3>());
+  S_bar.bottomRightCorner<3, 3>() = CalcSymmetricPositive(S.bottomRightCorner<3, 3>());
+  U_bar.topRows(n).noalias() = U.topRows(n) * S_bar;
+  k0 = 0;
+  for (int i = 0; i < n; ++i) {
+    base_pos[i] = -1;
+    if (active[i]) {
+      base_rows[k0] = i;
+      base_pos[i] = k0++;
+    }
+  }
+  for (int a = 0; a < k0; ++a) {
+    U_B.row(a) = U.row(base_rows[a]);
+    U_bar_B.row(a) = U_bar.row(base_rows[a]);
+    g[a] = body_rhs[base_rows[a]];
+  }
+  if (k0 > 0) {
+    auto K = L.topLeftCorner(k0, k0);
+    for (int b = 0; b < k0; ++b)
+      for (int a = b; a < k0; ++a) K(a, b) = W(base_rows[a], base_rows[b]);  // rows ascending
+    K.triangularView<Eigen::Lower>() += U_bar_B.topRows(k0) * U_B.topRows(k0).transpose();
+    ++num_factorizations;
+    Eigen::Ref<Eigen::MatrixXd> K_ref(K);
+    const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(K_ref);  // in place, lower triangle
+    if (llt.info() != Eigen::Success) {
+      for (int a = 0; a < k0; ++a) {
+        active[base_rows[a]] = 0;
+        base_pos[base_rows[a]] = -1;
+      }
+      k0 = 0;
+      P.topLeftCorner<6, 6>().setZero();
+      q.head<6>().setZero();
+      return false;
+    }
+  }
+  for (int c = 0; c < 6; ++c) {
+    Z.col(c).head(k0) = U_B.col(c).head(k0);
+    SolveBaseInPlace(Z.col(c).head(k0));
+  }
+  SolveBaseInPlace(g.head(k0));
+  P.topLeftCorner<6, 6>().noalias() = U_B.topRows(k0).transpose() * Z.topLeftCorner(k0, 6);
+  q.head<6>().noalias() = U_B.topRows(k0).transpose() * g.head(k0);
+  return true;
+}
+
+// Border item for row j ∉ B entering A: column V = W̄_Bj.
+void HapticLcpSolver::Workspace::AddEnteredRow(int j) {
+  const int c = 6 + num_items;
+  auto V = column.head(k0);
+  for (int a = 0; a < k0; ++a) V[a] = W_lower(base_rows[a], j);
+  V.noalias() += U_bar_B.topRows(k0) * U.row(j).transpose();
+  Z.col(c).head(k0) = V;
+  SolveBaseInPlace(Z.col(c).head(k0));
+  for (int b = 0; b <= c; ++b) P(c, b) = P(b, c) = V.dot(Z.col(b).head(k0));
+  q[c] = V.dot(g.head(k0));
+  item_row[num_items] = j;
+  item_entered[num_items] = true;
+  item_of_row[j] = num_items++;
+}
+
+// Border item for base row i leaving A: column V = e_i.
+void HapticLcpSolver::Workspace::AddLeftRow(int i) {
+  const int c = 6 + num_items;
+  const int p = base_pos[i];
+  Z.col(c).head(k0).setZero();
+  Z(p, c) = 1.0;
+  SolveBaseInPlace(Z.col(c).head(k0));
+  for (int b = 0; b <= c; ++b) P(c, b) = P(b, c) = Z(p, b);
+  q[c] = g[p];
+  item_row[num_items] = i;
+  item_entered[num_items] = false;
+  item_of_row[i] = num_items++;
+}
+
+// Drops item t; the last item takes its place.
+void HapticLcpSolver::Workspace::RemoveItem(int t) {
+  const int last = num_items - 1;
+  const int m = 6 + num_items;
+  item_of_row[item_row[t]] = -1;
+  if (t != last) {
+    const int ct = 6 + t, cl = 6 + last;
+    Z.col(ct).head(k0) = Z.col(cl).head(k0);
+    P.col(ct).head(m) = P.col(cl).head(m);
+    P.row(ct).head(m) = P.row(cl).head(m);
+    q[ct] = q[cl];
+    item_row[t] = item_row[last];
+    item_entered[t] = item_entered[last];
+    item_of_row[item_row[t]] = t;
+  }
+  num_items = last;
+}
+
+void HapticLcpSolver::Workspace::Activate(int i) {
+  active[i] = 1;
+  if (rebase_pending) return;
+  if (base_pos[i] >= 0) {
+    RemoveItem(item_of_row[i]);  // a base row that had left comes back
+  } else if (num_items < kMaxItems) {
+    AddEnteredRow(i);
+  } else {
+    rebase_pending = true;
+  }
+}
+
+void HapticLcpSolver::Workspace::Deactivate(int i) {
+  active[i] = 0;
+  if (rebase_pending) return;
+  if (base_pos[i] < 0) {
+    RemoveItem(item_of_row[i]);  // an entered row leaves again
+  } else if (num_items < kMaxItems) {
+    AddLeftRow(i);
+  } else {
+    rebase_pending = true;
+  }
+}
+
+// z_A solving W(t)_AA z_A = r_A, z = 0 off A, through the Schur complement of the border.
+bool HapticLcpSolver::Workspace::SolveOnActiveSet() {
+  if (rebase_pending && !Rebase()) return false;
+  const int m = 6 + num_items;
+  const Matrix6d dS = S - S_bar;
+  const auto Pm = P.topLeftCorner(m, m);
+  C.resize(m, m);
+  rho.resize(m);
+  C.topLeftCorner<6, 6>().noalias() = -dS * Pm.topLeftCorner<6, 6>();
+  C.topLeftCorner<6, 6>().diagonal().array() -= 1.0;
+  rho.head<6>().noalias() = -dS * (q.head<6>() - Pm.topLeftCorner<6, 6>() * s_free);
+  for (int t = 0; t < num_items; ++t) {
+    const int c = 6 + t;
+    const int j = item_row[t];
+    const bool entered = item_entered[t];
+    const Vector6d u_j = entered ? Vector6d(U.row(j).transpose()) : Vector6d::Zero();
+    C.block<6, 1>(0, c).noalias() = dS * (u_j - Pm.block<6, 1>(0, c));
+    C.block<1, 6>(c, 0) = u_j.transpose() - Pm.block<1, 6>(c, 0);
+    for (int s = 0; s < num_items; ++s) {
+      const bool both_entered = entered && item_entered[s];
+      C(c, 6 + s) = (both_entered ? W_bar(j, item_row[s]) : 0.0) - Pm(c, 6 + s);
+    }
+    rho[c] = (entered ? r[j] : 0.0) - (q[c] - Pm.block<1, 6>(c, 0).dot(s_free));
+  }
+  C_lu.compute(C);
+  xi.resize(m);
+  xi = C_lu.solve(rho);
+  // x_B = K0⁻¹ r_B − Z_U y − Z_V ξ = g − Z [s_free + y; ξ].
+  coef = xi;
+  coef.head<6>() += s_free;
+  auto x_B = column.head(k0);
+  x_B = g.head(k0);
+  x_B.noalias() -= Z.topLeftCorner(k0, m) * coef;
+  z.head(n).setZero();
+  for (int a = 0; a < k0; ++a) z[base_rows[a]] = x_B[a];
+  for (int t = 0; t < num_items; ++t) z[item_row[t]] = item_entered[t] ? xi[6 + t] : 0.0;
+  return z.head(n).allFinite();
+}
+
+// w = W(t) x − r over all rows.
+void HapticLcpSolver::Workspace::CalcSlack() {
+  w.head(n).noalias() = W.topLeftCorner(n, n).selfadjointView<Eigen::Lower>() * x.head(n);
+  const Vector6d Ux = U.topRows(n).transpose() * x.head(n);
+  const Vector6d SUx = S * Ux;
+  w.head(n).noalias() += U.topRows(n) * SUx;
+  w.head(n) -= r.head(n);
+}
+
+HapticLcpSolver::HapticLcpSolver(int max_rows) {
+  if (max_rows < 0) throw std::invalid_argument("HapticLcpSolver: max_rows must be ≥ 0");
+  ws_ = std::make_unique<Workspace>(max_rows);
+}
+
+HapticLcpSolver::~HapticLcpSolver() = default;
+HapticLcpSolver::HapticLcpSolver(HapticLcpSolver&&) noexcept = default;
+HapticLcpSolver& HapticLcpSolver::operator=(HapticLcpSolver&&) noexcept = default;
+
+int HapticLcpSolver::max_rows() const { return ws_->max_rows; }
+
+Eigen::Ref<const Eigen::VectorXd> HapticLcpSolver::last_impulses() const {
+  return ws_->x.head(std::max(ws_->n, 0));
+}
+
+bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
+                            const Eigen::Vector3d& F_hat_N, const Eigen::Vector3d& T_hat_N_m,
+                            Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m) {
+  Workspace& ws = *ws_;
+  F_c_N->setZero();
+  T_c_N_m->setZero();
+  last_iterations_ = 0;
+  last_residual_ = 0.0;
+  last_num_active_ = 0;
+  last_num_factorizations_ = 0;
+  ws.num_factorizations = 0;
+  const int n = rows.num_rows();
+  if (n > ws.max_rows || rows.J_w.rows() != n || rows.W_body.rows() != n ||
+      rows.W_body.cols() != n || rows.body_rhs.size() != n || !(tool.dt_s > 0.0))
+    return false;
+  const double dt_s = tool.dt_s;
+  const Eigen::Matrix3d A_v_inv = tool.A_v.inverse();
+  const Eigen::Matrix3d M_inv_A_L_inv = tool.M_inv_W * tool.A_L.inverse();
+  ws.S.setZero();
+  ws.S.topLeftCorner<3, 3>() = A_v_inv;
+  ws.S.bottomRightCorner<3, 3>() = M_inv_A_L_inv;
+  ws.s_free.head<3>() = A_v_inv * (dt_s * F_hat_N);
+  ws.s_free.tail<3>() = M_inv_A_L_inv * (dt_s * T_hat_N_m);
+  if (!ws.S.allFinite() || !ws.s_free.allFinite()) return false;
+
+  if (n == 0) {
+    ws.n = 0;
+    ws.rebase_pending = true;
+    return true;
+  }
+  if (!ws.SameRows(rows)) {
+    const int previous_n = ws.n;
+    if (!ws.CopyRows(rows)) return false;
+    // First guess: the previous step's active set if the size is the same, else all rows.
+    if (n != previous_n) std::fill(ws.active.begin(), ws.active.begin() + n, std::uint8_t{1});
+    ws.rebase_pending = true;
+  }
+  if (ws.rebase_pending) ws.Rebase();  // a dependent guess leaves an empty base: cold start
+
+  ws.r.head(n) = ws.body_rhs.head(n);
+  ws.r.head(n).noalias() -= ws.U.topRows(n) * ws.s_free;
+  const double tolerance = kEnteringTolerance * std::max(1.0, ws.r.head(n).lpNorm<Eigen::Infinity>());
+  auto fail = [&] {
+    ws.n = -1;  // recompute everything next time
+    last_num_factorizations_ = ws.num_factorizations;
+    return false;
+  };
+
+  // Shrink the guessed set until its equality solution is positive: a feasible start for the
+  // active-set iteration, optimal on its face.
+  while (true) {
+    ++last_iterations_;
+    if (!ws.SolveOnActiveSet()) return fail();
+    bool shrunk = false;
+    for (int i = 0; i < n; ++i) {
+      if (ws.active[i] && !(ws.z[i] > 0.0)) {
+        ws.Deactivate(i);
+        shrunk = true;
+      }
+    }
+    if (!shrunk) break;
+  }
+  ws.x.head(n) = ws.z.head(n);
+
+  // Lawson–Hanson: the most violated row enters; solve on the set; step back along the segment
+  // (ratio test) when an active x would turn negative, and drop the rows that reached zero.
+  bool converged = false;
+  for (int outer = 0;; ++outer) {
+    ws.CalcSlack();
+    int entering = -1;
+    double most_violated = -tolerance;
+    for (int i = 0; i < n; ++i)
+      if (!ws.active[i] && ws.w[i] < most_violated) most_violated = ws.w[i], entering = i;
+    if (entering < 0) {
+      converged = true;
+      break;
+    }
+    if (outer == 3 * n + 10) break;
+    ws.Activate(entering);
+    while (true) {
+      ++last_iterations_;
+      if (!ws.SolveOnActiveSet()) return fail();
+      double step = 1.0;
+      for (int i = 0; i < n; ++i)
+        if (ws.active[i] && ws.z[i] <= 0.0) step = std::min(step, ws.x[i] / (ws.x[i] - ws.z[i]));
+      for (int i = 0; i < n; ++i)
+        if (ws.active[i]) ws.x[i] += step * (ws.z[i] - ws.x[i]);
+      if (step >= 1.0) break;
+      bool any_active = false;
+      for (int i = 0; i < n; ++i) {
+        if (!ws.active[i]) continue;
+        if (ws.x[i] > 0.0) {
+          any_active = true;
+        } else {
+          ws.x[i] = 0.0;
+          ws.Deactivate(i);
+        }
+      }
+      if (!any_active) break;
+    }
+  }
+  last_num_factorizations_ = ws.num_factorizations;
+  if (!converged) return fail();
+
+  // λ = x/Δt; residual as ContactSolveReport's, c_i/(Δt W_ii) with c = w.
+  ws.x.head(n) /= dt_s;
+  double residual = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double W_ii = ws.W(i, i) + ws.U.row(i).dot(ws.S * ws.U.row(i).transpose());
+    residual = std::max(residual, std::abs(std::min(ws.x[i], ws.w[i] / (dt_s * W_ii))));
+    if (ws.x[i] > 0.0) ++last_num_active_;
+  }
+  const double scale = ws.x.head(n).lpNorm<Eigen::Infinity>();
+  last_residual_ = scale > 0.0 ? residual / scale : residual;
+  *F_c_N = ws.U.topLeftCorner(n, 3).transpose() * ws.x.head(n);
+  *T_c_N_m = ws.U.topRightCorner(n, 3).transpose() * ws.x.head(n);
+  return true;
+}
+
+}  // namespace hapsim::contact

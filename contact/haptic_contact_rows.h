@@ -1,0 +1,122 @@
+#pragma once
+// The unilateral contact solve of the haptic step in the `lcp` mode (DESIGN.md §4: "with
+// unilateral contacts the haptic process can instead receive the per-contact rows and solve the
+// small LCP at 1 kHz"). The visual frame hands over the constraint rows frozen at the frame
+// (ContactRows); at every haptic step, with the tool's step system and the discrete-time force
+// and torque F̂, T̂, the haptic process solves
+//
+//   W = J_v A_v⁻¹ J_vᵀ + J_ω M⁻¹ A_L⁻¹ J_ωᵀ + W_body                      (n × n)
+//   v_free = A_v⁻¹ Δt F̂,   ω_free = M⁻¹ A_L⁻¹ Δt T̂                         (free tool velocities)
+//   rhs = body_rhs − J_v v_free − J_ω ω_free          (= b − c_free, c_free = J_v v_free +
+//                                                        J_ω ω_free + J_u u̇)
+//   c = Δt W λ − rhs ≥ 0,   λ ≥ 0,   cᵀλ = 0                               (Signorini LCP)
+//
+// and returns F_c = J_vᵀλ, T_c = J_ωᵀλ. With every contact active this is the equality solve
+// of the linear contact model (linear_contact_model.h), which it reproduces; unlike that model
+// it lets contacts separate (and re-engage) between visual frames.
+//
+// Algorithm (see HapticLcpSolver). The tool part of W has rank ≤ 6 and the body part is frozen
+// for the frame, so W(t) = W̄ + U ΔS(t) Uᵀ with U = [J_v J_ω] (n × 6), S = blockdiag(A_v⁻¹,
+// M⁻¹A_L⁻¹), W̄ = W_body + U S̄ Uᵀ for a symmetric positive definite S̄ fixed when the rows
+// arrive, ΔS = S − S̄. A primal active-set method (Lawson & Hanson's NNLS in its QP form, as
+// SolveContactImpulses' kUnilateral) is run with every equality solve on the active set done by
+// the Schur-complement method of active-set QP solvers (Gill, Murray, Saunders & Wright 1990;
+// Bartlett & Biegler's QPSchur 2006): one dense Cholesky factor of a base block W̄_BB, kept
+// while the rows stay the same, and a small dense border for the rank-6 tool change and the
+// rows that entered or left the active set since. Warm-started from the previous step's active
+// set, a haptic step with unchanged rows and contacts costs O(n²) (the complementarity check)
+// plus O(n·m + m³), m ≤ 6 + 32 border columns, and no factorisation of an n × n matrix.
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "contact/contact_jacobian.h"
+#include "core/tool_integrator.h"
+
+namespace hapsim::contact {
+
+// What the visual frame hands to the haptic step for the lcp mode: per contact row (normal rows
+// only), frozen at the frame.
+struct ContactRows {
+  Eigen::MatrixX3d J_v;      // (n x 3) −n_iᵀ, world
+  Eigen::MatrixX3d J_w;      // (n x 3) −(r_i × n_i)ᵀ, world, m (lever from the tool's COM)
+  Eigen::MatrixXd W_body;    // (n x n) J_u A_u⁻¹ J_uᵀ at the visual step, s/kg; symmetric
+  Eigen::VectorXd body_rhs;  // (n) b − J_u u̇: velocity target minus the body's normal velocity, m/s
+  int num_rows() const { return static_cast<int>(J_v.rows()); }
+};
+
+// Builds the rows from the visual frame's data, the same inputs as MakeLinearContactModel: the
+// Jacobian of the chosen contacts (rows_per_contact must be 1), the body's Delassus part over
+// those rows and body_rhs = b − J_u u̇. W_body is symmetrised (½(W + Wᵀ)) so that the solver,
+// which reads its lower triangle, sees exactly what was given up to round-off. Throws
+// std::invalid_argument on a friction Jacobian or inconsistent sizes.
+ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body,
+                            const Eigen::VectorXd& body_rhs);
+
+// Same with W_body over all the frame's rows and `rows` the indices of the chosen ones (J and
+// body_rhs hold only the chosen rows, in that order), as VisualFrame::BuildLinearModel selects
+// the active rows.
+ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body_all,
+                            const std::vector<int>& rows, const Eigen::VectorXd& body_rhs);
+
+// The LCP above, exactly (to round-off), at 1 kHz and without heap allocation after
+// construction.
+//
+// Caching and warm start. The solver keeps a copy of the last rows it was given and compares
+// each call's rows with it entry by entry (O(n²), a few µs at n = 125): unchanged rows keep the
+// base factorisation and the active set of the previous step; changed rows are copied and
+// factorised once (the active set of the previous step is the first guess if n is unchanged,
+// else all rows). The guess only decides how much work is done, never the answer: the active
+// set is first shrunk until its solution is positive, then the active-set iteration runs to
+// complementarity. The LCP has a unique solution whenever W's symmetric part is positive
+// definite, so any guess reaches the same λ.
+//
+// Contracts: W_body symmetric (its lower triangle is read; an asymmetry above 1e-9 of its
+// largest entry is rejected) and positive semidefinite, A_v and A_L invertible, Δt > 0. A set
+// of rows whose W is singular (more independent constraints than the tool's 6 plus the body's
+// rank) has no unique solution; the solver then reports failure rather than guessing.
+// Allocation-free as checked by tests/contact/haptic_lcp_test.cc up to max_rows = 150 (larger
+// sizes make Eigen's blocked Cholesky ask for more than its 128 kB stack scratch limit).
+class HapticLcpSolver {
+ public:
+  // Preallocates everything for up to max_rows rows (memory ≈ 16 max_rows² bytes). Throws
+  // std::invalid_argument if max_rows < 0.
+  explicit HapticLcpSolver(int max_rows);
+  ~HapticLcpSolver();
+  HapticLcpSolver(HapticLcpSolver&&) noexcept;
+  HapticLcpSolver& operator=(HapticLcpSolver&&) noexcept;
+
+  // Solves the LCP for `rows`, the tool system `tool` of this haptic step (A_v, A_L, M⁻¹, Δt)
+  // and F̂, T̂ (world, N and N m, CalcDiscreteTimeWrench), and writes F_c = J_vᵀλ (N) and
+  // T_c = J_ωᵀλ (N m, about the tool's COM), world. Returns false, with zero force and torque,
+  // if rows.num_rows() > max_rows() or the rows are inconsistent in size, not finite or
+  // W_body not symmetric, or the active-set iteration failed (singular W, or no convergence
+  // within 3n + 10 entering rows); never allocates, never throws.
+  bool Solve(const ContactRows& rows, const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
+             const Eigen::Vector3d& T_hat_N_m, Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m);
+
+  int max_rows() const;
+  // Equality solves on an active set in the last Solve (1 when the warm start was right).
+  int last_iterations() const { return last_iterations_; }
+  // max_i |min(λ_i, c_i/(Δt W_ii))| / max_i λ_i (absolute when λ = 0), the measure of
+  // ContactSolveReport::residual; ≲ 1e-12 when converged.
+  double last_residual() const { return last_residual_; }
+  // Rows with λ > 0 after the last Solve.
+  int last_num_active() const { return last_num_active_; }
+  // Dense Cholesky factorisations of a base block in the last Solve: 0 at a warm step with the
+  // same rows, ≥ 1 when the rows changed or the border of changes grew past its capacity.
+  int last_num_factorizations() const { return last_num_factorizations_; }
+  // λ per row after the last successful Solve (size num_rows), N.
+  Eigen::Ref<const Eigen::VectorXd> last_impulses() const;
+
+ private:
+  struct Workspace;
+  std::unique_ptr<Workspace> ws_;
+  int last_iterations_ = 0;
+  double last_residual_ = 0.0;
+  int last_num_active_ = 0;
+  int last_num_factorizations_ = 0;
+};
+
+}  // namespace hapsim::contact

@@ -1,0 +1,45 @@
+#include "device/haptic_step.h"
+
+#include <Eigen/LU>
+
+#include "core/tool_integrator.h"
+
+namespace hapsim::device {
+
+HapticStep::HapticStep(ToolModel tool, const CouplingParams& coupling,
+                       const Eigen::Vector3d& gravity_m_s2, double dt_s,
+                       const ToolState& initial_tool)
+    : tool_(std::move(tool)),
+      coupling_(coupling),
+      gravity_m_s2_(gravity_m_s2),
+      dt_s_(dt_s),
+      tool_state_(initial_tool) {}
+
+HapticOutput HapticStep::Step(const DeviceState& device) {
+  const CouplingWrench wrench =
+      CalcCouplingWrench(coupling_, device, tool_state_, CalcAngularVelocity(tool_, tool_state_));
+  const ToolStepSystem system = CalcToolStepSystem(tool_, tool_state_, wrench, gravity_m_s2_, dt_s_);
+  Eigen::Vector3d F_hat_N, T_hat_N_m;
+  contact::CalcDiscreteTimeWrench(system, tool_state_, &F_hat_N, &T_hat_N_m);
+  HapticOutput out;
+  contact::EvaluateLinearContactModel(model_, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
+                                      &out.contact_torque_W_N_m);
+  const Eigen::Vector3d dv = system.A_v.lu().solve(dt_s_ * (system.F_tilde_N + out.contact_force_W_N));
+  const Eigen::Vector3d dL =
+      system.A_L.lu().solve(dt_s_ * (system.T_tilde_N_m + out.contact_torque_W_N_m));
+  AdvanceTool(tool_, dt_s_, dv, dL, &tool_state_);
+  out.device_force_W_N = -wrench.F_W_N;
+  out.device_torque_W_N_m = -wrench.T_W_N_m;
+  return out;
+}
+
+DeviceState HapticStep::tool_as_target() const {
+  DeviceState target;
+  target.x_W_m = tool_state_.x_W_m;
+  target.v_W_m_s = tool_state_.v_W_m_s;
+  target.q_WD = tool_state_.q_WT;
+  target.w_W_rad_s = CalcAngularVelocity(tool_, tool_state_);
+  return target;
+}
+
+}  // namespace hapsim::device

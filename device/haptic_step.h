@@ -1,0 +1,48 @@
+#pragma once
+// One step of the 1 kHz haptic loop in the paper's `linear` mode (DESIGN.md §1, §5):
+//   1 read the device   2 coupling wrench between device and haptic tool
+//   3 free tool update: A_v, A_L, F̃, T̃ at the haptic Δt, and F̂ = F̃ + A_v v/Δt, T̂ = T̃ + A_L L/Δt
+//   4 contact force from the linear contact model, F_c = F_c0 + ∂F_c/∂F̂ F̂ + ∂F_c/∂T̂ T̂ (and T_c)
+//   5 post-contact state: A_v Δv = Δt (F̃ + F_c), A_L ΔL = Δt (T̃ + T_c), advance
+//   6 output: the coupling's reaction −F, −T to the device.
+// Everything is fixed-size: the step allocates nothing (checked in a test).
+
+#include <Eigen/Core>
+
+#include "contact/linear_contact_model.h"
+#include "core/rigid_tool.h"
+#include "core/virtual_coupling.h"
+
+namespace hapsim::device {
+
+struct HapticOutput {
+  Eigen::Vector3d device_force_W_N = Eigen::Vector3d::Zero();     // sent to the device: −F
+  Eigen::Vector3d device_torque_W_N_m = Eigen::Vector3d::Zero();  // sent to the device: −T
+  Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();    // F_c on the haptic tool
+  Eigen::Vector3d contact_torque_W_N_m = Eigen::Vector3d::Zero(); // T_c on the haptic tool
+};
+
+class HapticStep {
+ public:
+  HapticStep(ToolModel tool, const CouplingParams& coupling, const Eigen::Vector3d& gravity_m_s2,
+             double dt_s, const ToolState& initial_tool);
+
+  // Replaces the contact model (a copy of fixed-size data: no allocation).
+  void SetContactModel(const contact::LinearContactModel& model) { model_ = model; }
+  HapticOutput Step(const DeviceState& device);
+
+  const ToolState& tool_state() const { return tool_state_; }
+  // The haptic tool as a coupling target for the visual tool (pose and velocities).
+  DeviceState tool_as_target() const;
+  double dt_s() const { return dt_s_; }
+
+ private:
+  ToolModel tool_;
+  CouplingParams coupling_;
+  Eigen::Vector3d gravity_m_s2_;
+  double dt_s_;
+  ToolState tool_state_;
+  contact::LinearContactModel model_;  // no contact until the first SetContactModel
+};
+
+}  // namespace hapsim::device

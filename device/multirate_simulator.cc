@@ -1,0 +1,121 @@
+#include "device/multirate_simulator.h"
+
+#include <stdexcept>
+
+namespace hapsim::device {
+namespace {
+
+contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual, const MultirateOptions& o) {
+  const int ratio = o.mode == HapticMode::kReference ? 1 : o.haptic_steps_per_frame;
+  visual.dt_s = ratio * o.haptic_dt_s;
+  visual.haptic_dt_s = o.haptic_dt_s;
+  return visual;
+}
+
+}  // namespace
+
+const char* ToString(HapticMode mode) {
+  switch (mode) {
+    case HapticMode::kLinear: return "linear";
+    case HapticMode::kLcp: return "lcp";
+    case HapticMode::kCoupling: return "coupling";
+    case HapticMode::kReference: return "reference";
+  }
+  return "?";
+}
+
+MultirateSimulator::MultirateSimulator(const fem::Model& body, const fem::FemOptions& fem_options,
+                                       const Eigen::VectorXd& body_external_force_N,
+                                       const ToolModel& tool, const ToolState& initial_tool,
+                                       contact::VisualFrameOptions visual_options,
+                                       const MultirateOptions& options)
+    : options_(options),
+      visual_options_(WithStep(std::move(visual_options), options)),
+      frame_(body, fem_options, body_external_force_N, tool, visual_options_),
+      body_state_(fem::MakeRestState(body)),
+      visual_tool_(initial_tool),
+      haptic_(tool, visual_options_.coupling, visual_options_.gravity_m_s2, options.haptic_dt_s,
+              initial_tool) {
+  if (options.mode == HapticMode::kLcp)
+    throw std::invalid_argument("haptic mode 'lcp' is not available yet in the in-process simulator");
+  if (options.haptic_steps_per_frame < 1) throw std::invalid_argument("haptic_steps_per_frame < 1");
+}
+
+void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_haptic_steps,
+                             const std::function<void(const HapticSample&)>& on_haptic_step,
+                             const std::function<void(const FrameSample&)>& on_frame) {
+  on_frame_ = on_frame;
+  for (long k = 0; k < num_haptic_steps; ++k) {
+    const DeviceState device = trajectory.Sample(k * options_.haptic_dt_s);
+    HapticSample sample;
+    switch (options_.mode) {
+      case HapticMode::kLinear: sample = StepLinear(device, k); break;
+      case HapticMode::kCoupling: sample = StepCoupling(device, k); break;
+      case HapticMode::kReference: sample = StepReference(device, k); break;
+      case HapticMode::kLcp: throw std::logic_error("lcp mode");
+    }
+    sample.t_s = k * options_.haptic_dt_s;
+    if (on_haptic_step) on_haptic_step(sample);
+  }
+}
+
+// Paper mode: two instances of the tool, both coupled to the device (the paper's Fig. 1): the
+// visual tool in the full simulation at the visual rate, the haptic tool at 1 kHz with the linear
+// contact model of the last visual frame.
+HapticSample MultirateSimulator::StepLinear(const DeviceState& device, long k) {
+  if (k % options_.haptic_steps_per_frame == 0) {
+    const contact::VisualFrameStats stats =
+        frame_.Step(device, &body_state_, &visual_tool_, &haptic_.tool_state());
+    haptic_.SetContactModel(frame_.linear_model());
+    last_frame_step_ = k;
+    if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+  }
+  const HapticOutput out = haptic_.Step(device);
+  HapticSample sample;
+  sample.device_force_W_N = out.device_force_W_N;
+  sample.device_torque_W_N_m = out.device_torque_W_N_m;
+  sample.tool_x_W_m = haptic_.tool_state().x_W_m;
+  sample.tool_q_WT = haptic_.tool_state().q_WT;
+  sample.num_contacts = frame_.linear_model().num_contacts;
+  sample.model_age_s = (k - last_frame_step_) * options_.haptic_dt_s;
+  return sample;
+}
+
+// Standard multirate: the visual tool, coupled to the device, moves only at visual frames; the
+// device feels the coupling to it, held between frames.
+HapticSample MultirateSimulator::StepCoupling(const DeviceState& device, long k) {
+  if (k % options_.haptic_steps_per_frame == 0) {
+    const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
+    last_frame_step_ = k;
+    if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+  }
+  const ToolModel& tool = frame_.tool_model();
+  const CouplingWrench wrench = CalcCouplingWrench(visual_options_.coupling, device, visual_tool_,
+                                                   CalcAngularVelocity(tool, visual_tool_));
+  HapticSample sample;
+  sample.device_force_W_N = -wrench.F_W_N;
+  sample.device_torque_W_N_m = -wrench.T_W_N_m;
+  sample.tool_x_W_m = visual_tool_.x_W_m;
+  sample.tool_q_WT = visual_tool_.q_WT;
+  sample.num_contacts = static_cast<int>(frame_.contacts().size());
+  sample.model_age_s = (k - last_frame_step_) * options_.haptic_dt_s;
+  return sample;
+}
+
+// Ground truth: a whole visual frame every haptic step; the device feels the coupling to that tool.
+HapticSample MultirateSimulator::StepReference(const DeviceState& device, long k) {
+  const ToolModel& tool = frame_.tool_model();
+  const CouplingWrench wrench = CalcCouplingWrench(visual_options_.coupling, device, visual_tool_,
+                                                   CalcAngularVelocity(tool, visual_tool_));
+  HapticSample sample;
+  sample.device_force_W_N = -wrench.F_W_N;
+  sample.device_torque_W_N_m = -wrench.T_W_N_m;
+  const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
+  if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+  sample.tool_x_W_m = visual_tool_.x_W_m;
+  sample.tool_q_WT = visual_tool_.q_WT;
+  sample.num_contacts = static_cast<int>(frame_.contacts().size());
+  return sample;
+}
+
+}  // namespace hapsim::device

@@ -1,0 +1,83 @@
+#pragma once
+// The in-process multirate simulator (issue 3): visual frames at a configurable rate and haptic
+// steps at 1 kHz, run one after the other in one process so every result is bit-reproducible.
+// The separate haptic process over LCM (issue 4) runs the same steps on two processes.
+//
+// Modes of the haptic side:
+//   linear     the paper: two instances of the tool, both coupled to the device: the visual tool in
+//              the full simulation, and a haptic tool integrated at 1 kHz with the linear contact
+//              model of the last visual frame.
+//   coupling   standard multirate rendering: no haptic tool; the device feels the coupling to the
+//              visual tool, which is coupled to the device and updated only at visual frames.
+//   reference  everything (FEM, detection, constraint solve) at the haptic step: the ground truth.
+//   lcp        (not yet: the per-contact rows and a 1 kHz LCP; see contact/haptic_contact_rows.h)
+// Within one haptic period a visual frame is computed first (when one is due), then the haptic
+// step; the model a frame produces is used from that same step on (no transport latency).
+
+#include <functional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "contact/visual_frame.h"
+#include "device/haptic_step.h"
+#include "device/scripted_trajectory.h"
+
+namespace hapsim::device {
+
+enum class HapticMode { kLinear, kLcp, kCoupling, kReference };
+const char* ToString(HapticMode mode);
+
+struct MultirateOptions {
+  HapticMode mode = HapticMode::kLinear;
+  double haptic_dt_s = 1e-3;
+  int haptic_steps_per_frame = 33;  // visual frame = this many haptic steps (reference: 1)
+};
+
+// What one haptic step produced.
+struct HapticSample {
+  double t_s = 0.0;
+  Eigen::Vector3d device_force_W_N = Eigen::Vector3d::Zero();
+  Eigen::Vector3d device_torque_W_N_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tool_x_W_m = Eigen::Vector3d::Zero();  // the tool the device feels
+  Eigen::Quaterniond tool_q_WT = Eigen::Quaterniond::Identity();
+  int num_contacts = 0;     // in the contact model (or the frame, for coupling/reference)
+  double model_age_s = 0.0; // time since the visual frame that produced the model
+};
+
+struct FrameSample {
+  double t_s = 0.0;
+  contact::VisualFrameStats stats;
+};
+
+class MultirateSimulator {
+ public:
+  // `body` must outlive the simulator. visual_options.dt_s is overwritten from `options`.
+  MultirateSimulator(const fem::Model& body, const fem::FemOptions& fem_options,
+                     const Eigen::VectorXd& body_external_force_N, const ToolModel& tool,
+                     const ToolState& initial_tool, contact::VisualFrameOptions visual_options,
+                     const MultirateOptions& options);
+
+  // Runs `num_haptic_steps` steps following `trajectory`, calling the sinks as it goes.
+  void Run(const ScriptedTrajectory& trajectory, long num_haptic_steps,
+           const std::function<void(const HapticSample&)>& on_haptic_step,
+           const std::function<void(const FrameSample&)>& on_frame);
+
+  const fem::State& body_state() const { return body_state_; }
+
+ private:
+  HapticSample StepLinear(const DeviceState& device, long k);
+  HapticSample StepCoupling(const DeviceState& device, long k);
+  HapticSample StepReference(const DeviceState& device, long k);
+
+  MultirateOptions options_;
+  contact::VisualFrameOptions visual_options_;
+  contact::VisualFrame frame_;
+  fem::State body_state_;
+  ToolState visual_tool_;
+  HapticStep haptic_;
+  long last_frame_step_ = 0;
+  std::function<void(const FrameSample&)> on_frame_;
+};
+
+}  // namespace hapsim::device

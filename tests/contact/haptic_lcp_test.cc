@@ -1,0 +1,370 @@
+// The haptic step's unilateral contact solve (contact/haptic_contact_rows.h) against
+// independent values:
+//  - SolveContactImpulses(kUnilateral) on the assembled W and rhs (a separate implementation:
+//    dense LU of the active block at every iteration, cold start), from cold and warm starts,
+//    while the active set, the tool system and the rows change between calls;
+//  - the linear contact model (MakeLinearContactModel) when every contact is active;
+//  - no heap allocation after construction (AllocationCounter), and failure without allocation
+//    when there are more rows than the solver was built for.
+// Synthetic problems as in contact_response_test.cc: a body with a random dense SPD matrix A_u,
+// a tool with a hand-set ToolStepSystem, contacts with random normals and points.
+#include "contact/haptic_contact_rows.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "contact/contact_jacobian.h"
+#include "contact/contact_solver.h"
+#include "contact/linear_contact_model.h"
+#include "tests/allocation_counter.h"
+
+namespace hapsim::contact {
+namespace {
+
+constexpr double kDt_s = 1e-3;
+// The two methods are exact; they differ by round-off amplified by W's condition number
+// (≤ 1e5 for these problems), far below this.
+constexpr double kRelativeTolerance = 1e-9;
+
+struct LcpProblem {
+  ContactJacobian J;  // full Jacobian (with J_u), for the linear model
+  ContactRows rows;
+  ToolStepSystem tool;
+  Eigen::Vector3d F_hat_N = Eigen::Vector3d::Zero();
+  Eigen::Vector3d T_hat_N_m = Eigen::Vector3d::Zero();
+};
+
+// A 50 g tool on a stiff coupling at the haptic step. The coupling's torque Jacobian has a
+// non-symmetric part (a rotation error), so W is not symmetric. `variant` changes A_L, M⁻¹.
+ToolStepSystem MakeTool(double variant) {
+  ToolStepSystem tool;
+  tool.dt_s = kDt_s;
+  const double m_kg = 0.05, k_N_m = 2000.0, b_N_s_m = 2.0;
+  tool.A_v = (m_kg + kDt_s * b_N_s_m + kDt_s * kDt_s * k_N_m) * Eigen::Matrix3d::Identity();
+  tool.A_v(0, 1) = tool.A_v(1, 0) = 0.002 * variant;
+  const Eigen::Matrix3d rotation =
+      Eigen::AngleAxisd(0.7 * variant, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d inertia = Eigen::Vector3d(2e-5, 3e-5, 1e-5).asDiagonal();
+  tool.M_inv_W = rotation * inertia.inverse() * rotation.transpose();
+  Eigen::Matrix3d skew;
+  skew << 0, -1, 0.5, 1, 0, -2, -0.5, 2, 0;
+  const Eigen::Matrix3d C = (kDt_s * 0.01 + kDt_s * kDt_s * 1.0) * Eigen::Matrix3d::Identity() +
+                            kDt_s * kDt_s * (0.3 + variant) * skew;
+  tool.A_L = Eigen::Matrix3d::Identity() + C * tool.M_inv_W;
+  return tool;
+}
+
+// n contacts on a body of n + 1 nodes (contact i between nodes i and i + 1), so that W_body =
+// J_u A_u⁻¹ J_uᵀ has full rank; `body_scale` scales the body's compliance (small: a stiff body,
+// W close to the rank-6 tool part). `press` shifts the targets: large makes every contact
+// active, 0 gives a mix of pressing and separating contacts.
+LcpProblem MakeLcpProblem(int n, unsigned seed, double press = 0.0, double body_scale = 1.0) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  auto random3 = [&] { return Eigen::Vector3d(unit(rng), unit(rng), unit(rng)); };
+  LcpProblem p;
+  p.tool = MakeTool(0.0);
+  const int num_dofs = 3 * (n + 1);
+  ToolState tool_state;
+  tool_state.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.02);
+  tool_state.v_W_m_s = 0.05 * random3();
+  tool_state.L_W_kg_m2_s = 1e-6 * random3();
+  std::vector<Contact> contacts;
+  for (int i = 0; i < n; ++i) {
+    Contact c;
+    c.n_W = (random3() + Eigen::Vector3d(0, 0, -2.0)).normalized();  // tool pressing down
+    c.p_tool_W_m = tool_state.x_W_m + 0.01 * random3();
+    c.nodes = {i, i + 1, -1};
+    const double w = 0.5 + 0.4 * unit(rng);
+    c.weights = {w, 1.0 - w, 0.0};
+    contacts.push_back(c);
+  }
+  p.J = CalcContactJacobian(contacts, tool_state.x_W_m, 1, num_dofs,
+                            std::vector<std::uint8_t>(num_dofs, 0));
+  Eigen::MatrixXd R(num_dofs, num_dofs);
+  for (int c = 0; c < num_dofs; ++c)
+    for (int r = 0; r < num_dofs; ++r) R(r, c) = unit(rng);
+  const Eigen::MatrixXd A_u =
+      R * R.transpose() * 1e-3 + 1e-2 * Eigen::MatrixXd::Identity(num_dofs, num_dofs);
+  const Eigen::MatrixXd J_u = Eigen::MatrixXd(p.J.J_u);
+  const Eigen::MatrixXd W_body = body_scale * J_u * A_u.ldlt().solve(J_u.transpose());
+  Eigen::VectorXd body_rhs(n);
+  for (int i = 0; i < n; ++i) body_rhs[i] = 0.1 * unit(rng) + press;
+  p.rows = MakeContactRows(p.J, W_body, body_rhs);
+  CalcDiscreteTimeWrench(p.tool, tool_state, &p.F_hat_N, &p.T_hat_N_m);
+  p.F_hat_N += Eigen::Vector3d(0.3, -0.2, -3.0);  // F̃: gravity and the coupling
+  p.T_hat_N_m += Eigen::Vector3d(0.01, 0.02, -0.005);
+  return p;
+}
+
+struct Reference {
+  Eigen::VectorXd lambda;
+  Eigen::Vector3d F_c_N, T_c_N_m;
+};
+
+// The LCP assembled densely and solved by SolveContactImpulses (kUnilateral).
+Reference SolveReference(const ContactRows& rows, const ToolStepSystem& tool,
+                         const Eigen::Vector3d& F_hat_N, const Eigen::Vector3d& T_hat_N_m) {
+  ContactJacobian J;
+  J.J_v = rows.J_v;
+  J.J_w = rows.J_w;
+  const Eigen::MatrixXd W = CalcToolDelassus(J, tool) + rows.W_body;
+  const Eigen::Vector3d v_free = tool.A_v.inverse() * tool.dt_s * F_hat_N;
+  const Eigen::Vector3d w_free = tool.M_inv_W * tool.A_L.inverse() * tool.dt_s * T_hat_N_m;
+  const Eigen::VectorXd rhs = rows.body_rhs - rows.J_v * v_free - rows.J_w * w_free;
+  Reference ref;
+  const ContactSolveReport report = SolveContactImpulses(
+      W, rhs, tool.dt_s, 1, ContactSolveOptions{ContactLaw::kUnilateral}, &ref.lambda);
+  EXPECT_TRUE(report.converged) << "reference residual " << report.residual;
+  ref.F_c_N = rows.J_v.transpose() * ref.lambda;
+  ref.T_c_N_m = rows.J_w.transpose() * ref.lambda;
+  return ref;
+}
+
+int CountPositive(const Eigen::VectorXd& lambda) {
+  return static_cast<int>((lambda.array() > 0.0).count());
+}
+
+// Solves with `solver` and compares λ, F_c and T_c with the reference; errors relative to the
+// size of the summed terms (Σ|λ| for F, Σ|J_ω||λ| for T) since F_c, T_c may cancel.
+void ExpectMatchesReference(HapticLcpSolver* solver, const ContactRows& rows,
+                            const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
+                            const Eigen::Vector3d& T_hat_N_m, const std::string& where) {
+  Eigen::Vector3d F_c, T_c;
+  ASSERT_TRUE(solver->Solve(rows, tool, F_hat_N, T_hat_N_m, &F_c, &T_c)) << where;
+  EXPECT_LT(solver->last_residual(), 1e-10) << where;
+  const Reference ref = SolveReference(rows, tool, F_hat_N, T_hat_N_m);
+  const Eigen::VectorXd lambda = solver->last_impulses();
+  const double lambda_scale = std::max(ref.lambda.norm(), 1e-300);
+  EXPECT_LT((lambda - ref.lambda).norm(), kRelativeTolerance * lambda_scale) << where;
+  const double F_scale = ref.lambda.cwiseAbs().sum();
+  const double T_scale = (rows.J_w.rowwise().norm().transpose() * ref.lambda.cwiseAbs()).value();
+  EXPECT_LT((F_c - ref.F_c_N).norm(), kRelativeTolerance * F_scale) << where;
+  EXPECT_LT((T_c - ref.T_c_N_m).norm(), kRelativeTolerance * T_scale) << where;
+  EXPECT_EQ(solver->last_num_active(), CountPositive(ref.lambda)) << where;
+}
+
+// Keeps the compiler from eliding an allocation whose result is unused (C++14 allows it).
+template <typename T>
+T* Escape(T* p) {
+  asm volatile("" : : "g"(p) : "memory");
+  return p;
+}
+
+TEST(AllocationCounter, CountsNewMallocAndEigen) {
+  if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer)";
+  struct alignas(64) Aligned {
+    double value[8];
+  };
+  AllocationCounter counter;
+  EXPECT_EQ(counter.count(), 0);
+  delete Escape(new int(1));
+  EXPECT_EQ(counter.count(), 1);
+  delete[] Escape(new double[4]);
+  EXPECT_EQ(counter.count(), 2);
+  delete Escape(new Aligned);
+  EXPECT_EQ(counter.count(), 3);
+  std::free(Escape(std::malloc(16)));
+  EXPECT_EQ(counter.count(), 4);
+  {
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(100);  // Eigen allocates with std::malloc
+    Escape(v.data());
+  }
+  EXPECT_EQ(counter.count(), 5);
+  counter.Reset();
+  EXPECT_EQ(counter.count(), 0);
+}
+
+TEST(MakeContactRows, SelectsAndSymmetrisesTheBodyRows) {
+  const LcpProblem p = MakeLcpProblem(5, 3);
+  Eigen::MatrixXd W_all = Eigen::MatrixXd::Random(8, 8);
+  const std::vector<int> chosen = {6, 1, 4, 0, 2};
+  const ContactRows rows = MakeContactRows(p.J, W_all, chosen, p.rows.body_rhs);
+  for (int r = 0; r < 5; ++r)
+    for (int c = 0; c < 5; ++c)
+      EXPECT_EQ(rows.W_body(r, c), 0.5 * (W_all(chosen[r], chosen[c]) + W_all(chosen[c], chosen[r])));
+  EXPECT_EQ(rows.J_v, p.J.J_v);
+  EXPECT_EQ(rows.num_rows(), 5);
+  ContactJacobian friction = p.J;
+  friction.rows_per_contact = 3;
+  EXPECT_THROW(MakeContactRows(friction, W_all, chosen, p.rows.body_rhs), std::invalid_argument);
+  EXPECT_THROW(MakeContactRows(p.J, W_all, {0, 1}, p.rows.body_rhs), std::invalid_argument);
+}
+
+TEST(HapticLcpSolver, MatchesTheActiveSetReferenceFromAColdStart) {
+  for (const int n : {6, 10, 25, 60, 125}) {
+    for (unsigned seed = 1; seed <= 2; ++seed) {
+      const LcpProblem p = MakeLcpProblem(n, 100 * n + seed);
+      HapticLcpSolver solver(150);
+      ExpectMatchesReference(&solver, p.rows, p.tool, p.F_hat_N, p.T_hat_N_m,
+                             "n " + std::to_string(n) + " seed " + std::to_string(seed));
+      // A mix of pressing and separating contacts: the LCP is not the equality solve.
+      EXPECT_GT(solver.last_num_active(), 0);
+      EXPECT_LT(solver.last_num_active(), n);
+    }
+  }
+}
+
+// Same rows over many haptic steps while F̂ swings (contacts release and re-engage) and the
+// tool's step system drifts: the warm-started answer equals the cold reference at every step.
+TEST(HapticLcpSolver, WarmStartFollowsChangingActiveSetsWithoutBias) {
+  for (const int n : {40, 125}) {
+    const LcpProblem p = MakeLcpProblem(n, 7 + n);
+    HapticLcpSolver solver(150);
+    std::set<std::vector<bool>> active_sets;
+    std::vector<bool> previous_active;
+    int active_set_changes = 0, warm_steps_without_factorisation = 0, total_factorisations = 0;
+    constexpr int kSteps = 40;
+    for (int step = 0; step < kSteps; ++step) {
+      const double phase = 0.4 * step;
+      const Eigen::Vector3d dF = 4.0 * Eigen::Vector3d(std::cos(phase), std::sin(phase), 0.3);
+      const Eigen::Vector3d dT = 0.05 * Eigen::Vector3d(std::sin(phase), 0.5, std::cos(phase));
+      const ToolStepSystem tool = MakeTool(0.02 * step);
+      ExpectMatchesReference(&solver, p.rows, tool, p.F_hat_N + dF, p.T_hat_N_m + dT,
+                             "n " + std::to_string(n) + " step " + std::to_string(step));
+      if (step > 0 && solver.last_num_factorizations() == 0) ++warm_steps_without_factorisation;
+      total_factorisations += solver.last_num_factorizations();
+      std::vector<bool> active(n);
+      for (int i = 0; i < n; ++i) active[i] = solver.last_impulses()[i] > 0.0;
+      active_sets.insert(active);
+      if (step > 0 && active != previous_active) ++active_set_changes;
+      previous_active = active;
+      // A fresh solver (cold start) agrees with the warm one to round-off.
+      HapticLcpSolver cold(150);
+      Eigen::Vector3d F_cold, T_cold;
+      ASSERT_TRUE(cold.Solve(p.rows, tool, p.F_hat_N + dF, p.T_hat_N_m + dT, &F_cold, &T_cold));
+      EXPECT_LT((cold.last_impulses() - solver.last_impulses()).norm(),
+                kRelativeTolerance * solver.last_impulses().norm());
+    }
+    EXPECT_GE(active_set_changes, kSteps / 2) << "n " << n;
+    EXPECT_GT(static_cast<int>(active_sets.size()), kSteps / 5) << "n " << n;
+    EXPECT_GT(warm_steps_without_factorisation, 0) << "n " << n;  // the warm path was taken
+    std::printf("n %d: %d active-set changes, %zu distinct sets, %d factorisations in %d steps\n",
+                n, active_set_changes, active_sets.size(), total_factorisations, kSteps);
+  }
+}
+
+// New rows (a new visual frame) of the same or another size, alternating; also a stiff body
+// (W nearly the rank-6 tool part, condition ~1e5).
+TEST(HapticLcpSolver, NewRowsOfTheSameAndOtherSizes) {
+  const std::vector<LcpProblem> problems = {MakeLcpProblem(50, 1), MakeLcpProblem(50, 2),
+                                            MakeLcpProblem(20, 3), MakeLcpProblem(30, 4, 0.0, 1e-3),
+                                            MakeLcpProblem(125, 5)};
+  HapticLcpSolver solver(125);
+  for (int k = 0; k < 15; ++k) {
+    const LcpProblem& p = problems[(k * 3) % problems.size()];
+    ExpectMatchesReference(&solver, p.rows, p.tool, p.F_hat_N, p.T_hat_N_m,
+                           "call " + std::to_string(k));
+  }
+}
+
+// As the visual frame builds the linear model: keep the rows that are active (the LCP's solution
+// restricted to them is their equality solution, all positive), select them from the frame's
+// W_body with MakeContactRows, and compare with the linear model of the same rows.
+TEST(HapticLcpSolver, AllContactsActiveMatchesTheLinearContactModel) {
+  for (const int n : {12, 60}) {
+    const LcpProblem frame = MakeLcpProblem(n, 31 + n);
+    HapticLcpSolver solver(n);
+    Eigen::Vector3d F_c, T_c;
+    ASSERT_TRUE(solver.Solve(frame.rows, frame.tool, frame.F_hat_N, frame.T_hat_N_m, &F_c, &T_c));
+    std::vector<int> active_rows;
+    for (int i = 0; i < n; ++i)
+      if (solver.last_impulses()[i] > 0.0) active_rows.push_back(i);
+    const int k = static_cast<int>(active_rows.size());
+    ASSERT_GT(k, 1);
+    ASSERT_LT(k, n);
+    ContactJacobian J;
+    J.J_v.resize(k, 3);
+    J.J_w.resize(k, 3);
+    Eigen::VectorXd body_rhs(k);
+    for (int a = 0; a < k; ++a) {
+      J.J_v.row(a) = frame.rows.J_v.row(active_rows[a]);
+      J.J_w.row(a) = frame.rows.J_w.row(active_rows[a]);
+      body_rhs[a] = frame.rows.body_rhs[active_rows[a]];
+    }
+    const ContactRows rows = MakeContactRows(J, frame.rows.W_body, active_rows, body_rhs);
+    const Eigen::MatrixXd W = CalcToolDelassus(J, frame.tool) + rows.W_body;
+    const LinearContactModel model = MakeLinearContactModel(J, W, frame.tool, rows.body_rhs);
+    for (const double scale : {0.0, 1e-3, 1e-2}) {
+      const Eigen::Vector3d F_hat = frame.F_hat_N + scale * Eigen::Vector3d(0.5, -1.0, 2.0);
+      const Eigen::Vector3d T_hat = frame.T_hat_N_m + scale * Eigen::Vector3d(-0.01, 0.02, 0.005);
+      Eigen::Vector3d F_model, T_model;
+      ASSERT_TRUE(solver.Solve(rows, frame.tool, F_hat, T_hat, &F_c, &T_c));
+      ASSERT_EQ(solver.last_num_active(), k) << "precondition: every contact active";
+      EvaluateLinearContactModel(model, F_hat, T_hat, &F_model, &T_model);
+      EXPECT_LT((F_c - F_model).norm(), kRelativeTolerance * F_model.norm()) << n << " " << scale;
+      EXPECT_LT((T_c - T_model).norm(), kRelativeTolerance * T_model.norm()) << n << " " << scale;
+    }
+  }
+}
+
+TEST(HapticLcpSolver, AllocatesNothingAfterConstruction) {
+  if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer)";
+  const std::vector<LcpProblem> problems = {MakeLcpProblem(125, 11), MakeLcpProblem(60, 12),
+                                            MakeLcpProblem(125, 13), MakeLcpProblem(6, 14)};
+  std::vector<ToolStepSystem> tools;
+  for (int k = 0; k < 8; ++k) tools.push_back(MakeTool(0.05 * k));
+  HapticLcpSolver solver(150);
+  Eigen::Vector3d F_c, T_c;
+  int failures = 0, factorisations = 0;
+  AllocationCounter counter;
+  for (int step = 0; step < 400; ++step) {
+    // A new frame every 50 steps; F̂ and the tool change every step.
+    const LcpProblem& p = problems[(step / 50) % problems.size()];
+    const double phase = 0.3 * step;
+    const Eigen::Vector3d F_hat =
+        p.F_hat_N + 3.0 * Eigen::Vector3d(std::cos(phase), std::sin(phase), 0.0);
+    if (!solver.Solve(p.rows, tools[step % tools.size()], F_hat, p.T_hat_N_m, &F_c, &T_c))
+      ++failures;
+    factorisations += solver.last_num_factorizations();
+  }
+  const std::int64_t allocations = counter.count();
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(failures, 0);
+  EXPECT_GT(factorisations, 8);  // the new-rows and border-overflow paths were exercised
+}
+
+TEST(HapticLcpSolver, MoreRowsThanCapacityFailsWithZeroForceAndNoAllocation) {
+  const LcpProblem p = MakeLcpProblem(25, 21);
+  HapticLcpSolver solver(20);
+  Eigen::Vector3d F_c(1.0, 2.0, 3.0), T_c(4.0, 5.0, 6.0);
+  AllocationCounter counter;
+  const bool ok = solver.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c);
+  const std::int64_t allocations = counter.count();
+  EXPECT_FALSE(ok);
+  EXPECT_EQ(F_c, Eigen::Vector3d::Zero());
+  EXPECT_EQ(T_c, Eigen::Vector3d::Zero());
+  if (AllocationCounter::enabled()) {
+    EXPECT_EQ(allocations, 0);
+  }
+  // The solver is still usable for rows that fit.
+  const LcpProblem small = MakeLcpProblem(20, 22);
+  ExpectMatchesReference(&solver, small.rows, small.tool, small.F_hat_N, small.T_hat_N_m,
+                         "after overflow");
+}
+
+TEST(HapticLcpSolver, RejectsAnAsymmetricBodyBlockAndRecovers) {
+  LcpProblem p = MakeLcpProblem(10, 41);
+  HapticLcpSolver solver(10);
+  ContactRows bad = p.rows;
+  bad.W_body(3, 1) += 1e-3 * bad.W_body.cwiseAbs().maxCoeff();
+  Eigen::Vector3d F_c, T_c;
+  EXPECT_FALSE(solver.Solve(bad, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c));
+  EXPECT_EQ(F_c, Eigen::Vector3d::Zero());
+  ExpectMatchesReference(&solver, p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, "after rejection");
+  // No rows: no force.
+  ContactRows none;
+  EXPECT_TRUE(solver.Solve(none, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c));
+  EXPECT_EQ(F_c, Eigen::Vector3d::Zero());
+}
+
+}  // namespace
+}  // namespace hapsim::contact
