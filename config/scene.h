@@ -74,6 +74,8 @@
 
 #include "core/rigid_tool.h"
 #include "core/virtual_coupling.h"
+#include "contact/contact_solver.h"
+#include "device/haptic_mode.h"
 #include "device/scripted_trajectory.h"
 #include "fem/fem_options.h"
 #include "fem/material.h"
@@ -140,9 +142,8 @@ struct ToolScene {
   SourceLocation location;  // the `tool` section
 };
 
-// Tool–body contact law (mirrors contact::ContactLaw; config does not depend on contact/, the
-// caller converts).
-enum class ContactLaw { kEquality, kUnilateral, kFriction };
+// Tool–body contact law: contact::ContactLaw (equality, unilateral, friction).
+using ContactLaw = contact::ContactLaw;
 
 // Defaults are those of contact::ResponseOptions and contact::DetectionOptions.
 struct ContactScene {
@@ -153,12 +154,8 @@ struct ContactScene {
   double margin_m = 1e-3;             // detection margin, m
 };
 
-// What the haptic process renders (DESIGN.md §4–6):
-//   kLinear     the paper's linear contact model of the last visual frame, evaluated at 1 kHz
-//   kLcp        the per-contact rows of the last visual frame, the small LCP solved at 1 kHz
-//   kCoupling   standard multirate rendering: only the virtual coupling to the visual tool
-//   kReference  everything at the haptic step (the ground truth)
-enum class HapticMode { kLinear, kLcp, kCoupling, kReference };
+// What the haptic side renders: see device/haptic_mode.h.
+using HapticMode = device::HapticMode;
 
 struct HapticScene {
   double rate_hz = 1000.0;
@@ -166,9 +163,7 @@ struct HapticScene {
   int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
 };
 
-const char* ToString(ContactLaw law);   // "equality", "unilateral", "friction"
-const char* ToString(HapticMode mode);  // "linear", "lcp", "coupling", "reference"
-// The value ToString names `name`, or nullopt (for command-line overrides).
+// The value contact::ToString / device::ToString names `name`, or nullopt (command-line overrides).
 std::optional<ContactLaw> ParseContactLaw(const std::string& name);
 std::optional<HapticMode> ParseHapticMode(const std::string& name);
 

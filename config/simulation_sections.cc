@@ -232,32 +232,6 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
   scene->trajectory = ReadTrajectory(root.GetMap("device"));
 }
 
-const char* ToString(ContactLaw law) {
-  switch (law) {
-    case ContactLaw::kEquality:
-      return "equality";
-    case ContactLaw::kUnilateral:
-      return "unilateral";
-    case ContactLaw::kFriction:
-      return "friction";
-  }
-  return "unknown";
-}
-
-const char* ToString(HapticMode mode) {
-  switch (mode) {
-    case HapticMode::kLinear:
-      return "linear";
-    case HapticMode::kLcp:
-      return "lcp";
-    case HapticMode::kCoupling:
-      return "coupling";
-    case HapticMode::kReference:
-      return "reference";
-  }
-  return "unknown";
-}
-
 std::optional<ContactLaw> ParseContactLaw(const std::string& name) {
   return Parse(kContactLaws, name);
 }

@@ -133,6 +133,15 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
 
 }  // namespace
 
+const char* ToString(ContactLaw law) {
+  switch (law) {
+    case ContactLaw::kEquality: return "equality";
+    case ContactLaw::kUnilateral: return "unilateral";
+    case ContactLaw::kFriction: return "friction";
+  }
+  return "unknown";
+}
+
 ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
                                         double dt_s, int rows_per_contact,
                                         const ContactSolveOptions& options,

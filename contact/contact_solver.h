@@ -20,6 +20,7 @@
 namespace hapsim::contact {
 
 enum class ContactLaw { kEquality, kUnilateral, kFriction };
+const char* ToString(ContactLaw law);  // "equality", "unilateral", "friction"
 
 struct ContactSolveOptions {
   ContactLaw law = ContactLaw::kUnilateral;

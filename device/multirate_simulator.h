@@ -20,13 +20,11 @@
 #include <Eigen/Core>
 
 #include "contact/visual_frame.h"
+#include "device/haptic_mode.h"
 #include "device/haptic_step.h"
 #include "device/scripted_trajectory.h"
 
 namespace hapsim::device {
-
-enum class HapticMode { kLinear, kLcp, kCoupling, kReference };
-const char* ToString(HapticMode mode);
 
 struct MultirateOptions {
   HapticMode mode = HapticMode::kLinear;
