@@ -7,5 +7,6 @@
 namespace hapsim::apps {
 
 void AddFemCommand(CLI::App* app);
+void AddSimCommand(CLI::App* app);
 
 }  // namespace hapsim::apps

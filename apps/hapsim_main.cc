@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("hapsim ") + HAPSIM_VERSION);
   app.require_subcommand(1);
   hapsim::apps::AddFemCommand(&app);
+  hapsim::apps::AddSimCommand(&app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

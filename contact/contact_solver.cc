@@ -1,6 +1,7 @@
 #include "contact/contact_solver.h"
 
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -12,7 +13,9 @@ namespace {
 ContactSolveReport SolveEquality(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
                                  Eigen::VectorXd* lambda) {
   ContactSolveReport report;
-  *lambda = Eigen::PartialPivLU<Eigen::MatrixXd>(dt_s * W).solve(rhs);
+  // Rank-revealing, as redundant contacts (one body point twice, or many on a rigid part) make W
+  // singular; the minimum-norm λ then shares the load between them.
+  *lambda = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(dt_s * W).solve(rhs);
   const double rhs_norm = rhs.norm();
   report.residual = rhs_norm > 0.0 ? (dt_s * W * *lambda - rhs).norm() / rhs_norm : 0.0;
   report.converged = lambda->allFinite();

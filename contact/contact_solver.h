@@ -1,7 +1,7 @@
 #pragma once
 // Contact impulses from the Delassus matrix (DESIGN.md §4), three laws behind one function:
 //
-//   equality   (the paper)      Δt W λ = b − c_free                    dense LU
+//   equality   (the paper)      Δt W λ = b − c_free                    dense, rank-revealing
 //   unilateral (Signorini)      c = c_free − b + Δt W λ ≥ 0,  λ ≥ 0,  cᵀλ = 0   projected
 //   Gauss–Seidel friction   (Coulomb)        normal rows as unilateral; per contact the tangential
 //   impulse is
@@ -9,8 +9,8 @@
 //                               Gauss–Seidel
 //
 // W is (rows x rows) with W = J_v A_v⁻¹ J_vᵀ + J_ω M⁻¹ A_L⁻¹ J_ωᵀ + J_u A_u⁻¹ J_uᵀ. It is symmetric
-// only when the coupling's torque Jacobian is (zero rotation error), so the equality solve uses
-// partial-pivoting LU rather than LDLᵀ. `rhs` = b − c_free, with b the position stabilisation
+// only when the coupling's torque Jacobian is (zero rotation error), and singular when contacts are
+// redundant, so the equality solve uses a complete orthogonal decomposition rather than LDLᵀ. `rhs` = b − c_free, with b the position stabilisation
 // −β φ/Δt plus any restitution target.
 
 #include <Eigen/Core>

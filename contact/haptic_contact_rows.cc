@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 
 namespace hapsim::contact {
@@ -82,10 +83,11 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
 //   [ H         U_E    D      ] [ ξ ]   [r_E; 0]   (entered rows: W̄_jB, U_j, W̄_EE; left rows:
 //                                                   e_iᵀ x_B = 0)
 //
-// whose Schur complement on K0 is m × m, m = 6 + items. Z = K0⁻¹[U_B V] and P = [U_B V]ᵀ Z
-// (symmetric since K0 is) and q = [U_B V]ᵀ g, g = K0⁻¹ body_rhs_B, do not depend on the step and
-// are updated one column per change; with r_B = body_rhs_B − U_B s_free everything step-dependent
-// is 6-dimensional.
+// whose Schur complement on K0 is m × m, m = 6 + items. Y = L⁻¹[U_B V], P = YᵀY = [U_B V]ᵀK0⁻¹
+// [U_B V] and q = Yᵀh, h = L⁻¹ body_rhs_B, do not depend on the step and are updated one column
+// (one forward substitution) per change; with r_B = body_rhs_B − U_B s_free everything
+// step-dependent in the border is 6-dimensional, and x_B = L⁻ᵀ(h − Y [s_free + y; ξ]) costs one
+// back substitution per solve.
 struct HapticLcpSolver::Workspace {
   explicit Workspace(int max_rows_in)
       : max_rows(max_rows_in),
@@ -99,8 +101,8 @@ struct HapticLcpSolver::Workspace {
         L(max_rows_in, max_rows_in),
         U_B(max_rows_in, 6),
         U_bar_B(max_rows_in, 6),
-        g(max_rows_in),
-        Z(max_rows_in, kMaxBorder),
+        h(max_rows_in),
+        Y(max_rows_in, kMaxBorder),
         P(kMaxBorder, kMaxBorder),
         q(kMaxBorder),
         active(max_rows_in, 0),
@@ -116,7 +118,7 @@ struct HapticLcpSolver::Workspace {
         C_lu(kMaxBorder) {
     W.setZero();
     L.setZero();
-    Z.setZero();
+    Y.setZero();
     P.setZero();
     x.setZero();
   }
@@ -128,7 +130,8 @@ struct HapticLcpSolver::Workspace {
   bool SameRows(const ContactRows& rows) const;
   bool CopyRows(const ContactRows& rows);
   bool Rebase();
-  void SolveBaseInPlace(Eigen::Ref<Eigen::VectorXd> v) const;
+  void ForwardSolveInPlace(int first, Eigen::Ref<Eigen::VectorXd> v) const;
+  void BackSolveInPlace(Eigen::Ref<Eigen::VectorXd> v) const;
   void AddEnteredRow(int j);
   void AddLeftRow(int i);
   void RemoveItem(int t);
@@ -136,6 +139,9 @@ struct HapticLcpSolver::Workspace {
   void Deactivate(int i);
   bool SolveOnActiveSet();
   void CalcSlack();
+  // Number of border items whose cost (two triangular solves each, O(k0²) at matrix-vector
+  // speed) matches one refactorisation (k0³/3 at matrix-matrix speed, ~4× faster per flop).
+  int BorderBreakEven() const { return 8 + k0 / 24; }
 
   const int max_rows;
   // The rows of the last call (the cache key); n = −1 before the first.
@@ -155,10 +161,10 @@ struct HapticLcpSolver::Workspace {
   std::vector<int> item_of_row;  // (max) border item of a row, −1 none
   Eigen::MatrixXd L;             // (max x max) lower triangle: Cholesky factor of K0
   MatrixX6d U_B, U_bar_B;        // (max x 6) U and U S̄ gathered at the base rows
-  Eigen::VectorXd g;             // (max) K0⁻¹ body_rhs_B
-  Eigen::MatrixXd Z;             // (max x kMaxBorder) K0⁻¹ [U_B V]
-  BorderMatrix P;                // [U_B V]ᵀ K0⁻¹ [U_B V]
-  BorderVector q;                // [U_B V]ᵀ g
+  Eigen::VectorXd h;             // (max) L⁻¹ body_rhs_B
+  Eigen::MatrixXd Y;             // (max x kMaxBorder) L⁻¹ [U_B V]
+  BorderMatrix P;                // YᵀY = [U_B V]ᵀ K0⁻¹ [U_B V]
+  BorderVector q;                // Yᵀh
   int num_items = 0;
   std::array<int, kMaxItems> item_row{};
   std::array<bool, kMaxItems> item_entered{};
@@ -173,10 +179,21 @@ struct HapticLcpSolver::Workspace {
   Eigen::PartialPivLU<BorderMatrix> C_lu;
 };
 
+// Bitwise comparison, column by column (memcmp: ~4× faster than Eigen's ==).
 bool HapticLcpSolver::Workspace::SameRows(const ContactRows& rows) const {
   const int m = rows.num_rows();
-  return m == n && body_rhs.head(m) == rows.body_rhs && U.topLeftCorner(m, 3) == rows.J_v &&
-         U.topRightCorner(m, 3) == rows.J_w && W.topLeftCorner(m, m) == rows.W_body;
+  if (m != n) return false;
+  const auto same = [m](const double* a, const double* b) {
+    return std::memcmp(a, b, sizeof(double) * m) == 0;
+  };
+  if (!same(body_rhs.data(), rows.body_rhs.data())) return false;
+  for (int c = 0; c < 3; ++c)
+    if (!same(U.col(c).data(), rows.J_v.col(c).data()) ||
+        !same(U.col(3 + c).data(), rows.J_w.col(c).data()))
+      return false;
+  for (int c = 0; c < m; ++c)
+    if (!same(W.col(c).data(), rows.W_body.col(c).data())) return false;
+  return true;
 }
 
 bool HapticLcpSolver::Workspace::CopyRows(const ContactRows& rows) {
@@ -185,7 +202,7 @@ bool HapticLcpSolver::Workspace::CopyRows(const ContactRows& rows) {
   U.topLeftCorner(n, 3) = rows.J_v;
   U.topRightCorner(n, 3) = rows.J_w;
   W.topLeftCorner(n, n) = rows.W_body;
-  const double scale = W.topLeftCorner(n, n).cwiseAbs().maxCoeff();
+  const double scale = W.topLeftCorner(n, n).cwiseAbs().maxCoeff<Eigen::PropagateNaN>();
   bool ok = body_rhs.head(n).allFinite() && U.topRows(n).allFinite() && std::isfinite(scale);
   for (int j = 0; ok && j < n; ++j)
     for (int i = j + 1; i < n; ++i)
@@ -194,11 +211,19 @@ bool HapticLcpSolver::Workspace::CopyRows(const ContactRows& rows) {
   return ok;
 }
 
-void HapticLcpSolver::Workspace::SolveBaseInPlace(Eigen::Ref<Eigen::VectorXd> v) const {
+// v ← L⁻¹ v for a v that is zero above row `first` (only rows first.. are touched).
+void HapticLcpSolver::Workspace::ForwardSolveInPlace(int first,
+                                                     Eigen::Ref<Eigen::VectorXd> v) const {
+  if (first >= k0) return;
+  L.block(first, first, k0 - first, k0 - first)
+      .triangularView<Eigen::Lower>()
+      .solveInPlace(v.segment(first, k0 - first));
+}
+
+// v ← L⁻ᵀ v.
+void HapticLcpSolver::Workspace::BackSolveInPlace(Eigen::Ref<Eigen::VectorXd> v) const {
   if (k0 == 0) return;
-  const auto factor = L.topLeftCorner(k0, k0);
-  factor.triangularView<Eigen::Lower>().solveInPlace(v);
-  factor.triangularView<Eigen::Lower>().adjoint().solveInPlace(v);
+  L.topLeftCorner(k0, k0).triangularView<Eigen::Lower>().adjoint().solveInPlace(v);
 }
 
 // Makes the current active set the base: K0 = W̄_AA, S̄ from this step's S, border cleared.
@@ -223,7 +248,7 @@ bool HapticLcpSolver::Workspace::Rebase() {
   for (int a = 0; a < k0; ++a) {
     U_B.row(a) = U.row(base_rows[a]);
     U_bar_B.row(a) = U_bar.row(base_rows[a]);
-    g[a] = body_rhs[base_rows[a]];
+    h[a] = body_rhs[base_rows[a]];
   }
   if (k0 > 0) {
     auto K = L.topLeftCorner(k0, k0);
@@ -245,12 +270,12 @@ bool HapticLcpSolver::Workspace::Rebase() {
     }
   }
   for (int c = 0; c < 6; ++c) {
-    Z.col(c).head(k0) = U_B.col(c).head(k0);
-    SolveBaseInPlace(Z.col(c).head(k0));
+    Y.col(c).head(k0) = U_B.col(c).head(k0);
+    ForwardSolveInPlace(0, Y.col(c).head(k0));
   }
-  SolveBaseInPlace(g.head(k0));
-  P.topLeftCorner<6, 6>().noalias() = U_B.topRows(k0).transpose() * Z.topLeftCorner(k0, 6);
-  q.head<6>().noalias() = U_B.topRows(k0).transpose() * g.head(k0);
+  ForwardSolveInPlace(0, h.head(k0));
+  P.topLeftCorner<6, 6>().noalias() = Y.topLeftCorner(k0, 6).transpose() * Y.topLeftCorner(k0, 6);
+  q.head<6>().noalias() = Y.topLeftCorner(k0, 6).transpose() * h.head(k0);
   return true;
 }
 
@@ -260,10 +285,11 @@ void HapticLcpSolver::Workspace::AddEnteredRow(int j) {
   auto V = column.head(k0);
   for (int a = 0; a < k0; ++a) V[a] = W_lower(base_rows[a], j);
   V.noalias() += U_bar_B.topRows(k0) * U.row(j).transpose();
-  Z.col(c).head(k0) = V;
-  SolveBaseInPlace(Z.col(c).head(k0));
-  for (int b = 0; b <= c; ++b) P(c, b) = P(b, c) = V.dot(Z.col(b).head(k0));
-  q[c] = V.dot(g.head(k0));
+  auto y = Y.col(c).head(k0);
+  y = V;
+  ForwardSolveInPlace(0, y);
+  for (int b = 0; b <= c; ++b) P(c, b) = P(b, c) = y.dot(Y.col(b).head(k0));
+  q[c] = y.dot(h.head(k0));
   item_row[num_items] = j;
   item_entered[num_items] = true;
   item_of_row[j] = num_items++;
@@ -273,11 +299,13 @@ void HapticLcpSolver::Workspace::AddEnteredRow(int j) {
 void HapticLcpSolver::Workspace::AddLeftRow(int i) {
   const int c = 6 + num_items;
   const int p = base_pos[i];
-  Z.col(c).head(k0).setZero();
-  Z(p, c) = 1.0;
-  SolveBaseInPlace(Z.col(c).head(k0));
-  for (int b = 0; b <= c; ++b) P(c, b) = P(b, c) = Z(p, b);
-  q[c] = g[p];
+  auto y = Y.col(c).head(k0);  // L⁻¹ e_p is zero above p
+  y.setZero();
+  y[p] = 1.0;
+  ForwardSolveInPlace(p, y);
+  const int tail = k0 - p;
+  for (int b = 0; b <= c; ++b) P(c, b) = P(b, c) = y.tail(tail).dot(Y.col(b).segment(p, tail));
+  q[c] = y.tail(tail).dot(h.segment(p, tail));
   item_row[num_items] = i;
   item_entered[num_items] = false;
   item_of_row[i] = num_items++;
@@ -290,7 +318,7 @@ void HapticLcpSolver::Workspace::RemoveItem(int t) {
   item_of_row[item_row[t]] = -1;
   if (t != last) {
     const int ct = 6 + t, cl = 6 + last;
-    Z.col(ct).head(k0) = Z.col(cl).head(k0);
+    Y.col(ct).head(k0) = Y.col(cl).head(k0);
     P.col(ct).head(m) = P.col(cl).head(m);
     P.row(ct).head(m) = P.row(cl).head(m);
     q[ct] = q[cl];
@@ -352,12 +380,13 @@ bool HapticLcpSolver::Workspace::SolveOnActiveSet() {
   C_lu.compute(C);
   xi.resize(m);
   xi = C_lu.solve(rho);
-  // x_B = K0⁻¹ r_B − Z_U y − Z_V ξ = g − Z [s_free + y; ξ].
+  // x_B = K0⁻¹(r_B − U_B y − V ξ) = L⁻ᵀ(h − Y [s_free + y; ξ]).
   coef = xi;
   coef.head<6>() += s_free;
   auto x_B = column.head(k0);
-  x_B = g.head(k0);
-  x_B.noalias() -= Z.topLeftCorner(k0, m) * coef;
+  x_B = h.head(k0);
+  x_B.noalias() -= Y.topLeftCorner(k0, m) * coef;
+  BackSolveInPlace(x_B);
   z.head(n).setZero();
   for (int a = 0; a < k0; ++a) z[base_rows[a]] = x_B[a];
   for (int t = 0; t < num_items; ++t) z[item_row[t]] = item_entered[t] ? xi[6 + t] : 0.0;
@@ -418,18 +447,19 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
     ws.rebase_pending = true;
     return true;
   }
-  if (!ws.SameRows(rows)) {
-    const int previous_n = ws.n;
-    if (!ws.CopyRows(rows)) return false;
-    // First guess: the previous step's active set if the size is the same, else all rows.
-    if (n != previous_n) std::fill(ws.active.begin(), ws.active.begin() + n, std::uint8_t{1});
+  const bool new_rows = !ws.SameRows(rows);
+  if (new_rows && !ws.CopyRows(rows)) return false;
+  ws.r.head(n) = ws.body_rhs.head(n);
+  ws.r.head(n).noalias() -= ws.U.topRows(n) * ws.s_free;
+  if (new_rows) {
+    // New contacts (their indices say nothing about the old active set): guess the rows that
+    // ask for a push, r_i = b_i − c_free,i > 0.
+    for (int i = 0; i < n; ++i) ws.active[i] = ws.r[i] > 0.0;
     ws.rebase_pending = true;
   }
   if (ws.rebase_pending) ws.Rebase();  // a dependent guess leaves an empty base: cold start
-
-  ws.r.head(n) = ws.body_rhs.head(n);
-  ws.r.head(n).noalias() -= ws.U.topRows(n) * ws.s_free;
-  const double tolerance = kEnteringTolerance * std::max(1.0, ws.r.head(n).lpNorm<Eigen::Infinity>());
+  const double tolerance =
+      kEnteringTolerance * std::max(1.0, ws.r.head(n).lpNorm<Eigen::Infinity>());
   auto fail = [&] {
     ws.n = -1;  // recompute everything next time
     last_num_factorizations_ = ws.num_factorizations;
@@ -437,18 +467,17 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   };
 
   // Shrink the guessed set until its equality solution is positive: a feasible start for the
-  // active-set iteration, optimal on its face.
+  // active-set iteration, optimal on its face. Many rows leaving at once (a poor guess for new
+  // rows) are cheaper to refactorise than to border.
   while (true) {
     ++last_iterations_;
     if (!ws.SolveOnActiveSet()) return fail();
-    bool shrunk = false;
-    for (int i = 0; i < n; ++i) {
-      if (ws.active[i] && !(ws.z[i] > 0.0)) {
-        ws.Deactivate(i);
-        shrunk = true;
-      }
-    }
-    if (!shrunk) break;
+    int num_leaving = 0;
+    for (int i = 0; i < n; ++i) num_leaving += ws.active[i] && !(ws.z[i] > 0.0);
+    if (num_leaving == 0) break;
+    if (num_leaving > ws.BorderBreakEven()) ws.rebase_pending = true;
+    for (int i = 0; i < n; ++i)
+      if (ws.active[i] && !(ws.z[i] > 0.0)) ws.Deactivate(i);
   }
   ws.x.head(n) = ws.z.head(n);
 
@@ -470,12 +499,21 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
     while (true) {
       ++last_iterations_;
       if (!ws.SolveOnActiveSet()) return fail();
+      // Ratio test: the longest step along z − x keeping x ≥ 0. The row that blocks it is set
+      // to zero explicitly (x + step (z − x) may round to a tiny positive value, and a row left
+      // in the set that way would stall the iteration with ever smaller steps).
       double step = 1.0;
-      for (int i = 0; i < n; ++i)
-        if (ws.active[i] && ws.z[i] <= 0.0) step = std::min(step, ws.x[i] / (ws.x[i] - ws.z[i]));
+      int blocking = -1;
+      for (int i = 0; i < n; ++i) {
+        if (!ws.active[i] || ws.z[i] > 0.0) continue;
+        const double decrease = ws.x[i] - ws.z[i];
+        const double ratio = decrease > 0.0 ? ws.x[i] / decrease : 0.0;
+        if (ratio < step) step = ratio, blocking = i;
+      }
       for (int i = 0; i < n; ++i)
         if (ws.active[i]) ws.x[i] += step * (ws.z[i] - ws.x[i]);
-      if (step >= 1.0) break;
+      if (blocking < 0) break;
+      ws.x[blocking] = 0.0;
       bool any_active = false;
       for (int i = 0; i < n; ++i) {
         if (!ws.active[i]) continue;

@@ -39,9 +39,9 @@ namespace hapsim::contact {
 // What the visual frame hands to the haptic step for the lcp mode: per contact row (normal rows
 // only), frozen at the frame.
 struct ContactRows {
-  Eigen::MatrixX3d J_v;      // (n x 3) −n_iᵀ, world
-  Eigen::MatrixX3d J_w;      // (n x 3) −(r_i × n_i)ᵀ, world, m (lever from the tool's COM)
-  Eigen::MatrixXd W_body;    // (n x n) J_u A_u⁻¹ J_uᵀ at the visual step, s/kg; symmetric
+  Eigen::MatrixX3d J_v;    // (n x 3) −n_iᵀ, world
+  Eigen::MatrixX3d J_w;    // (n x 3) −(r_i × n_i)ᵀ, world, m (lever from the tool's COM)
+  Eigen::MatrixXd W_body;  // (n x n) J_u A_u⁻¹ J_uᵀ at the visual step, s/kg; symmetric
   Eigen::VectorXd body_rhs;  // (n) b − J_u u̇: velocity target minus the body's normal velocity, m/s
   int num_rows() const { return static_cast<int>(J_v.rows()); }
 };

@@ -1,6 +1,6 @@
 #include "contact/linear_contact_model.h"
 
-#include <Eigen/LU>
+#include <Eigen/QR>
 #include <stdexcept>
 
 namespace hapsim::contact {
@@ -17,8 +17,9 @@ LinearContactModel MakeLinearContactModel(const ContactJacobian& J, const Eigen:
   LinearContactModel model;
   model.num_contacts = J.num_rows() / J.rows_per_contact;
   if (J.num_rows() == 0) return model;
-  const Eigen::PartialPivLU<Eigen::MatrixXd> W_lu(W);
-  if (!(std::abs(W_lu.determinant()) > 0.0)) throw std::runtime_error("singular Delassus matrix");
+  // Rank-revealing: two contacts with the same body point and normal (or more than six on a rigid
+  // part) make W singular; the minimum-norm solution then shares the force between them.
+  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> W_lu(W);
   const Eigen::MatrixX3d Y_v = W_lu.solve(J.J_v);  // W⁻¹ J_v  (three solves)
   const Eigen::MatrixX3d Y_w = W_lu.solve(J.J_w);  // W⁻¹ J_ω  (three solves)
   const Eigen::VectorXd y_0 = W_lu.solve(body_rhs) / tool.dt_s;

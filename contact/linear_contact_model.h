@@ -35,7 +35,8 @@ struct LinearContactModel {
 
 // Builds the model. `tool` holds A_v, A_L, M⁻¹ and Δt of the step the model will be evaluated
 // at (the haptic step); W must have been built with those same tool matrices. body_rhs =
-// b − J_u u̇ (one entry per constraint row). Throws std::runtime_error if W is singular.
+// b − J_u u̇ (one entry per constraint row). A singular W (redundant contacts) gets the
+// minimum-norm solution.
 LinearContactModel MakeLinearContactModel(const ContactJacobian& J, const Eigen::MatrixXd& W,
                                           const ToolStepSystem& tool,
                                           const Eigen::VectorXd& body_rhs);

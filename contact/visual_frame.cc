@@ -58,7 +58,7 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   BuildLinearModel(device, X_WT_start, *tool, haptic_tool ? *haptic_tool : *tool, *body);
   stats.model_s = stage.Lap();
   // 7. Sanity pass: nodes still inside the tool are moved to its surface.
-  stats.num_sanity_corrections = RunSanityPass(*tool, body);
+  stats.num_sanity_corrections = RunSanityPass(*tool, body, &stats.max_penetration_m);
   stats.sanity_s = stage.Lap();
   stats.total_s = total.Elapsed();
   return stats;

@@ -41,6 +41,7 @@ struct VisualFrameStats {
   int num_contacts = 0;    // contacts made constraints
   int num_active = 0;      // constraints with λ > 0
   int num_sanity_corrections = 0;
+  double max_penetration_m = 0.0;  // deepest contact node inside the tool after the step, ≥ 0
   ContactSolveReport solve;
   fem::StepStats fem;
 };
@@ -75,7 +76,8 @@ class VisualFrame {
   void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                         const ToolState& tool, const ToolState& haptic_tool,
                         const fem::State& body);
-  int RunSanityPass(const ToolState& tool, fem::State* body) const;
+  // Returns the number of nodes moved; *max_penetration_m receives the deepest one found.
+  int RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m) const;
 
   const fem::Model& body_;
   ToolModel tool_;

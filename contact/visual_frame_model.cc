@@ -1,5 +1,7 @@
 // Stages 6 and 7 of the visual frame: the linear contact model handed to the haptic step, and
 // the sanity pass.
+#include <algorithm>
+
 #include <Eigen/Dense>
 
 #include "contact/visual_frame.h"
@@ -55,7 +57,9 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   linear_model_ = MakeLinearContactModel(J, W, haptic, b - J.J_u * body.v_m_s);
 }
 
-int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body) const {
+int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body,
+                               double* max_penetration_m) const {
+  *max_penetration_m = 0.0;
   const Eigen::Isometry3d X_WT = CalcPose(tool);
   const Eigen::Isometry3d X_TW = X_WT.inverse();
   const Eigen::Vector3d w_W = CalcAngularVelocity(tool_, tool);
@@ -66,6 +70,7 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body) const {
       if (node < 0 || body_.dof_is_fixed[3 * node]) continue;
       const Eigen::Vector3d p_W = body->x_m.segment<3>(3 * node);
       const ToolDistance d = detector_.tool_distance().Calc(X_TW * p_W);
+      *max_penetration_m = std::max(*max_penetration_m, -d.distance_m);
       if (d.distance_m >= -options_.sanity_tolerance_m) continue;
       const Eigen::Vector3d n_W = X_WT.linear() * d.normal_T;
       body->x_m.segment<3>(3 * node) = X_WT * d.closest_T_m;

@@ -74,6 +74,7 @@ HapticSample MultirateSimulator::StepLinear(const DeviceState& device, long k) {
   HapticSample sample;
   sample.device_force_W_N = out.device_force_W_N;
   sample.device_torque_W_N_m = out.device_torque_W_N_m;
+  sample.contact_force_W_N = out.contact_force_W_N;
   sample.tool_x_W_m = haptic_.tool_state().x_W_m;
   sample.tool_q_WT = haptic_.tool_state().q_WT;
   sample.num_contacts = frame_.linear_model().num_contacts;
@@ -95,6 +96,7 @@ HapticSample MultirateSimulator::StepCoupling(const DeviceState& device, long k)
   HapticSample sample;
   sample.device_force_W_N = -wrench.F_W_N;
   sample.device_torque_W_N_m = -wrench.T_W_N_m;
+  sample.contact_force_W_N = frame_.contact_force_N();
   sample.tool_x_W_m = visual_tool_.x_W_m;
   sample.tool_q_WT = visual_tool_.q_WT;
   sample.num_contacts = static_cast<int>(frame_.contacts().size());
@@ -112,6 +114,7 @@ HapticSample MultirateSimulator::StepReference(const DeviceState& device, long k
   sample.device_torque_W_N_m = -wrench.T_W_N_m;
   const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
   if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+  sample.contact_force_W_N = frame_.contact_force_N();
   sample.tool_x_W_m = visual_tool_.x_W_m;
   sample.tool_q_WT = visual_tool_.q_WT;
   sample.num_contacts = static_cast<int>(frame_.contacts().size());

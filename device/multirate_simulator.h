@@ -37,6 +37,7 @@ struct HapticSample {
   double t_s = 0.0;
   Eigen::Vector3d device_force_W_N = Eigen::Vector3d::Zero();
   Eigen::Vector3d device_torque_W_N_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();  // on that tool (held in coupling)
   Eigen::Vector3d tool_x_W_m = Eigen::Vector3d::Zero();  // the tool the device feels
   Eigen::Quaterniond tool_q_WT = Eigen::Quaterniond::Identity();
   int num_contacts = 0;     // in the contact model (or the frame, for coupling/reference)

@@ -8,8 +8,6 @@
 //    when there are more rows than the solver was built for.
 // Synthetic problems as in contact_response_test.cc: a body with a random dense SPD matrix A_u,
 // a tool with a hand-set ToolStepSystem, contacts with random normals and points.
-#include "contact/haptic_contact_rows.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -23,6 +21,7 @@
 
 #include "contact/contact_jacobian.h"
 #include "contact/contact_solver.h"
+#include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
 #include "tests/allocation_counter.h"
 
@@ -190,7 +189,8 @@ TEST(MakeContactRows, SelectsAndSymmetrisesTheBodyRows) {
   const ContactRows rows = MakeContactRows(p.J, W_all, chosen, p.rows.body_rhs);
   for (int r = 0; r < 5; ++r)
     for (int c = 0; c < 5; ++c)
-      EXPECT_EQ(rows.W_body(r, c), 0.5 * (W_all(chosen[r], chosen[c]) + W_all(chosen[c], chosen[r])));
+      EXPECT_EQ(rows.W_body(r, c),
+                0.5 * (W_all(chosen[r], chosen[c]) + W_all(chosen[c], chosen[r])));
   EXPECT_EQ(rows.J_v, p.J.J_v);
   EXPECT_EQ(rows.num_rows(), 5);
   ContactJacobian friction = p.J;
