@@ -82,7 +82,11 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
 ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
                                   const ContactSolveOptions& options, Eigen::VectorXd* lambda) {
   const Eigen::Index n = rhs.size();
-  const Eigen::MatrixXd M = dt_s * W;
+  // A relative 1e-10 on the diagonal keeps the free-set systems non-singular when contacts are
+  // redundant (same body point twice, many on a nearly rigid part): without it the solves return
+  // garbage there and the method cycles. It changes λ by ~1e-10 relative.
+  Eigen::MatrixXd M = dt_s * W;
+  M.diagonal().array() += 1e-10 * M.diagonal().cwiseAbs().maxCoeff();
   const double tolerance = options.tolerance * std::max(1.0, rhs.lpNorm<Eigen::Infinity>());
   std::vector<Eigen::Index> free_rows;
   std::vector<bool> is_free(n, false);
@@ -107,13 +111,20 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
       }
       const Eigen::VectorXd z = M_ff.partialPivLu().solve(rhs_f);
       double step = 1.0;
+      Eigen::Index limiting = -1;
       for (Eigen::Index a = 0; a < k; ++a) {
         const double current = (*lambda)[free_rows[a]];
-        if (z[a] <= 0.0) step = std::min(step, current / (current - z[a]));
+        if (z[a] <= 0.0 && current / (current - z[a]) < step) {
+          step = current / (current - z[a]);
+          limiting = a;
+        }
       }
       for (Eigen::Index a = 0; a < k; ++a)
         (*lambda)[free_rows[a]] += step * (z[a] - (*lambda)[free_rows[a]]);
-      if (step >= 1.0) break;
+      if (limiting < 0) break;
+      // The row that limited the step is exactly at zero by construction; round-off can leave it
+      // a hair above, and then it would never leave and the loop would not end.
+      (*lambda)[free_rows[limiting]] = 0.0;
       // Rows that reached zero leave the free set.
       std::vector<Eigen::Index> kept;
       for (Eigen::Index row : free_rows) {

@@ -4,7 +4,9 @@
 //  BM_HapticLcpWarm       HapticLcpSolver::Solve at a haptic step within a visual frame: same
 //                         rows, F̂ perturbed slightly every call (warm start, no factorisation)
 //  BM_HapticLcpNewRows    the first haptic step of a visual frame: the rows alternate between
-//                         two frames, so every call copies the rows and factorises a base block
+//                         two frames, so every call copies the rows and factorises a base block;
+//                         rows:2 the frame's active contacts (realistic), rows:0 rows of which
+//                         ~20% separate at once (a poor first guess: two factorisations)
 //  BM_DenseLu             one dense partial-pivoting LU of W (n × n): the floor of the plain
 //                         warm-started active-set method, which refactorises W_AA at every step
 //                         because the tool part of W changes at every step
@@ -80,11 +82,43 @@ Problem MakeProblem(int n, unsigned seed) {
   return p;
 }
 
+// The rows a visual frame hands over when it sends its active contacts: a problem with more
+// contacts is solved and its first n active rows are kept (most stay active, a few separate as
+// the others' load shifts).
+Problem MakeFrameProblem(int n, unsigned seed) {
+  for (int m = n;; m += std::max(1, n / 10)) {
+    const Problem full = MakeProblem(m, seed);
+    HapticLcpSolver solver(m);
+    Eigen::Vector3d F_c, T_c;
+    solver.Solve(full.rows, full.tool, full.F_hat_N, full.T_hat_N_m, &F_c, &T_c);
+    std::vector<int> rows;
+    for (int i = 0; i < m && static_cast<int>(rows.size()) < n; ++i)
+      if (solver.last_impulses()[i] > 0.0) rows.push_back(i);
+    if (static_cast<int>(rows.size()) < n) continue;
+    Problem p = full;
+    p.J = ContactJacobian{};
+    p.J.J_v.resize(n, 3);
+    p.J.J_w.resize(n, 3);
+    Eigen::VectorXd body_rhs(n);
+    for (int a = 0; a < n; ++a) {
+      p.J.J_v.row(a) = full.rows.J_v.row(rows[a]);
+      p.J.J_w.row(a) = full.rows.J_w.row(rows[a]);
+      body_rhs[a] = full.rows.body_rhs[rows[a]];
+    }
+    p.rows = MakeContactRows(p.J, full.rows.W_body, rows, body_rhs);
+    p.W = CalcToolDelassus(p.J, p.tool) + p.rows.W_body;
+    return p;
+  }
+}
+
+// which 0, 1: two frames of MakeProblem; 2, 3: two frames of MakeFrameProblem.
 const Problem& GetProblem(int n, int which) {
   static std::vector<std::pair<std::pair<int, int>, Problem*>> cache;
   for (const auto& [key, problem] : cache)
     if (key == std::make_pair(n, which)) return *problem;
-  cache.push_back({{n, which}, new Problem(MakeProblem(n, 1000 * n + which))});
+  const unsigned seed = 1000 * n + which;
+  cache.push_back(
+      {{n, which}, new Problem(which < 2 ? MakeProblem(n, seed) : MakeFrameProblem(n, seed))});
   return *cache.back().second;
 }
 
@@ -112,9 +146,11 @@ void BM_HapticLcpWarm(benchmark::State& bench) {
   SetCounters(bench, solver);
 }
 
+// range(1): 0 = rows of MakeProblem (~20% of them separate), 2 = the frame's active rows.
 void BM_HapticLcpNewRows(benchmark::State& bench) {
   const int n = static_cast<int>(bench.range(0));
-  const Problem* frames[2] = {&GetProblem(n, 0), &GetProblem(n, 1)};
+  const int kind = static_cast<int>(bench.range(1));
+  const Problem* frames[2] = {&GetProblem(n, kind), &GetProblem(n, kind + 1)};
   HapticLcpSolver solver(150);
   Eigen::Vector3d F_c, T_c;
   int k = 0;
@@ -165,7 +201,10 @@ void BM_EvaluateLinearContactModel(benchmark::State& bench) {
 }
 
 BENCHMARK(BM_HapticLcpWarm)->Arg(25)->Arg(50)->Arg(125)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_HapticLcpNewRows)->Arg(25)->Arg(50)->Arg(125)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HapticLcpNewRows)
+    ->ArgsProduct({{25, 50, 125}, {2, 0}})
+    ->ArgNames({"n", "rows"})
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DenseLu)->Arg(25)->Arg(50)->Arg(125)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ReferenceActiveSet)->Arg(25)->Arg(50)->Arg(125)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_EvaluateLinearContactModel)->Arg(125)->Unit(benchmark::kMicrosecond);
