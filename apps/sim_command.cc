@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
@@ -88,8 +87,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
           << 1e3 * s.free_fem_s << ',' << 1e3 * s.detection_s << ',' << 1e3 * s.response_s << ','
           << 1e3 * s.model_s << ',' << 1e3 * s.sanity_s << ',' << 1e3 * s.total_s << ','
           << s.num_candidates << ',' << s.num_contacts << ',' << s.num_active << ','
-          << s.solve.iterations << ',' << s.solve.residual << ',' << s.num_sanity_corrections
-          << ',' << s.max_penetration_m << '\n';
+          << s.solve.iterations << ',' << s.solve.residual << ',' << s.num_sanity_corrections << ','
+          << s.max_penetration_m << '\n';
     }
   });
 }
@@ -116,11 +115,16 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode, 
                                    "response", "model",     "sanity",   "total"};
   nlohmann::json medians;
   for (int i = 0; i < 8; ++i) medians[kStages[i]] = Median(stage[i]);
-  return {{"scene", scene.file}, {"name", scene.name}, {"mode", mode},
-          {"haptic_rate_hz", scene.haptic.rate_hz}, {"haptic_steps_per_frame", steps_per_frame},
-          {"num_haptic_steps", record.haptic.size()}, {"num_frames", record.frames.size()},
+  return {{"scene", scene.file},
+          {"name", scene.name},
+          {"mode", mode},
+          {"haptic_rate_hz", scene.haptic.rate_hz},
+          {"haptic_steps_per_frame", steps_per_frame},
+          {"num_haptic_steps", record.haptic.size()},
+          {"num_frames", record.frames.size()},
           {"contact_law", contact::ToString(scene.contact.law)},
-          {"frame_stage_median_ms", medians}, {"max_contacts", max_contacts},
+          {"frame_stage_median_ms", medians},
+          {"max_contacts", max_contacts},
           {"peak_force_N", peak_N},
           {"rms_force_N", record.haptic.empty() ? 0.0 : std::sqrt(sum_sq / record.haptic.size())},
           {"max_penetration_m", max_penetration_m}};
@@ -130,11 +134,15 @@ void RunSim(const SimCommandOptions& options) {
   const config::Scene scene = config::LoadScene(options.scene_path);
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim sim` needs a tool");
   if (!scene.body)
-    throw InputError(scene.file, 0, "body", "`hapsim sim` needs a deformable body (rigid-only scenes are not supported yet)");
+    throw InputError(
+        scene.file, 0, "body",
+        "`hapsim sim` needs a deformable body (rigid-only scenes are not supported yet)");
   device::HapticMode mode = scene.haptic.mode;
   if (!options.mode.empty()) {
     const auto parsed = config::ParseHapticMode(options.mode);
-    if (!parsed) throw InputError("", 0, "--mode", "unknown mode '" + options.mode + "' (linear, lcp, coupling, reference)");
+    if (!parsed)
+      throw InputError("", 0, "--mode",
+                       "unknown mode '" + options.mode + "' (linear, lcp, coupling, reference)");
     mode = *parsed;
   }
   device::MultirateOptions multirate;
@@ -146,19 +154,21 @@ void RunSim(const SimCommandOptions& options) {
                                        scene.tool->model, scene.tool->initial_state,
                                        MakeVisualOptions(scene), multirate);
   const long num_steps = std::lround(scene.num_steps * scene.dt_s * scene.haptic.rate_hz);
-  std::printf("hapsim sim: %s, mode %s: %d tets, %ld haptic steps at %g Hz, a visual frame every %d\n",
-              scene.name.c_str(), device::ToString(mode), body.model.num_tets(), num_steps,
-              scene.haptic.rate_hz, multirate.haptic_steps_per_frame);
+  std::printf(
+      "hapsim sim: %s, mode %s: %d tets, %ld haptic steps at %g Hz, a visual frame every %d\n",
+      scene.name.c_str(), device::ToString(mode), body.model.num_tets(), num_steps,
+      scene.haptic.rate_hz, multirate.haptic_steps_per_frame);
   SimRecord record;
   record.haptic.reserve(num_steps);
   {
     ProgressBar progress("sim", num_steps);
-    simulator.Run(device::ScriptedTrajectory(scene.trajectory), num_steps,
-                  [&](const device::HapticSample& s) {
-                    record.haptic.push_back(s);
-                    progress.Update(static_cast<long>(record.haptic.size()));
-                  },
-                  [&](const device::FrameSample& f) { record.frames.push_back(f); });
+    simulator.Run(
+        device::ScriptedTrajectory(scene.trajectory), num_steps,
+        [&](const device::HapticSample& s) {
+          record.haptic.push_back(s);
+          progress.Update(static_cast<long>(record.haptic.size()));
+        },
+        [&](const device::FrameSample& f) { record.frames.push_back(f); });
   }
   const std::string out_dir = options.out_dir.empty()
                                   ? "out/" + scene.name + "_" + device::ToString(mode)
@@ -166,16 +176,21 @@ void RunSim(const SimCommandOptions& options) {
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, 0, "--out", "cannot create the output folder: " + ec.message());
-  const std::string summary_path = options.summary_path.empty() ? out_dir + "/summary.json" : options.summary_path;
+  const std::string summary_path =
+      options.summary_path.empty() ? out_dir + "/summary.json" : options.summary_path;
   WriteHapticCsv(out_dir + "/haptic.csv", record);
   WriteFramesCsv(out_dir + "/frames.csv", record);
-  const nlohmann::json summary = MakeSummary(scene, device::ToString(mode), multirate.haptic_steps_per_frame, record);
+  const nlohmann::json summary =
+      MakeSummary(scene, device::ToString(mode), multirate.haptic_steps_per_frame, record);
   WriteFileAtomically(summary_path, [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
-  std::printf("  peak force %.3f N, RMS %.3f N, max contacts %d, max penetration %.2f mm, median frame %.2f ms\n",
-              summary["peak_force_N"].get<double>(), summary["rms_force_N"].get<double>(),
-              summary["max_contacts"].get<int>(), 1e3 * summary["max_penetration_m"].get<double>(),
-              summary["frame_stage_median_ms"]["total"].get<double>());
-  std::printf("  wrote %s/haptic.csv, %s/frames.csv, %s\n", out_dir.c_str(), out_dir.c_str(), summary_path.c_str());
+  std::printf(
+      "  peak force %.3f N, RMS %.3f N, max contacts %d, max penetration %.2f mm, median frame "
+      "%.2f ms\n",
+      summary["peak_force_N"].get<double>(), summary["rms_force_N"].get<double>(),
+      summary["max_contacts"].get<int>(), 1e3 * summary["max_penetration_m"].get<double>(),
+      summary["frame_stage_median_ms"]["total"].get<double>());
+  std::printf("  wrote %s/haptic.csv, %s/frames.csv, %s\n", out_dir.c_str(), out_dir.c_str(),
+              summary_path.c_str());
 }
 
 }  // namespace
@@ -184,18 +199,23 @@ void AddSimCommand(CLI::App* app) {
   auto options = std::make_shared<SimCommandOptions>();
   CLI::App* sim = app->add_subcommand(
       "sim",
-      "In-process multirate run of a scene: visual frames (FEM, contact, linear contact model) and\n"
+      "In-process multirate run of a scene: visual frames (FEM, contact, linear contact model) "
+      "and\n"
       "1 kHz haptic steps, one after the other (bit-reproducible), following the scene's scripted\n"
       "device. Writes haptic.csv, frames.csv and a JSON summary.");
-  sim->add_option("scene", options->scene_path, "Scene file (YAML) with body, tool and device")->required();
-  sim->add_option("--mode", options->mode,
-                  "linear (the paper's model), coupling (standard multirate), reference (all at the\n"
-                  "haptic rate); default: the scene's haptic.mode");
-  sim->add_option("--visual-hz", options->visual_hz,
-                  "Visual frame rate; the haptic rate must be a whole multiple (default: 1/time.dt_s)")
+  sim->add_option("scene", options->scene_path, "Scene file (YAML) with body, tool and device")
+      ->required();
+  sim->add_option(
+      "--mode", options->mode,
+      "linear (the paper's model), coupling (standard multirate), reference (all at the\n"
+      "haptic rate); default: the scene's haptic.mode");
+  sim->add_option(
+         "--visual-hz", options->visual_hz,
+         "Visual frame rate; the haptic rate must be a whole multiple (default: 1/time.dt_s)")
       ->check(CLI::PositiveNumber);
   sim->add_option("--out", options->out_dir, "Output folder (default: out/<scene>_<mode>)");
-  sim->add_option("--summary", options->summary_path, "JSON summary file (default: <out>/summary.json)");
+  sim->add_option("--summary", options->summary_path,
+                  "JSON summary file (default: <out>/summary.json)");
   sim->callback([options] { RunSim(*options); });
 }
 

@@ -72,9 +72,9 @@
 #include <string>
 #include <vector>
 
+#include "contact/contact_solver.h"
 #include "core/rigid_tool.h"
 #include "core/virtual_coupling.h"
-#include "contact/contact_solver.h"
 #include "device/haptic_mode.h"
 #include "device/scripted_trajectory.h"
 #include "fem/fem_options.h"

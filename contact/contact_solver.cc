@@ -149,9 +149,12 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
 
 const char* ToString(ContactLaw law) {
   switch (law) {
-    case ContactLaw::kEquality: return "equality";
-    case ContactLaw::kUnilateral: return "unilateral";
-    case ContactLaw::kFriction: return "friction";
+    case ContactLaw::kEquality:
+      return "equality";
+    case ContactLaw::kUnilateral:
+      return "unilateral";
+    case ContactLaw::kFriction:
+      return "friction";
   }
   return "unknown";
 }

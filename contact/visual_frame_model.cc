@@ -1,8 +1,7 @@
 // Stages 6 and 7 of the visual frame: the linear contact model handed to the haptic step, and
 // the sanity pass.
-#include <algorithm>
-
 #include <Eigen/Dense>
+#include <algorithm>
 
 #include "contact/visual_frame.h"
 

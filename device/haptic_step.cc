@@ -18,13 +18,15 @@ HapticStep::HapticStep(ToolModel tool, const CouplingParams& coupling,
 HapticOutput HapticStep::Step(const DeviceState& device) {
   const CouplingWrench wrench =
       CalcCouplingWrench(coupling_, device, tool_state_, CalcAngularVelocity(tool_, tool_state_));
-  const ToolStepSystem system = CalcToolStepSystem(tool_, tool_state_, wrench, gravity_m_s2_, dt_s_);
+  const ToolStepSystem system =
+      CalcToolStepSystem(tool_, tool_state_, wrench, gravity_m_s2_, dt_s_);
   Eigen::Vector3d F_hat_N, T_hat_N_m;
   contact::CalcDiscreteTimeWrench(system, tool_state_, &F_hat_N, &T_hat_N_m);
   HapticOutput out;
   contact::EvaluateLinearContactModel(model_, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
                                       &out.contact_torque_W_N_m);
-  const Eigen::Vector3d dv = system.A_v.lu().solve(dt_s_ * (system.F_tilde_N + out.contact_force_W_N));
+  const Eigen::Vector3d dv =
+      system.A_v.lu().solve(dt_s_ * (system.F_tilde_N + out.contact_force_W_N));
   const Eigen::Vector3d dL =
       system.A_L.lu().solve(dt_s_ * (system.T_tilde_N_m + out.contact_torque_W_N_m));
   AdvanceTool(tool_, dt_s_, dv, dL, &tool_state_);

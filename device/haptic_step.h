@@ -16,10 +16,10 @@
 namespace hapsim::device {
 
 struct HapticOutput {
-  Eigen::Vector3d device_force_W_N = Eigen::Vector3d::Zero();     // sent to the device: −F
-  Eigen::Vector3d device_torque_W_N_m = Eigen::Vector3d::Zero();  // sent to the device: −T
-  Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();    // F_c on the haptic tool
-  Eigen::Vector3d contact_torque_W_N_m = Eigen::Vector3d::Zero(); // T_c on the haptic tool
+  Eigen::Vector3d device_force_W_N = Eigen::Vector3d::Zero();      // sent to the device: −F
+  Eigen::Vector3d device_torque_W_N_m = Eigen::Vector3d::Zero();   // sent to the device: −T
+  Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();     // F_c on the haptic tool
+  Eigen::Vector3d contact_torque_W_N_m = Eigen::Vector3d::Zero();  // T_c on the haptic tool
 };
 
 class HapticStep {

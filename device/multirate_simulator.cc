@@ -5,7 +5,8 @@
 namespace hapsim::device {
 namespace {
 
-contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual, const MultirateOptions& o) {
+contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual,
+                                     const MultirateOptions& o) {
   const int ratio = o.mode == HapticMode::kReference ? 1 : o.haptic_steps_per_frame;
   visual.dt_s = ratio * o.haptic_dt_s;
   visual.haptic_dt_s = o.haptic_dt_s;
@@ -16,10 +17,14 @@ contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual, const M
 
 const char* ToString(HapticMode mode) {
   switch (mode) {
-    case HapticMode::kLinear: return "linear";
-    case HapticMode::kLcp: return "lcp";
-    case HapticMode::kCoupling: return "coupling";
-    case HapticMode::kReference: return "reference";
+    case HapticMode::kLinear:
+      return "linear";
+    case HapticMode::kLcp:
+      return "lcp";
+    case HapticMode::kCoupling:
+      return "coupling";
+    case HapticMode::kReference:
+      return "reference";
   }
   return "?";
 }
@@ -37,7 +42,8 @@ MultirateSimulator::MultirateSimulator(const fem::Model& body, const fem::FemOpt
       haptic_(tool, visual_options_.coupling, visual_options_.gravity_m_s2, options.haptic_dt_s,
               initial_tool) {
   if (options.mode == HapticMode::kLcp)
-    throw std::invalid_argument("haptic mode 'lcp' is not available yet in the in-process simulator");
+    throw std::invalid_argument(
+        "haptic mode 'lcp' is not available yet in the in-process simulator");
   if (options.haptic_steps_per_frame < 1) throw std::invalid_argument("haptic_steps_per_frame < 1");
 }
 
@@ -49,10 +55,17 @@ void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_hapt
     const DeviceState device = trajectory.Sample(k * options_.haptic_dt_s);
     HapticSample sample;
     switch (options_.mode) {
-      case HapticMode::kLinear: sample = StepLinear(device, k); break;
-      case HapticMode::kCoupling: sample = StepCoupling(device, k); break;
-      case HapticMode::kReference: sample = StepReference(device, k); break;
-      case HapticMode::kLcp: throw std::logic_error("lcp mode");
+      case HapticMode::kLinear:
+        sample = StepLinear(device, k);
+        break;
+      case HapticMode::kCoupling:
+        sample = StepCoupling(device, k);
+        break;
+      case HapticMode::kReference:
+        sample = StepReference(device, k);
+        break;
+      case HapticMode::kLcp:
+        throw std::logic_error("lcp mode");
     }
     sample.t_s = k * options_.haptic_dt_s;
     if (on_haptic_step) on_haptic_step(sample);
@@ -82,6 +95,23 @@ HapticSample MultirateSimulator::StepLinear(const DeviceState& device, long k) {
   return sample;
 }
 
+// The device force of the two modes without a haptic tool: the coupling's reaction to the
+// visual tool as it stands.
+void MultirateSimulator::FillFromVisualTool(const DeviceState& device, HapticSample* sample) const {
+  const CouplingWrench wrench =
+      CalcCouplingWrench(visual_options_.coupling, device, visual_tool_,
+                         CalcAngularVelocity(frame_.tool_model(), visual_tool_));
+  sample->device_force_W_N = -wrench.F_W_N;
+  sample->device_torque_W_N_m = -wrench.T_W_N_m;
+}
+
+void MultirateSimulator::FillFromLastFrame(HapticSample* sample) const {
+  sample->contact_force_W_N = frame_.contact_force_N();
+  sample->tool_x_W_m = visual_tool_.x_W_m;
+  sample->tool_q_WT = visual_tool_.q_WT;
+  sample->num_contacts = static_cast<int>(frame_.contacts().size());
+}
+
 // Standard multirate: the visual tool, coupled to the device, moves only at visual frames; the
 // device feels the coupling to it, held between frames.
 HapticSample MultirateSimulator::StepCoupling(const DeviceState& device, long k) {
@@ -90,34 +120,21 @@ HapticSample MultirateSimulator::StepCoupling(const DeviceState& device, long k)
     last_frame_step_ = k;
     if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
   }
-  const ToolModel& tool = frame_.tool_model();
-  const CouplingWrench wrench = CalcCouplingWrench(visual_options_.coupling, device, visual_tool_,
-                                                   CalcAngularVelocity(tool, visual_tool_));
   HapticSample sample;
-  sample.device_force_W_N = -wrench.F_W_N;
-  sample.device_torque_W_N_m = -wrench.T_W_N_m;
-  sample.contact_force_W_N = frame_.contact_force_N();
-  sample.tool_x_W_m = visual_tool_.x_W_m;
-  sample.tool_q_WT = visual_tool_.q_WT;
-  sample.num_contacts = static_cast<int>(frame_.contacts().size());
+  FillFromVisualTool(device, &sample);
+  FillFromLastFrame(&sample);
   sample.model_age_s = (k - last_frame_step_) * options_.haptic_dt_s;
   return sample;
 }
 
-// Ground truth: a whole visual frame every haptic step; the device feels the coupling to that tool.
+// Ground truth: a whole visual frame every haptic step; the device feels the coupling to the tool
+// at the start of the step, as in the haptic step of the other modes.
 HapticSample MultirateSimulator::StepReference(const DeviceState& device, long k) {
-  const ToolModel& tool = frame_.tool_model();
-  const CouplingWrench wrench = CalcCouplingWrench(visual_options_.coupling, device, visual_tool_,
-                                                   CalcAngularVelocity(tool, visual_tool_));
   HapticSample sample;
-  sample.device_force_W_N = -wrench.F_W_N;
-  sample.device_torque_W_N_m = -wrench.T_W_N_m;
+  FillFromVisualTool(device, &sample);
   const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
   if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
-  sample.contact_force_W_N = frame_.contact_force_N();
-  sample.tool_x_W_m = visual_tool_.x_W_m;
-  sample.tool_q_WT = visual_tool_.q_WT;
-  sample.num_contacts = static_cast<int>(frame_.contacts().size());
+  FillFromLastFrame(&sample);
   return sample;
 }
 

@@ -14,10 +14,9 @@
 // Within one haptic period a visual frame is computed first (when one is due), then the haptic
 // step; the model a frame produces is used from that same step on (no transport latency).
 
+#include <Eigen/Core>
 #include <functional>
 #include <string>
-
-#include <Eigen/Core>
 
 #include "contact/visual_frame.h"
 #include "device/haptic_mode.h"
@@ -38,10 +37,10 @@ struct HapticSample {
   Eigen::Vector3d device_force_W_N = Eigen::Vector3d::Zero();
   Eigen::Vector3d device_torque_W_N_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();  // on that tool (held in coupling)
-  Eigen::Vector3d tool_x_W_m = Eigen::Vector3d::Zero();  // the tool the device feels
+  Eigen::Vector3d tool_x_W_m = Eigen::Vector3d::Zero();         // the tool the device feels
   Eigen::Quaterniond tool_q_WT = Eigen::Quaterniond::Identity();
-  int num_contacts = 0;     // in the contact model (or the frame, for coupling/reference)
-  double model_age_s = 0.0; // time since the visual frame that produced the model
+  int num_contacts = 0;      // in the contact model (or the frame, for coupling/reference)
+  double model_age_s = 0.0;  // time since the visual frame that produced the model
 };
 
 struct FrameSample {
@@ -68,6 +67,8 @@ class MultirateSimulator {
   HapticSample StepLinear(const DeviceState& device, long k);
   HapticSample StepCoupling(const DeviceState& device, long k);
   HapticSample StepReference(const DeviceState& device, long k);
+  void FillFromVisualTool(const DeviceState& device, HapticSample* sample) const;
+  void FillFromLastFrame(HapticSample* sample) const;
 
   MultirateOptions options_;
   contact::VisualFrameOptions visual_options_;

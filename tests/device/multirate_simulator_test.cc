@@ -5,15 +5,16 @@
 //  - release: equality constraints in the linear model pull the tool while it lifts off (the
 //    sticking the paper reports), while the reference with unilateral contacts never pulls;
 //  - runs are bit-reproducible; the haptic step allocates nothing.
-#include <cmath>
-#include <vector>
+#include "device/multirate_simulator.h"
 
 #include <gtest/gtest.h>
 
-#include "tests/allocation_counter.h"
-#include "device/multirate_simulator.h"
+#include <cmath>
+#include <vector>
+
 #include "fem/lattice_mesher.h"
 #include "fem/time_stepper.h"
+#include "tests/allocation_counter.h"
 
 namespace hapsim::device {
 namespace {
@@ -36,8 +37,9 @@ Scene MakeScene() {
   shape.kind = ToolShape::Kind::kCylinder;
   shape.radius_m = 0.02;
   shape.length_m = 0.04;
-  Scene scene{fem::MakeModel(mesh, material, fem::FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0)),
-              MakeToolModelWithMass(shape, 0.05), ToolState{}};
+  Scene scene{
+      fem::MakeModel(mesh, material, fem::FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0)),
+      MakeToolModelWithMass(shape, 0.05), ToolState{}};
   scene.start.x_W_m = Eigen::Vector3d(0, 0, 0.071);  // bottom face 1 mm above the top
   return scene;
 }
@@ -46,11 +48,18 @@ Scene MakeScene() {
 ScriptedTrajectory MakeScript(const ToolState& start, bool slide) {
   const Eigen::Quaterniond I = Eigen::Quaterniond::Identity();
   const Eigen::Vector3d down = start.x_W_m - Eigen::Vector3d(0, 0, 0.005);
-  if (!slide) return ScriptedTrajectory({{0, start.x_W_m, I}, {0.8, down, I}, {1.2, down, I},
-                                         {2.0, start.x_W_m + Eigen::Vector3d(0, 0, 0.004), I}});
+  if (!slide)
+    return ScriptedTrajectory({{0, start.x_W_m, I},
+                               {0.8, down, I},
+                               {1.2, down, I},
+                               {2.0, start.x_W_m + Eigen::Vector3d(0, 0, 0.004), I}});
   const Eigen::Vector3d dx(0.02, 0, 0);
-  return ScriptedTrajectory({{0, start.x_W_m, I}, {0.2, start.x_W_m, I}, {1.0, down, I},
-                             {2.0, down + dx, I}, {2.8, start.x_W_m + dx, I}, {3.0, start.x_W_m + dx, I}});
+  return ScriptedTrajectory({{0, start.x_W_m, I},
+                             {0.2, start.x_W_m, I},
+                             {1.0, down, I},
+                             {2.0, down + dx, I},
+                             {2.8, start.x_W_m + dx, I},
+                             {3.0, start.x_W_m + dx, I}});
 }
 
 std::vector<HapticSample> Simulate(const Scene& scene, HapticMode mode, contact::ContactLaw law,
@@ -61,16 +70,19 @@ std::vector<HapticSample> Simulate(const Scene& scene, HapticMode mode, contact:
   MultirateOptions options;
   options.mode = mode;
   options.haptic_steps_per_frame = kStepsPerFrame;
-  MultirateSimulator simulator(scene.body, fem::FemOptions{}, fem::CalcGravityForce(scene.body, {0, 0, -9.81}),
-                               scene.tool, scene.start, visual, options);
+  MultirateSimulator simulator(scene.body, fem::FemOptions{},
+                               fem::CalcGravityForce(scene.body, {0, 0, -9.81}), scene.tool,
+                               scene.start, visual, options);
   std::vector<HapticSample> samples;
-  simulator.Run(script, steps, [&](const HapticSample& s) { samples.push_back(s); }, nullptr);
+  simulator.Run(
+      script, steps, [&](const HapticSample& s) { samples.push_back(s); }, nullptr);
   return samples;
 }
 
 double RmsError(const std::vector<HapticSample>& a, const std::vector<HapticSample>& b) {
   double sum = 0.0;
-  for (size_t k = 0; k < a.size(); ++k) sum += (a[k].device_force_W_N - b[k].device_force_W_N).squaredNorm();
+  for (size_t k = 0; k < a.size(); ++k)
+    sum += (a[k].device_force_W_N - b[k].device_force_W_N).squaredNorm();
   return std::sqrt(sum / a.size());
 }
 
@@ -104,16 +116,19 @@ TEST(MultirateSimulator, EqualityConstraintsStickOnReleaseUnilateralDoNot) {
   const double unilateral_N = MinContactForceZWhileLifting(
       Simulate(scene, HapticMode::kReference, contact::ContactLaw::kUnilateral, script, 2000));
   RecordProperty("equality_min_force_z_N", std::to_string(equality_N));
-  EXPECT_LT(equality_N, -0.1);       // pulls the tool down while it lifts
-  EXPECT_GE(unilateral_N, -1e-12);   // never pulls
+  EXPECT_LT(equality_N, -0.1);      // pulls the tool down while it lifts
+  EXPECT_GE(unilateral_N, -1e-12);  // never pulls
 }
 
 TEST(MultirateSimulator, RunsAreBitReproducible) {
   const Scene scene = MakeScene();
   const ScriptedTrajectory script = MakeScript(scene.start, false);
-  const auto a = Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 1000);
-  const auto b = Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 1000);
-  for (size_t k = 0; k < a.size(); ++k) ASSERT_EQ(a[k].device_force_W_N, b[k].device_force_W_N) << k;
+  const auto a =
+      Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 1000);
+  const auto b =
+      Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 1000);
+  for (size_t k = 0; k < a.size(); ++k)
+    ASSERT_EQ(a[k].device_force_W_N, b[k].device_force_W_N) << k;
 }
 
 TEST(HapticStep, AllocatesNothing) {
