@@ -145,7 +145,8 @@ TEST(HapticStep, AllocatesNothing) {
     if (k % 33 == 0) step.SetContactModel(model);
     step.Step(script.Sample(k * 1e-3));
   }
-  if (AllocationCounter::enabled()) EXPECT_EQ(counter.count(), 0);
+  if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer build)";
+  EXPECT_EQ(counter.count(), 0);
 }
 
 }  // namespace
