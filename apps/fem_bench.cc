@@ -167,11 +167,7 @@ void RunFemBench(const FemBenchOptions& options) {
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
   const nlohmann::json summary = {{"machine", {{"cpu", ReadCpuModel()}, {"date", date}}},
                                   {"rows", rows}};
-  std::error_code ec;
-  std::filesystem::create_directories(options.out_dir, ec);
-  if (ec)
-    throw InputError(options.out_dir, 0, "--out",
-                     "cannot create the output folder: " + ec.message());
+  CreateOutputDirectory(options.out_dir);
   const std::string summary_path =
       options.summary_path.empty() ? options.out_dir + "/fem_bench.json" : options.summary_path;
   WriteFileAtomically(summary_path, [&](std::ostream& out) { out << summary.dump(2) << '\n'; });

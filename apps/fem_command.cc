@@ -109,12 +109,6 @@ void WriteStepsCsv(const std::string& path, const config::Body& body, const FemR
   });
 }
 
-void CreateDirectories(const std::string& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw InputError(dir, 0, "--out", "cannot create the output folder: " + ec.message());
-}
-
 void RunFemOnce(const FemCommandOptions& options) {
   if (options.scene_paths.size() != 1)
     throw InputError("", 0, "SCENE", "give exactly one scene (several only with --bench)");
@@ -136,7 +130,7 @@ void RunFemOnce(const FemCommandOptions& options) {
   const std::string out_dir = options.out_dir.empty() ? "out/" + scene.name : options.out_dir;
   const std::string summary_path =
       options.summary_path.empty() ? out_dir + "/summary.json" : options.summary_path;
-  CreateDirectories(out_dir);
+  CreateOutputDirectory(out_dir);
   WriteStepsCsv(out_dir + "/steps.csv", body, record, scene.dt_s);
   const Eigen::Map<const Eigen::Matrix3Xd> x_m(record.final_state.x_m.data(), 3,
                                                body.model.num_nodes());
@@ -144,8 +138,7 @@ void RunFemOnce(const FemCommandOptions& options) {
   fem::WriteVtkTetMesh(x_m, body.model.mesh.tets, {{"displacement_m", &u_m}},
                        out_dir + "/final_mesh.vtk");
   const nlohmann::json summary = MakeSummary(scene, body, record, num_steps);
-  if (const auto parent = std::filesystem::path(summary_path).parent_path(); !parent.empty())
-    CreateDirectories(parent.string());
+  CreateOutputDirectory(std::filesystem::path(summary_path).parent_path().string(), "--summary");
   WriteFileAtomically(summary_path, [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
   std::printf(
       "  step time: median %.3f ms, mean %.3f ms (rotations %.3f, assembly %.3f, solve %.3f ms "

@@ -173,11 +173,10 @@ void RunSim(const SimCommandOptions& options) {
   const std::string out_dir = options.out_dir.empty()
                                   ? "out/" + scene.name + "_" + device::ToString(mode)
                                   : options.out_dir;
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw InputError(out_dir, 0, "--out", "cannot create the output folder: " + ec.message());
+  CreateOutputDirectory(out_dir);
   const std::string summary_path =
       options.summary_path.empty() ? out_dir + "/summary.json" : options.summary_path;
+  CreateOutputDirectory(std::filesystem::path(summary_path).parent_path().string(), "--summary");
   WriteHapticCsv(out_dir + "/haptic.csv", record);
   WriteFramesCsv(out_dir + "/frames.csv", record);
   const nlohmann::json summary =

@@ -35,4 +35,11 @@ void WriteFileAtomically(const std::string& path, const std::function<void(std::
   }
 }
 
+void CreateOutputDirectory(const std::string& dir, const std::string& key) {
+  if (dir.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(dir, 0, key, "cannot create the output folder: " + ec.message());
+}
+
 }  // namespace hapsim

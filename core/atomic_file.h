@@ -15,4 +15,8 @@ constexpr int kRoundTripDigits = 17;
 // renamed; the temporary file is removed then. An exception from `write` also removes it.
 void WriteFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write);
 
+// Creates `dir` and its parents if missing (nothing for ""). Throws InputError naming the folder
+// and the command-line `key` it came from when it cannot.
+void CreateOutputDirectory(const std::string& dir, const std::string& key = "--out");
+
 }  // namespace hapsim
