@@ -2,6 +2,9 @@
 // Not a test: run `build/tests/fem_step_benchmark` from the repository root (it reads scenes/).
 // The state is first advanced 30 steps from rest so rotations and CG warm starts are realistic.
 
+#include <algorithm>
+#include <vector>
+
 #include <benchmark/benchmark.h>
 
 #include "config/body_builder.h"
@@ -86,11 +89,56 @@ void BM_ImplicitStep(benchmark::State& bench) {
   bench.counters["iterations"] = benchmark::Counter(iterations, benchmark::Counter::kAvgIterations);
 }
 
+// Rows of 125 contacts on the top nodes nearest the centre, normal −z (a flat tool pressing down).
+Eigen::SparseMatrix<double> MakeTopContactRows(const fem::Model& model, int num_contacts) {
+  const double top_m = model.mesh.rest_positions_m.row(2).maxCoeff();
+  std::vector<std::pair<double, int>> top;
+  for (int n = 0; n < model.num_nodes(); ++n)
+    if (model.mesh.rest_positions_m(2, n) > top_m - 1e-9)
+      top.emplace_back(model.mesh.rest_positions_m.col(n).head<2>().norm(), n);
+  std::sort(top.begin(), top.end());
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int i = 0; i < num_contacts; ++i) entries.emplace_back(i, 3 * top[i].second + 2, -1.0);
+  Eigen::SparseMatrix<double> J(num_contacts, model.num_dofs());
+  J.setFromTriplets(entries.begin(), entries.end());
+  return J;
+}
+
+// Body compliance J A⁻¹ Jᵀ for 125 contacts (docs/CONTACT.md): arg 1 = 0 the chosen sparse
+// Zᵀ Z, 1 one dense solve per contact with the same factor.
+void BM_ContactCompliance(benchmark::State& bench) {
+  const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
+  fem::TimeStepper stepper(f.body.model, f.scene.body->options, f.scene.dt_s, f.body.external_force_N);
+  Eigen::VectorXd dv;
+  stepper.CalcFreeVelocityChange(f.state, &dv);  // assembles A and holds its factor
+  const Eigen::SparseMatrix<double> J = MakeTopContactRows(f.body.model, 125);
+  const Eigen::MatrixXd Jt = Eigen::MatrixXd(J.transpose());
+  fem::CholmodFactor* factor = const_cast<fem::LinearSolver*>(stepper.solver())->factor();
+  Eigen::MatrixXd W(125, 125);
+  Eigen::VectorXd x;
+  for (auto _ : bench) {
+    if (bench.range(1) == 0) {
+      W = stepper.CalcCompliance(J);
+    } else {
+      for (int i = 0; i < 125; ++i) {
+        factor->Solve(Jt.col(i), &x);
+        W.col(i) = J * x;
+      }
+    }
+    benchmark::DoNotOptimize(W.data());
+  }
+  SetCounters(bench, f);
+}
+
 BENCHMARK(BM_Rotations)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ForcesAndStiffness)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ImplicitStep)
     ->ArgsProduct({{0, 1, 2}, {0, 1}})
     ->ArgNames({"block", "cholmod"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ContactCompliance)
+    ->ArgsProduct({{1, 2}, {0, 1}})
+    ->ArgNames({"block", "per_contact"})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace
