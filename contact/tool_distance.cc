@@ -106,6 +106,9 @@ void CheckPrimitive(const ToolShape& shape) {
     case ToolShape::Kind::kCylinder:
       if (!(shape.radius_m > 0.0) || !(shape.length_m > 0.0))
         fail("cylinder needs radius > 0 and length > 0");
+      if (!(shape.edge_radius_m >= 0.0) || shape.edge_radius_m > shape.radius_m ||
+          shape.edge_radius_m > 0.5 * shape.length_m)
+        fail("cylinder edge radius must be in [0, min(radius, length/2)]");
       break;
     case ToolShape::Kind::kBox:
       if (!(shape.half_extents_m.minCoeff() >= 0.0) || !(shape.half_extents_m.maxCoeff() > 0.0))
@@ -162,7 +165,15 @@ ToolDistance CalcCapsuleDistance(double radius_m, double length_m, const Vector3
                           p_T_m);
 }
 
-ToolDistance CalcCylinderDistance(double radius_m, double length_m, const Vector3d& p_T_m) {
+ToolDistance CalcCylinderDistance(double radius_m, double length_m, const Vector3d& p_T_m,
+                                  double edge_radius_m) {
+  if (edge_radius_m > 0.0) {
+    ToolDistance inner = CalcCylinderDistance(radius_m - edge_radius_m,
+                                              length_m - 2.0 * edge_radius_m, p_T_m);
+    inner.distance_m -= edge_radius_m;
+    inner.closest_T_m += edge_radius_m * inner.normal_T;
+    return inner;
+  }
   const Vector3d radial = RadialDirection(p_T_m);
   const double cap_sign = p_T_m.z() >= 0.0 ? 1.0 : -1.0;
   const double side_excess_m = std::hypot(p_T_m.x(), p_T_m.y()) - radius_m;
@@ -286,7 +297,7 @@ ToolDistance ToolDistanceField::Calc(const Vector3d& p_T_m) const {
     case ToolShape::Kind::kCapsule:
       return CalcCapsuleDistance(shape_.radius_m, shape_.length_m, p_T_m);
     case ToolShape::Kind::kCylinder:
-      return CalcCylinderDistance(shape_.radius_m, shape_.length_m, p_T_m);
+      return CalcCylinderDistance(shape_.radius_m, shape_.length_m, p_T_m, shape_.edge_radius_m);
     case ToolShape::Kind::kBox:
       return CalcBoxDistance(shape_.half_extents_m, p_T_m);
     case ToolShape::Kind::kMesh:
@@ -319,11 +330,13 @@ ToolFeatures MakeToolFeatures(const ToolShape& shape, int cylinder_rim_segments)
     for (int rim = 0; rim < 2; ++rim)
       for (int k = 0; k < n; ++k) {
         const double angle = 2.0 * M_PI * k / n, z_sign = rim == 0 ? -1.0 : 1.0;
+        const double e = shape.edge_radius_m;
         const Vector3d radial(std::cos(angle), std::sin(angle), 0.0);
+        const Vector3d normal = (radial + Vector3d(0.0, 0.0, z_sign)) / std::sqrt(2.0);
         features.vertices_T_m.col(rim * n + k) =
-            shape.radius_m * radial + Vector3d(0.0, 0.0, z_sign * 0.5 * shape.length_m);
-        features.vertex_normals_T.col(rim * n + k) =
-            (radial + Vector3d(0.0, 0.0, z_sign)) / std::sqrt(2.0);
+            (shape.radius_m - e) * radial +
+            Vector3d(0.0, 0.0, z_sign * (0.5 * shape.length_m - e)) + e * normal;
+        features.vertex_normals_T.col(rim * n + k) = normal;
         features.edges.col(rim * n + k) << rim * n + k, rim * n + (k + 1) % n;
       }
   } else if (shape.kind == ToolShape::Kind::kMesh) {

@@ -36,8 +36,12 @@ TrianglePoint CalcClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::
 ToolDistance CalcSphereDistance(double radius_m, const Eigen::Vector3d& p_T_m);
 // Capsule: the points within radius_m of the segment z ∈ [−length_m/2, length_m/2] on the z axis.
 ToolDistance CalcCapsuleDistance(double radius_m, double length_m, const Eigen::Vector3d& p_T_m);
-// Cylinder with flat caps: ρ ≤ radius_m, |z| ≤ length_m/2. Side, caps and the rim edge.
-ToolDistance CalcCylinderDistance(double radius_m, double length_m, const Eigen::Vector3d& p_T_m);
+// Cylinder with flat caps: ρ ≤ radius_m, |z| ≤ length_m/2. Side, caps and the rim edge. With
+// edge_radius_m = e > 0 the rim is rounded: the shape is the inner cylinder (radius − e,
+// length − 2e) grown by e, whose signed distance is the inner one minus e, exactly, with the
+// same normal (the inner cylinder is convex).
+ToolDistance CalcCylinderDistance(double radius_m, double length_m, const Eigen::Vector3d& p_T_m,
+                                  double edge_radius_m = 0.0);
 // Box |p_i| ≤ half_extents_m(i).
 ToolDistance CalcBoxDistance(const Eigen::Vector3d& half_extents_m, const Eigen::Vector3d& p_T_m);
 
@@ -90,7 +94,8 @@ struct ToolFeatures {
 };
 
 // Box: 8 corners, 12 edges. Cylinder: each rim sampled as a regular polygon of
-// `cylinder_rim_segments` points (on the true rim), 2 × segments edges. Mesh: its vertices
+// `cylinder_rim_segments` points (on the true rim; on a rounded rim, its points at 45° where the
+// normal is (radial ± z)/√2), 2 × segments edges. Mesh: its vertices
 // (normal cone axis = vertex pseudonormal) and unique edges.
 // Throws std::invalid_argument if cylinder_rim_segments < 3.
 ToolFeatures MakeToolFeatures(const ToolShape& shape, int cylinder_rim_segments = 32);

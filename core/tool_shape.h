@@ -27,6 +27,11 @@ struct ToolShape {
   // Capsule: length of the segment between the cap centres; cylinder: full height. Both along
   // the tool z axis, centred on the origin of T.
   double length_m = 0.0;
+  // Cylinder: radius of its rounded rim, 0 (sharp) to min(radius_m, length_m/2). The rounded
+  // cylinder is the Minkowski sum of a cylinder (radius − e, length − 2e) and a ball of radius e.
+  // A sharp rim catches body nodes on its side wall as the tool slides (the closest-feature
+  // normal there is horizontal), which pins them against it; real instruments are not sharp.
+  double edge_radius_m = 0.0;
   Eigen::Vector3d half_extents_m = Eigen::Vector3d::Zero();  // box, centred, axes of T
   TriangleMesh mesh;  // kMesh: closed, outward-oriented, in the tool frame T
 };

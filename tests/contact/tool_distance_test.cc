@@ -112,6 +112,21 @@ TEST(ToolDistanceTest, CylinderMatchesClosedFormOnSideCapsAndRim) {
   EXPECT_LT((rim.normal_T - Vector3d(0.6, 0.0, 0.8)).norm(), 1e-12);
 }
 
+// The rounded-rim cylinder against Quilez's "rounded cylinder" SDF (a rounded rectangle in the
+// (ρ, z) half-plane), and with edge radius = radius against the capsule it then is.
+TEST(ToolDistanceTest, RoundedCylinderMatchesClosedForm) {
+  const double r = 0.006, length = 0.02, e = 0.002;
+  const auto rounded_sdf = [&](const Vector3d& p) {
+    const Eigen::Vector2d d(std::hypot(p.x(), p.y()) - (r - e), std::abs(p.z()) - 0.5 * length + e);
+    return std::min(d.maxCoeff(), 0.0) + d.cwiseMax(0.0).norm() - e;
+  };
+  CheckAgainstSdf([&](const Vector3d& p) { return CalcCylinderDistance(r, length, p, e); },
+                  rounded_sdf, Vector3d(0.01, 0.01, 0.015));
+  CheckAgainstSdf([&](const Vector3d& p) { return CalcCylinderDistance(r, length, p, r); },
+                  [&](const Vector3d& p) { return CapsuleSdf(r, length - 2.0 * r, p); },
+                  Vector3d(0.009, 0.009, 0.015));
+}
+
 TEST(ToolDistanceTest, BoxMatchesClosedForm) {
   const Vector3d h(0.01, 0.004, 0.007);
   CheckAgainstSdf([&](const Vector3d& p) { return CalcBoxDistance(h, p); },

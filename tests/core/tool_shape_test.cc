@@ -200,6 +200,38 @@ TEST(ToolShapeTest, CylinderClosedFormIsTheLimitOfPrismMeshes) {
                                }));
 }
 
+// A cylinder whose rim is rounded by its own radius is a capsule (a sphere when the length is
+// 2r), and by almost nothing the sharp cylinder: the quadrature of the rounded bands against
+// those closed forms.
+TEST(ToolShapeTest, RoundedCylinderMatchesSphereCapsuleAndSharpCylinder) {
+  const auto calc = [](double r, double length, double e) {
+    ToolShape shape;
+    shape.kind = ToolShape::Kind::kCylinder;
+    shape.radius_m = r;
+    shape.length_m = length;
+    shape.edge_radius_m = e;
+    return CalcMassProperties(shape, kDensity_kg_m3);
+  };
+  const auto expect_same = [](const MassProperties& a, const MassProperties& b, double tolerance) {
+    EXPECT_NEAR(a.mass_kg, b.mass_kg, tolerance * b.mass_kg);
+    EXPECT_LT((a.inertia_com_kg_m2 - b.inertia_com_kg_m2).norm(),
+              tolerance * b.inertia_com_kg_m2.norm());
+  };
+  ToolShape sphere;
+  sphere.radius_m = kRadius_m;
+  expect_same(calc(kRadius_m, 2.0 * kRadius_m, kRadius_m), CalcMassProperties(sphere, kDensity_kg_m3),
+              1e-12);
+  ToolShape capsule;
+  capsule.kind = ToolShape::Kind::kCapsule;
+  capsule.radius_m = kRadius_m;
+  capsule.length_m = kLength_m;
+  expect_same(calc(kRadius_m, kLength_m + 2.0 * kRadius_m, kRadius_m),
+              CalcMassProperties(capsule, kDensity_kg_m3), 1e-12);
+  expect_same(calc(kRadius_m, kLength_m, 1e-9), calc(kRadius_m, kLength_m, 0.0), 1e-6);
+  EXPECT_THROW(calc(kRadius_m, kLength_m, 1.01 * kRadius_m), std::invalid_argument);
+  EXPECT_THROW(calc(kRadius_m, kLength_m, -1e-3), std::invalid_argument);
+}
+
 TEST(ToolShapeTest, CapsuleClosedFormIsTheLimitOfCapsuleMeshes) {
   ToolShape capsule;
   capsule.kind = ToolShape::Kind::kCapsule;
