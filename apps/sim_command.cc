@@ -13,6 +13,7 @@
 #include "apps/commands.h"
 #include "config/body_builder.h"
 #include "config/scene.h"
+#include "config/simulation_builder.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/progress_bar.h"
@@ -47,22 +48,11 @@ int CalcStepsPerFrame(const config::Scene& scene, double visual_hz) {
   return steps;
 }
 
-contact::VisualFrameOptions MakeVisualOptions(const config::Scene& scene) {
-  contact::VisualFrameOptions options;
-  options.gravity_m_s2 = scene.gravity_m_s2;
-  options.coupling = scene.coupling;
-  options.detection.margin_m = scene.contact.margin_m;
-  options.response.solve.law = scene.contact.law;
-  options.response.solve.friction_coefficient = scene.contact.friction_coefficient;
-  options.response.stabilization_beta = scene.contact.stabilization_beta;
-  options.response.restitution = scene.contact.restitution;
-  return options;
-}
-
 void WriteHapticCsv(const std::string& path, const SimRecord& record) {
   WriteFileAtomically(path, [&](std::ostream& out) {
     out << "t_s,force_x_N,force_y_N,force_z_N,torque_x_N_m,torque_y_N_m,torque_z_N_m,"
-           "tool_x_m,tool_y_m,tool_z_m,tool_qw,tool_qx,tool_qy,tool_qz,contacts,model_age_s\n";
+           "tool_x_m,tool_y_m,tool_z_m,tool_qw,tool_qx,tool_qy,tool_qz,contacts,model_age_s,"
+           "lcp_fell_back\n";
     for (const device::HapticSample& s : record.haptic) {
       const auto& f = s.device_force_W_N;
       const auto& t = s.device_torque_W_N_m;
@@ -71,7 +61,7 @@ void WriteHapticCsv(const std::string& path, const SimRecord& record) {
       out << s.t_s << ',' << f.x() << ',' << f.y() << ',' << f.z() << ',' << t.x() << ',' << t.y()
           << ',' << t.z() << ',' << x.x() << ',' << x.y() << ',' << x.z() << ',' << q.w() << ','
           << q.x() << ',' << q.y() << ',' << q.z() << ',' << s.num_contacts << ',' << s.model_age_s
-          << '\n';
+          << ',' << s.lcp_fell_back << '\n';
     }
   });
 }
@@ -107,7 +97,9 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode, 
     max_contacts = std::max(max_contacts, s.num_contacts);
   }
   double peak_N = 0.0, sum_sq = 0.0;
+  long lcp_fallbacks = 0;
   for (const device::HapticSample& s : record.haptic) {
+    lcp_fallbacks += s.lcp_fell_back;
     peak_N = std::max(peak_N, s.device_force_W_N.norm());
     sum_sq += s.device_force_W_N.squaredNorm();
   }
@@ -127,7 +119,8 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode, 
           {"max_contacts", max_contacts},
           {"peak_force_N", peak_N},
           {"rms_force_N", record.haptic.empty() ? 0.0 : std::sqrt(sum_sq / record.haptic.size())},
-          {"max_penetration_m", max_penetration_m}};
+          {"max_penetration_m", max_penetration_m},
+          {"lcp_fallback_steps", lcp_fallbacks}};
 }
 
 void RunSim(const SimCommandOptions& options) {
@@ -145,14 +138,13 @@ void RunSim(const SimCommandOptions& options) {
                        "unknown mode '" + options.mode + "' (linear, lcp, coupling, reference)");
     mode = *parsed;
   }
-  device::MultirateOptions multirate;
-  multirate.mode = mode;
-  multirate.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
-  multirate.haptic_steps_per_frame = CalcStepsPerFrame(scene, options.visual_hz);
+  const device::MultirateOptions multirate = config::MakeMultirateOptions(
+      scene, mode, CalcStepsPerFrame(scene, options.visual_hz),
+      "--mode");
   const config::Body body = config::MakeBody(*scene.body, scene.gravity_m_s2);
   device::MultirateSimulator simulator(body.model, scene.body->options, body.external_force_N,
                                        scene.tool->model, scene.tool->initial_state,
-                                       MakeVisualOptions(scene), multirate);
+                                       config::MakeVisualFrameOptions(scene), multirate);
   const long num_steps = std::lround(scene.num_steps * scene.dt_s * scene.haptic.rate_hz);
   std::printf(
       "hapsim sim: %s, mode %s: %d tets, %ld haptic steps at %g Hz, a visual frame every %d\n",

@@ -42,7 +42,9 @@
 //                                      # axis of a capsule or cylinder):
 //       sphere: {radius_m: 0.01}                        # > 0
 //       capsule: {radius_m: 0.005, length_m: 0.05}      # radius > 0, length ≥ 0 (cap centres)
-//       cylinder: {radius_m: 0.01, length_m: 0.06}      # > 0 each (full height)
+//       cylinder: {radius_m: 0.01, length_m: 0.06}      # > 0 each (full height); optional
+//                                      # edge_radius_m: rounded rim, in [0, min(r, length/2)],
+//                                      # default 0 (sharp)
 //       box: {half_extents_m: [0.01, 0.01, 0.02]}       # > 0 each
 //       mesh: {file: tools/probe.stl}  # closed OBJ/STL in metres, relative to the scene file's
 //                                      # folder; re-centred on its centre of mass
@@ -60,7 +62,10 @@
 //   haptic:                            # optional (with a tool), defaults as shown
 //     rate_hz: 1000                    # > 0; rate_hz · dt_s must be an integer ≥ 1 (to 1e-9):
 //                                      # the number of haptic steps per visual frame
-//     mode: linear                     # linear | lcp | coupling | reference
+//     mode: linear                     # linear | lcp | coupling | reference (lcp: not with
+//                                      # the friction law; its 1 kHz rows are normal only)
+//     lcp_max_rows: 512                # ≥ 1: rows the 1 kHz lcp solver holds (≈ 16 n² bytes);
+//                                      # a frame with more falls back to the linear model
 //   device:                            # required with a tool
 //     trajectory:                      # scripted device motion (device/scripted_trajectory.h)
 //       - {t_s: 0.0, position_m: [0, 0, 0.09], rotation_vector_rad: [0, 0, 0]}
@@ -160,6 +165,7 @@ using HapticMode = device::HapticMode;
 struct HapticScene {
   double rate_hz = 1000.0;
   HapticMode mode = HapticMode::kLinear;
+  int lcp_max_rows = 512;
   int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
 };
 

@@ -82,10 +82,12 @@ ToolShape ReadToolShape(const YamlMap& map, const std::string& base_dir, std::st
     shape.radius_m = capsule->GetDouble("radius_m", Above(0.0));
     shape.length_m = capsule->GetDouble("length_m", AtLeast(0.0));
   } else if (const std::optional<YamlMap> cylinder = map.FindMap("cylinder")) {
-    cylinder->CheckKeys({"radius_m", "length_m"});
+    cylinder->CheckKeys({"radius_m", "length_m", "edge_radius_m"});
     shape.kind = ToolShape::Kind::kCylinder;
     shape.radius_m = cylinder->GetDouble("radius_m", Above(0.0));
     shape.length_m = cylinder->GetDouble("length_m", Above(0.0));
+    shape.edge_radius_m = cylinder->GetDoubleOr(
+        "edge_radius_m", 0.0, ClosedInterval(0.0, std::min(shape.radius_m, 0.5 * shape.length_m)));
   } else if (const std::optional<YamlMap> box = map.FindMap("box")) {
     box->CheckKeys({"half_extents_m"});
     shape.kind = ToolShape::Kind::kBox;
@@ -170,12 +172,15 @@ int CalcStepsPerFrame(double rate_hz, const YamlMap& time, const std::optional<Y
   time.FailKey("dt_s", message.str() + " (haptic.rate_hz is not given: 1000 Hz by default)");
 }
 
-HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time) {
+HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, ContactLaw law) {
   HapticScene haptic;
   if (map.has_value()) {
-    map->CheckKeys({"rate_hz", "mode"});
+    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows"});
     haptic.rate_hz = map->GetDoubleOr("rate_hz", haptic.rate_hz, Above(0.0));
     haptic.mode = map->GetEnumOr("mode", Choices(kHapticModes), haptic.mode);
+    if (haptic.mode == HapticMode::kLcp && law == ContactLaw::kFriction)
+      map->FailKey("mode", "lcp solves normal rows only; it cannot be used with contact law friction");
+    haptic.lcp_max_rows = map->GetIntOr("lcp_max_rows", haptic.lcp_max_rows, AtLeast(1));
   }
   haptic.steps_per_frame = CalcStepsPerFrame(haptic.rate_hz, time, map);
   return haptic;
@@ -228,7 +233,7 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
   if (const std::optional<YamlMap> contact = root.FindMap("contact")) {
     scene->contact = ReadContact(*contact);
   }
-  scene->haptic = ReadHaptic(root.FindMap("haptic"), time);
+  scene->haptic = ReadHaptic(root.FindMap("haptic"), time, scene->contact.law);
   scene->trajectory = ReadTrajectory(root.GetMap("device"));
 }
 

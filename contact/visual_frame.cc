@@ -1,6 +1,7 @@
 #include "contact/visual_frame.h"
 
 #include <Eigen/Dense>
+#include <stdexcept>
 
 #include "core/stopwatch.h"
 
@@ -24,7 +25,11 @@ VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_opti
       options_(options),
       rows_per_contact_(options.response.solve.law == ContactLaw::kFriction ? 3 : 1),
       stepper_(body, fem_options, options.dt_s, std::move(body_external_force_N)),
-      detector_(body, tool_.shape, options.detection) {}
+      detector_(body, tool_.shape, options.detection) {
+  if (options.export_contact_rows && rows_per_contact_ != 1)
+    throw std::invalid_argument(
+        "VisualFrame: the lcp rows are normal rows only; the friction law has no lcp mode");
+}
 
 VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, ToolState* tool,
                                    const ToolState* haptic_tool) {

@@ -13,6 +13,7 @@
 #include "contact/collision_detection.h"
 #include "contact/collision_response.h"
 #include "contact/contact_jacobian.h"
+#include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
 #include "core/rigid_tool.h"
 #include "core/tool_integrator.h"
@@ -31,6 +32,9 @@ struct VisualFrameOptions {
   DetectionOptions detection;
   ResponseOptions response;
   double sanity_tolerance_m = 1e-4;  // nodes deeper than this inside the tool are moved out
+  // Stage 6 also exports the per-contact rows of every candidate contact for the haptic `lcp`
+  // mode (contact_rows()). Needs normal rows only: not with the friction law.
+  bool export_contact_rows = false;
 };
 
 // Wall time of each stage, seconds, and what the frame found.
@@ -61,6 +65,9 @@ class VisualFrame {
 
   // Results of the last Step.
   const LinearContactModel& linear_model() const { return linear_model_; }
+  // Rows of all the frame's contacts, linearised as the model is (empty unless
+  // options.export_contact_rows).
+  const ContactRows& contact_rows() const { return contact_rows_; }
   const std::vector<Contact>& contacts() const { return contacts_; }
   const ContactJacobian& jacobian() const { return jacobian_; }
   const Eigen::VectorXd& impulses() const { return lambda_; }  // λ per row, N
@@ -76,6 +83,11 @@ class VisualFrame {
   void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                         const ToolState& tool, const ToolState& haptic_tool,
                         const fem::State& body);
+  // The frame's contacts as seen from the haptic tool at the end of the frame (points, normals
+  // and gaps), with the velocity target b each row holds over the next frame.
+  void MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start, const ToolState& visual_tool,
+                                const ToolState& haptic_tool, std::vector<Contact>* moved,
+                                Eigen::VectorXd* b) const;
   // Returns the number of nodes moved; *max_penetration_m receives the deepest one found.
   int RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m) const;
 
@@ -97,6 +109,7 @@ class VisualFrame {
   Eigen::VectorXd c_post_;  // separating velocity of each row after the response
   ContactSolveReport last_solve_;
   LinearContactModel linear_model_;
+  ContactRows contact_rows_;
 };
 
 }  // namespace hapsim::contact

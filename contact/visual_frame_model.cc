@@ -7,31 +7,51 @@
 
 namespace hapsim::contact {
 
+// Contact points ride with the visual tool over the frame, then over to the haptic tool (the
+// identity when the model is linearised at the visual tool). Moving a tool point p by δp changes
+// the gap by −n·δp, so the gaps follow the same motion. Targets are velocities the model holds
+// for a whole visual frame (until the next model): close a gap over that frame, or undo a
+// fraction β of a penetration over it. A one-haptic-step target (−φ/Δt_haptic) would drive the
+// tool through the body over the 33 steps it is held.
+void VisualFrame::MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start,
+                                           const ToolState& visual_tool,
+                                           const ToolState& haptic_tool,
+                                           std::vector<Contact>* moved, Eigen::VectorXd* b) const {
+  const Eigen::Isometry3d motion = CalcPose(haptic_tool) * X_WT_start.inverse();
+  const Eigen::Isometry3d visual_motion = CalcPose(visual_tool) * X_WT_start.inverse();
+  moved->assign(contacts_.begin(), contacts_.end());
+  b->setZero(rows_per_contact_ * static_cast<int>(contacts_.size()));
+  for (size_t i = 0; i < moved->size(); ++i) {
+    const int row = rows_per_contact_ * static_cast<int>(i);
+    Contact& contact = (*moved)[i];
+    const Eigen::Vector3d p_visual_W_m = visual_motion * contact.p_tool_W_m;
+    contact.p_tool_W_m = motion * contact.p_tool_W_m;
+    contact.n_W = motion.linear() * contact.n_W;
+    contact.gap_m += options_.dt_s * c_post_[row];  // gap at the end of the frame, to first order
+    contact.gap_m -= contact.n_W.dot(contact.p_tool_W_m - p_visual_W_m);  // haptic tool's offset
+    const double fraction = contact.gap_m >= 0.0 ? 1.0 : options_.response.stabilization_beta;
+    (*b)[row] = -fraction * contact.gap_m / options_.dt_s;
+  }
+}
+
 // The model is linearised at the post-collision state, for the haptic step: the tool matrices
 // use the haptic Δt and the coupling at the new tool pose; the body's compliance is the one of
 // the visual step (the paper's choice; DESIGN.md §4 leaves open whether a haptic-step compliance
 // is better). Only active constraints (λ > 0) enter: an inactive unilateral contact would
-// otherwise act as an equality and pull the tool.
+// otherwise act as an equality and pull the tool. The lcp rows take every contact: the 1 kHz
+// solve decides which are active.
 void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                                    const ToolState& visual_tool, const ToolState& tool,
                                    const fem::State& body) {
-  // Contact points ride with the visual tool over the frame, then over to the haptic tool (the
-  // identity when the model is linearised at the visual tool). Moving a tool point p by δp
-  // changes the gap by −n·δp, so the gaps follow the same motion.
-  const Eigen::Isometry3d motion = CalcPose(tool) * X_WT_start.inverse();
-  const Eigen::Isometry3d visual_motion = CalcPose(visual_tool) * X_WT_start.inverse();
+  std::vector<Contact> moved;
+  Eigen::VectorXd b_all;
+  MoveContactsToHapticTool(X_WT_start, visual_tool, tool, &moved, &b_all);
   std::vector<Contact> active;
   std::vector<int> active_rows;
-  for (size_t i = 0; i < contacts_.size(); ++i) {
+  for (size_t i = 0; i < moved.size(); ++i) {
     const int row = rows_per_contact_ * static_cast<int>(i);
     if (!(lambda_[row] > 0.0)) continue;
-    Contact moved = contacts_[i];
-    const Eigen::Vector3d p_visual_W_m = visual_motion * moved.p_tool_W_m;
-    moved.p_tool_W_m = motion * moved.p_tool_W_m;
-    moved.n_W = motion.linear() * moved.n_W;
-    moved.gap_m += options_.dt_s * c_post_[row];  // gap at the end of the frame, to first order
-    moved.gap_m -= moved.n_W.dot(moved.p_tool_W_m - p_visual_W_m);  // haptic tool's offset
-    active.push_back(moved);
+    active.push_back(moved[i]);
     for (int d = 0; d < rows_per_contact_; ++d) active_rows.push_back(row + d);
   }
   const ContactJacobian J = CalcContactJacobian(active, tool.x_W_m, rows_per_contact_,
@@ -41,19 +61,25 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   const ToolStepSystem haptic =
       CalcToolStepSystem(tool_, tool, wrench, options_.gravity_m_s2, options_.haptic_dt_s);
   Eigen::MatrixXd W = CalcToolDelassus(J, haptic);
-  for (size_t r = 0; r < active_rows.size(); ++r)
+  Eigen::VectorXd b(active_rows.size());
+  for (size_t r = 0; r < active_rows.size(); ++r) {
+    b[r] = b_all[active_rows[r]];
     for (size_t c = 0; c < active_rows.size(); ++c)
       W(r, c) += W_body_(active_rows[r], active_rows[c]);
-  // Targets are velocities the model holds for a whole visual frame (until the next model): close
-  // a gap over that frame, or undo a fraction β of a penetration over it. A one-haptic-step
-  // target (−φ/Δt_haptic) would drive the tool through the body over the 33 steps it is held.
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(J.num_rows());
-  for (size_t i = 0; i < active.size(); ++i) {
-    const double gap_m = active[i].gap_m;
-    const double fraction = gap_m >= 0.0 ? 1.0 : options_.response.stabilization_beta;
-    b[rows_per_contact_ * static_cast<int>(i)] = -fraction * gap_m / options_.dt_s;
   }
-  linear_model_ = MakeLinearContactModel(J, W, haptic, b - J.J_u * body.v_m_s);
+  // The body's velocity without contact over a haptic step: its post-frame velocity less what the
+  // frame's contact force λ_vis holds back, u̇ − Δt_h A_u⁻¹ J_uᵀ λ_vis, so that J_u u̇_free =
+  // J_u u̇ − Δt_h W_body λ_vis. A body resting under the tool (u̇ = 0) then yields only to a
+  // change of force from λ_vis, not to the whole force each millisecond.
+  const Eigen::VectorXd held_m_s = options_.haptic_dt_s * (W_body_ * lambda_);
+  Eigen::VectorXd body_rhs = b - J.J_u * body.v_m_s;
+  for (size_t r = 0; r < active_rows.size(); ++r) body_rhs[r] += held_m_s[active_rows[r]];
+  linear_model_ = MakeLinearContactModel(J, W, haptic, body_rhs);
+  if (options_.export_contact_rows) {
+    const ContactJacobian J_all = CalcContactJacobian(moved, tool.x_W_m, rows_per_contact_,
+                                                      body_.num_dofs(), body_.dof_is_fixed);
+    contact_rows_ = MakeContactRows(J_all, W_body_, b_all - J_all.J_u * body.v_m_s + held_m_s);
+  }
 }
 
 int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body,

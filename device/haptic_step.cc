@@ -8,12 +8,13 @@ namespace hapsim::device {
 
 HapticStep::HapticStep(ToolModel tool, const CouplingParams& coupling,
                        const Eigen::Vector3d& gravity_m_s2, double dt_s,
-                       const ToolState& initial_tool)
+                       const ToolState& initial_tool, int lcp_max_rows)
     : tool_(std::move(tool)),
       coupling_(coupling),
       gravity_m_s2_(gravity_m_s2),
       dt_s_(dt_s),
-      tool_state_(initial_tool) {}
+      tool_state_(initial_tool),
+      lcp_(lcp_max_rows) {}
 
 HapticOutput HapticStep::Step(const DeviceState& device) {
   const CouplingWrench wrench =
@@ -23,8 +24,14 @@ HapticOutput HapticStep::Step(const DeviceState& device) {
   Eigen::Vector3d F_hat_N, T_hat_N_m;
   contact::CalcDiscreteTimeWrench(system, tool_state_, &F_hat_N, &T_hat_N_m);
   HapticOutput out;
-  contact::EvaluateLinearContactModel(model_, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
-                                      &out.contact_torque_W_N_m);
+  if (rows_ != nullptr) {
+    out.lcp_fell_back = !lcp_.Solve(*rows_, system, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
+                                    &out.contact_torque_W_N_m);
+  }
+  if (rows_ == nullptr || out.lcp_fell_back) {
+    contact::EvaluateLinearContactModel(model_, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
+                                        &out.contact_torque_W_N_m);
+  }
   const Eigen::Vector3d dv =
       system.A_v.lu().solve(dt_s_ * (system.F_tilde_N + out.contact_force_W_N));
   const Eigen::Vector3d dL =

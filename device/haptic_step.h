@@ -1,14 +1,20 @@
 #pragma once
-// One step of the 1 kHz haptic loop in the paper's `linear` mode (DESIGN.md §1, §5):
+// One step of the 1 kHz haptic loop in the `linear` (the paper's) and `lcp` modes (DESIGN.md §1,
+// §4, §5):
 //   1 read the device   2 coupling wrench between device and haptic tool
 //   3 free tool update: A_v, A_L, F̃, T̃ at the haptic Δt, and F̂ = F̃ + A_v v/Δt, T̂ = T̃ + A_L L/Δt
-//   4 contact force from the linear contact model, F_c = F_c0 + ∂F_c/∂F̂ F̂ + ∂F_c/∂T̂ T̂ (and T_c)
+//   4 contact force and torque on the haptic tool, either
+//       linear: from the linear contact model, F_c = F_c0 + ∂F_c/∂F̂ F̂ + ∂F_c/∂T̂ T̂ (and T_c), or
+//       lcp:    from the unilateral solve on the frame's contact rows (HapticLcpSolver), which
+//               lets contacts separate and re-engage between visual frames
 //   5 post-contact state: A_v Δv = Δt (F̃ + F_c), A_L ΔL = Δt (T̃ + T_c), advance
 //   6 output: the coupling's reaction −F, −T to the device.
-// Everything is fixed-size: the step allocates nothing (checked in a test).
+// The linear step is fixed-size and allocates nothing; the lcp step allocates nothing after
+// construction (up to the solver's max_rows; both checked in tests).
 
 #include <Eigen/Core>
 
+#include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
 #include "core/rigid_tool.h"
 #include "core/virtual_coupling.h"
@@ -20,15 +26,23 @@ struct HapticOutput {
   Eigen::Vector3d device_torque_W_N_m = Eigen::Vector3d::Zero();   // sent to the device: −T
   Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();     // F_c on the haptic tool
   Eigen::Vector3d contact_torque_W_N_m = Eigen::Vector3d::Zero();  // T_c on the haptic tool
+  // lcp: the solve failed (too many rows, singular W) and the linear model was used instead.
+  bool lcp_fell_back = false;
 };
 
 class HapticStep {
  public:
+  // lcp_max_rows: capacity of the lcp solver (0: no lcp; memory ≈ 16 lcp_max_rows² bytes).
   HapticStep(ToolModel tool, const CouplingParams& coupling, const Eigen::Vector3d& gravity_m_s2,
-             double dt_s, const ToolState& initial_tool);
+             double dt_s, const ToolState& initial_tool, int lcp_max_rows = 0);
 
   // Replaces the contact model (a copy of fixed-size data: no allocation).
   void SetContactModel(const contact::LinearContactModel& model) { model_ = model; }
+  // lcp mode: the rows to solve on from the next step (not copied: they must stay unchanged
+  // until replaced); nullptr returns to the linear model. The model set by SetContactModel is
+  // the fallback when a solve fails.
+  void SetContactRows(const contact::ContactRows* rows) { rows_ = rows; }
+  int lcp_max_rows() const { return lcp_.max_rows(); }
   HapticOutput Step(const DeviceState& device);
 
   const ToolState& tool_state() const { return tool_state_; }
@@ -43,6 +57,8 @@ class HapticStep {
   double dt_s_;
   ToolState tool_state_;
   contact::LinearContactModel model_;  // no contact until the first SetContactModel
+  const contact::ContactRows* rows_ = nullptr;
+  contact::HapticLcpSolver lcp_;
 };
 
 }  // namespace hapsim::device

@@ -10,6 +10,7 @@ contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual,
   const int ratio = o.mode == HapticMode::kReference ? 1 : o.haptic_steps_per_frame;
   visual.dt_s = ratio * o.haptic_dt_s;
   visual.haptic_dt_s = o.haptic_dt_s;
+  visual.export_contact_rows = o.mode == HapticMode::kLcp;
   return visual;
 }
 
@@ -40,10 +41,7 @@ MultirateSimulator::MultirateSimulator(const fem::Model& body, const fem::FemOpt
       body_state_(fem::MakeRestState(body)),
       visual_tool_(initial_tool),
       haptic_(tool, visual_options_.coupling, visual_options_.gravity_m_s2, options.haptic_dt_s,
-              initial_tool) {
-  if (options.mode == HapticMode::kLcp)
-    throw std::invalid_argument(
-        "haptic mode 'lcp' is not available yet in the in-process simulator");
+              initial_tool, options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0) {
   if (options.haptic_steps_per_frame < 1) throw std::invalid_argument("haptic_steps_per_frame < 1");
 }
 
@@ -56,7 +54,8 @@ void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_hapt
     HapticSample sample;
     switch (options_.mode) {
       case HapticMode::kLinear:
-        sample = StepLinear(device, k);
+      case HapticMode::kLcp:
+        sample = StepHapticTool(device, k);
         break;
       case HapticMode::kCoupling:
         sample = StepCoupling(device, k);
@@ -64,8 +63,6 @@ void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_hapt
       case HapticMode::kReference:
         sample = StepReference(device, k);
         break;
-      case HapticMode::kLcp:
-        throw std::logic_error("lcp mode");
     }
     sample.t_s = k * options_.haptic_dt_s;
     if (on_haptic_step) on_haptic_step(sample);
@@ -74,12 +71,14 @@ void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_hapt
 
 // Paper mode: two instances of the tool, both coupled to the device (the paper's Fig. 1): the
 // visual tool in the full simulation at the visual rate, the haptic tool at 1 kHz with the linear
-// contact model of the last visual frame.
-HapticSample MultirateSimulator::StepLinear(const DeviceState& device, long k) {
+// contact model (or, lcp, the contact rows) of the last visual frame.
+HapticSample MultirateSimulator::StepHapticTool(const DeviceState& device, long k) {
+  const bool lcp = options_.mode == HapticMode::kLcp;
   if (k % options_.haptic_steps_per_frame == 0) {
     const contact::VisualFrameStats stats =
         frame_.Step(device, &body_state_, &visual_tool_, &haptic_.tool_state());
     haptic_.SetContactModel(frame_.linear_model());
+    if (lcp) haptic_.SetContactRows(&frame_.contact_rows());
     last_frame_step_ = k;
     if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
   }
@@ -90,7 +89,9 @@ HapticSample MultirateSimulator::StepLinear(const DeviceState& device, long k) {
   sample.contact_force_W_N = out.contact_force_W_N;
   sample.tool_x_W_m = haptic_.tool_state().x_W_m;
   sample.tool_q_WT = haptic_.tool_state().q_WT;
-  sample.num_contacts = frame_.linear_model().num_contacts;
+  sample.num_contacts =
+      lcp ? frame_.contact_rows().num_rows() : frame_.linear_model().num_contacts;
+  sample.lcp_fell_back = out.lcp_fell_back;
   sample.model_age_s = (k - last_frame_step_) * options_.haptic_dt_s;
   return sample;
 }

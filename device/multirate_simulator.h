@@ -9,8 +9,9 @@
 //              model of the last visual frame.
 //   coupling   standard multirate rendering: no haptic tool; the device feels the coupling to the
 //              visual tool, which is coupled to the device and updated only at visual frames.
+//   lcp        as linear, but the haptic tool's contact force comes from a unilateral solve at
+//              1 kHz on the rows of all the frame's contacts (contact/haptic_contact_rows.h).
 //   reference  everything (FEM, detection, constraint solve) at the haptic step: the ground truth.
-//   lcp        (not yet: the per-contact rows and a 1 kHz LCP; see contact/haptic_contact_rows.h)
 // Within one haptic period a visual frame is computed first (when one is due), then the haptic
 // step; the model a frame produces is used from that same step on (no transport latency).
 
@@ -29,6 +30,7 @@ struct MultirateOptions {
   HapticMode mode = HapticMode::kLinear;
   double haptic_dt_s = 1e-3;
   int haptic_steps_per_frame = 33;  // visual frame = this many haptic steps (reference: 1)
+  int lcp_max_rows = 512;           // lcp: rows the 1 kHz solver holds (more: linear fallback)
 };
 
 // What one haptic step produced.
@@ -39,7 +41,8 @@ struct HapticSample {
   Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();  // on that tool (held in coupling)
   Eigen::Vector3d tool_x_W_m = Eigen::Vector3d::Zero();         // the tool the device feels
   Eigen::Quaterniond tool_q_WT = Eigen::Quaterniond::Identity();
-  int num_contacts = 0;      // in the contact model (or the frame, for coupling/reference)
+  int num_contacts = 0;      // in the contact model or lcp rows (the frame's, coupling/reference)
+  bool lcp_fell_back = false;  // lcp: the solve failed and the linear model was used
   double model_age_s = 0.0;  // time since the visual frame that produced the model
 };
 
@@ -64,7 +67,7 @@ class MultirateSimulator {
   const fem::State& body_state() const { return body_state_; }
 
  private:
-  HapticSample StepLinear(const DeviceState& device, long k);
+  HapticSample StepHapticTool(const DeviceState& device, long k);
   HapticSample StepCoupling(const DeviceState& device, long k);
   HapticSample StepReference(const DeviceState& device, long k);
   void FillFromVisualTool(const DeviceState& device, HapticSample* sample) const;

@@ -41,7 +41,7 @@ contact:                                      # 10
   margin_m: 0.002                             # 15
 haptic:                                       # 16
   rate_hz: 500                                # 17
-  mode: lcp                                   # 18
+  mode: coupling                              # 18
 device:                                       # 19
   trajectory:                                 # 20
     - {t_s: 0.0, position_m: [0, 0, 0.09], rotation_vector_rad: [0, 0, 0.5]}   # 21
@@ -121,7 +121,7 @@ TEST(SimSceneTest, FullSimulationSceneGivesEveryValue) {
   EXPECT_EQ(scene.contact.margin_m, 0.002);
 
   EXPECT_EQ(scene.haptic.rate_hz, 500.0);
-  EXPECT_EQ(scene.haptic.mode, HapticMode::kLcp);
+  EXPECT_EQ(scene.haptic.mode, HapticMode::kCoupling);
   EXPECT_EQ(scene.haptic.steps_per_frame, 10);
 
   ASSERT_EQ(scene.trajectory.size(), 3u);
@@ -223,6 +223,9 @@ const BadCase kBadCases[] = {
     {"NanToolPosition", "[0.01, 0.02, 0.09]", "[0.01, .nan, 0.09]", 7, "tool.position_m", "finite"},
     {"ShortRotationVector", "[0, 1.5707963267948966, 0]", "[0, 1]", 8, "tool.rotation_vector_rad",
      "list of 3 numbers"},
+    {"EdgeRadiusAboveRadius", "capsule: {radius_m: 0.005, length_m: 0.05}",
+     "cylinder: {radius_m: 0.005, length_m: 0.05, edge_radius_m: 0.006}", 5,
+     "tool.shape.cylinder.edge_radius_m", "in [0, 0.005]"},
     // coupling
     {"ScalarForCoupling",
      "coupling: {k_lin_N_m: 2000, b_lin_N_s_m: 5, k_ang_N_m_rad: 2, b_ang_N_m_s_rad: 0.01}",
@@ -257,10 +260,14 @@ const BadCase kBadCases[] = {
      "20.01 haptic steps per visual frame; it must be a whole number >= 1"},
     {"LessThanOneStepPerFrame", "rate_hz: 500", "rate_hz: 10", 17, "haptic.rate_hz",
      "0.2 haptic steps per visual frame"},
-    {"UnknownMode", "mode: lcp", "mode: penalty", 18, "haptic.mode",
+    {"UnknownMode", "mode: coupling", "mode: penalty", 18, "haptic.mode",
      "one of: linear, lcp, coupling, reference"},
-    {"UnknownHapticKey", "mode: lcp", "mode: lcp\n  period_s: 0.001", 19, "haptic.period_s",
-     "allowed keys here: rate_hz, mode"},
+    {"UnknownHapticKey", "mode: coupling", "mode: coupling\n  period_s: 0.001", 19,
+     "haptic.period_s", "allowed keys here: rate_hz, mode, lcp_max_rows"},
+    {"LcpWithFriction", "mode: coupling", "mode: lcp", 18, "haptic.mode",
+     "cannot be used with contact law friction"},
+    {"ZeroLcpRows", "mode: coupling", "mode: coupling\n  lcp_max_rows: 0", 19,
+     "haptic.lcp_max_rows", "must be >= 1"},
     // device
     {"UnknownDeviceKey", "  trajectory:", "  trajectories:", 20, "device.trajectories",
      "allowed keys here: trajectory"},
