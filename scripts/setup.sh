@@ -9,11 +9,14 @@ cd "$(dirname "$0")/.."
 # serial (CHOLMOD's supernodal kernels; about 2x faster than the reference BLAS, single-threaded
 # so benchmarks measure one core), yaml-cpp (scenes), CLI11 (command line), GoogleTest and
 # Google Benchmark (tests, benchmarks), nlohmann-json (JSON outputs), matplotlib (charts), FCL
-# (collision detection: bounding-volume hierarchy over the body surface, triangle-vs-tool tests).
+# (collision detection: bounding-volume hierarchy over the body surface, triangle-vs-tool tests),
+# LCM (message types, UDP multicast transport between the visual and the haptic process, event
+# logs; liblcm-bin has lcm-gen, lcm-logger and lcm-logplayer).
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas0-serial
   libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libfcl-dev
+  liblcm-dev liblcm-bin
   nlohmann-json3-dev python3 python3-matplotlib
 )
 

@@ -1,0 +1,282 @@
+#include "messages/adapters.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+namespace hapsim::messages {
+namespace {
+
+void SetError(std::string* error, std::string text) {
+  if (error != nullptr) *error = std::move(text);
+}
+
+void VectorToArray(const Eigen::Vector3d& v, double out[3]) {
+  for (int i = 0; i < 3; ++i) out[i] = v[i];
+}
+
+Eigen::Vector3d ArrayToVector(const double in[3]) { return Eigen::Vector3d(in[0], in[1], in[2]); }
+
+void QuaternionToArray(const Eigen::Quaterniond& q, double out[4]) {
+  out[0] = q.w();
+  out[1] = q.x();
+  out[2] = q.y();
+  out[3] = q.z();
+}
+
+void MatrixToArray(const Eigen::Matrix3d& m, double out[3][3]) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out[r][c] = m(r, c);
+  }
+}
+
+Eigen::Matrix3d ArrayToMatrix(const double in[3][3]) {
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m(r, c) = in[r][c];
+  }
+  return m;
+}
+
+bool AllFinite(const double* data, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(data[i])) return false;
+  }
+  return true;
+}
+
+// Field names are C strings so that the success path builds no std::string (no allocation).
+bool CheckFinite(const double* data, std::size_t n, const char* field, std::string* error) {
+  if (AllFinite(data, n)) return true;
+  SetError(error, std::string(field) + ": non-finite entry");
+  return false;
+}
+
+// The quaternion (w, x, y, z) in `in` as a unit quaternion (see adapters.h for the tolerances).
+bool ReadUnitQuaternion(const double in[4], const char* field, Eigen::Quaterniond* q,
+                        std::string* error) {
+  Eigen::Quaterniond q_in(in[0], in[1], in[2], in[3]);
+  const double norm = q_in.norm();
+  if (!std::isfinite(norm) || std::abs(norm - 1.0) > kQuaternionNormTolerance) {
+    SetError(error, std::string(field) + ": quaternion norm " + std::to_string(norm) +
+                        " is not within " + std::to_string(kQuaternionNormTolerance) + " of 1");
+    return false;
+  }
+  if (std::abs(norm - 1.0) > kQuaternionRoundOff) q_in.coeffs() /= norm;
+  *q = q_in;
+  return true;
+}
+
+bool CheckSize(std::size_t size, int expected, const char* field, const char* what,
+               std::string* error) {
+  if (size == static_cast<std::size_t>(expected)) return true;
+  SetError(error, std::string(field) + ": " + std::to_string(size) + " " + what + ", expected " +
+                      std::to_string(expected) + " (num_rows)");
+  return false;
+}
+
+// A [num_rows][num_cols] array of the contact model: sizes as declared, entries finite.
+bool CheckRowArray(const std::vector<std::vector<double>>& rows, int num_rows, int num_cols,
+                   const char* field, std::string* error) {
+  if (!CheckSize(rows.size(), num_rows, field, "rows", error)) return false;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i].size() != static_cast<std::size_t>(num_cols)) {
+      SetError(error, std::string(field) + "[" + std::to_string(i) +
+                          "]: " + std::to_string(rows[i].size()) + " entries, expected " +
+                          std::to_string(num_cols));
+      return false;
+    }
+    if (!AllFinite(rows[i].data(), rows[i].size())) {
+      SetError(error, std::string(field) + "[" + std::to_string(i) + "]: non-finite entry");
+      return false;
+    }
+  }
+  return true;
+}
+
+// Everything FromMessage(contact_model_t) rejects except the quaternion, which it reads itself.
+bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* error) {
+  if (!(std::isfinite(msg.dt_visual_s) && msg.dt_visual_s > 0.0)) {
+    SetError(error, "contact_model_t.dt_visual_s: must be finite and > 0");
+    return false;
+  }
+  if (!(std::isfinite(msg.dt_haptic_s) && msg.dt_haptic_s > 0.0)) {
+    SetError(error, "contact_model_t.dt_haptic_s: must be finite and > 0");
+    return false;
+  }
+  if (msg.num_contacts < 0 || msg.num_rows < 0) {
+    SetError(error, msg.num_contacts < 0 ? "contact_model_t.num_contacts: negative"
+                                         : "contact_model_t.num_rows: negative");
+    return false;
+  }
+  const int n = msg.num_rows;
+  return CheckFinite(&msg.t_frame_s, 1, "contact_model_t.t_frame_s", error) &&
+         CheckFinite(msg.x_W_m, 3, "contact_model_t.x_W_m", error) &&
+         CheckFinite(msg.F_c0_N, 3, "contact_model_t.F_c0_N", error) &&
+         CheckFinite(msg.T_c0_N_m, 3, "contact_model_t.T_c0_N_m", error) &&
+         CheckFinite(&msg.dFc_dF[0][0], 9, "contact_model_t.dFc_dF", error) &&
+         CheckFinite(&msg.dFc_dT[0][0], 9, "contact_model_t.dFc_dT", error) &&
+         CheckFinite(&msg.dTc_dF[0][0], 9, "contact_model_t.dTc_dF", error) &&
+         CheckFinite(&msg.dTc_dT[0][0], 9, "contact_model_t.dTc_dT", error) &&
+         CheckRowArray(msg.J_v, n, 3, "contact_model_t.J_v", error) &&
+         CheckRowArray(msg.J_w, n, 3, "contact_model_t.J_w", error) &&
+         CheckRowArray(msg.W_body, n, n, "contact_model_t.W_body", error) &&
+         CheckSize(msg.body_rhs.size(), n, "contact_model_t.body_rhs", "entries", error) &&
+         CheckFinite(msg.body_rhs.data(), n, "contact_model_t.body_rhs", error);
+}
+
+}  // namespace
+
+hapsim_lcm::device_state_t ToMessage(const DeviceState& device, std::int64_t utime,
+                                     std::int64_t sequence, std::int32_t buttons) {
+  hapsim_lcm::device_state_t msg;
+  msg.utime = utime;
+  msg.sequence = sequence;
+  VectorToArray(device.x_W_m, msg.x_W_m);
+  QuaternionToArray(device.q_WD, msg.q_WD);
+  VectorToArray(device.v_W_m_s, msg.v_W_m_s);
+  VectorToArray(device.w_W_rad_s, msg.w_W_rad_s);
+  msg.buttons = buttons;
+  return msg;
+}
+
+bool FromMessage(const hapsim_lcm::device_state_t& msg, DeviceState* device, std::string* error) {
+  Eigen::Quaterniond q_WD(msg.q_WD[0], msg.q_WD[1], msg.q_WD[2], msg.q_WD[3]);
+  // A non-finite quaternion passes through for the safety layer; a finite one must be unit.
+  if (AllFinite(msg.q_WD, 4) &&
+      !ReadUnitQuaternion(msg.q_WD, "device_state_t.q_WD", &q_WD, error)) {
+    return false;
+  }
+  device->x_W_m = ArrayToVector(msg.x_W_m);
+  device->q_WD = q_WD;
+  device->v_W_m_s = ArrayToVector(msg.v_W_m_s);
+  device->w_W_rad_s = ArrayToVector(msg.w_W_rad_s);
+  return true;
+}
+
+hapsim_lcm::device_force_t ToMessage(const Eigen::Vector3d& force_W_N,
+                                     const Eigen::Vector3d& torque_W_N_m, std::int64_t utime,
+                                     std::int64_t sequence, const std::string& zero_reason) {
+  hapsim_lcm::device_force_t msg;
+  msg.utime = utime;
+  msg.sequence = sequence;
+  msg.zeroed = zero_reason.empty() ? 0 : 1;
+  msg.reason = zero_reason;
+  VectorToArray(msg.zeroed ? Eigen::Vector3d::Zero().eval() : force_W_N, msg.force_W_N);
+  VectorToArray(msg.zeroed ? Eigen::Vector3d::Zero().eval() : torque_W_N_m, msg.torque_W_N_m);
+  return msg;
+}
+
+bool FromMessage(const hapsim_lcm::device_force_t& msg, Eigen::Vector3d* force_W_N,
+                 Eigen::Vector3d* torque_W_N_m, std::string* error) {
+  if (!CheckFinite(msg.force_W_N, 3, "device_force_t.force_W_N", error) ||
+      !CheckFinite(msg.torque_W_N_m, 3, "device_force_t.torque_W_N_m", error)) {
+    return false;
+  }
+  *force_W_N = ArrayToVector(msg.force_W_N);
+  *torque_W_N_m = ArrayToVector(msg.torque_W_N_m);
+  return true;
+}
+
+void PoseToMessage(const ToolState& tool, double x_W_m[3], double q_WT[4]) {
+  VectorToArray(tool.x_W_m, x_W_m);
+  QuaternionToArray(tool.q_WT, q_WT);
+}
+
+bool PoseFromMessage(const double x_W_m[3], const double q_WT[4], ToolState* tool,
+                     std::string* error) {
+  Eigen::Quaterniond q;
+  if (!CheckFinite(x_W_m, 3, "x_W_m", error) || !ReadUnitQuaternion(q_WT, "q_WT", &q, error)) {
+    return false;
+  }
+  tool->x_W_m = ArrayToVector(x_W_m);
+  tool->q_WT = q;
+  return true;
+}
+
+hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
+                                      const contact::ContactRows* rows_or_null,
+                                      const ContactModelHeader& header) {
+  hapsim_lcm::contact_model_t msg;
+  msg.utime = header.utime;
+  msg.sequence = header.sequence;
+  msg.dt_visual_s = header.dt_visual_s;
+  msg.dt_haptic_s = header.dt_haptic_s;
+  msg.t_frame_s = header.t_frame_s;
+  VectorToArray(header.x_W_m, msg.x_W_m);
+  QuaternionToArray(header.q_WT, msg.q_WT);
+  msg.num_contacts = model.num_contacts;
+  VectorToArray(model.F_c0_N, msg.F_c0_N);
+  VectorToArray(model.T_c0_N_m, msg.T_c0_N_m);
+  MatrixToArray(model.dFc_dF, msg.dFc_dF);
+  MatrixToArray(model.dFc_dT, msg.dFc_dT);
+  MatrixToArray(model.dTc_dF, msg.dTc_dF);
+  MatrixToArray(model.dTc_dT, msg.dTc_dT);
+
+  const int n = rows_or_null == nullptr ? 0 : rows_or_null->num_rows();
+  msg.num_rows = n;
+  if (n == 0) return msg;
+  const contact::ContactRows& rows = *rows_or_null;
+  if (rows.J_w.rows() != n || rows.W_body.rows() != n || rows.W_body.cols() != n ||
+      rows.body_rhs.size() != n) {
+    throw std::invalid_argument("messages::ToMessage: ContactRows sizes disagree with J_v's " +
+                                std::to_string(n) + " rows");
+  }
+  msg.J_v.assign(n, std::vector<double>(3));
+  msg.J_w.assign(n, std::vector<double>(3));
+  msg.W_body.assign(n, std::vector<double>(n));
+  msg.body_rhs.resize(n);
+  for (int i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      msg.J_v[i][c] = rows.J_v(i, c);
+      msg.J_w[i][c] = rows.J_w(i, c);
+    }
+    for (int c = 0; c < n; ++c) msg.W_body[i][c] = rows.W_body(i, c);
+    msg.body_rhs[i] = rows.body_rhs[i];
+  }
+  return msg;
+}
+
+bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactModel* model,
+                 contact::ContactRows* rows, ContactModelHeader* header, std::string* error) {
+  Eigen::Quaterniond q_WT;
+  if (!CheckContactModel(msg, error) ||
+      !ReadUnitQuaternion(msg.q_WT, "contact_model_t.q_WT", &q_WT, error)) {
+    return false;
+  }
+  header->utime = msg.utime;
+  header->sequence = msg.sequence;
+  header->dt_visual_s = msg.dt_visual_s;
+  header->dt_haptic_s = msg.dt_haptic_s;
+  header->t_frame_s = msg.t_frame_s;
+  header->x_W_m = ArrayToVector(msg.x_W_m);
+  header->q_WT = q_WT;
+
+  model->num_contacts = msg.num_contacts;
+  model->F_c0_N = ArrayToVector(msg.F_c0_N);
+  model->T_c0_N_m = ArrayToVector(msg.T_c0_N_m);
+  model->dFc_dF = ArrayToMatrix(msg.dFc_dF);
+  model->dFc_dT = ArrayToMatrix(msg.dFc_dT);
+  model->dTc_dF = ArrayToMatrix(msg.dTc_dF);
+  model->dTc_dT = ArrayToMatrix(msg.dTc_dT);
+  if (rows == nullptr) return true;
+
+  // resize keeps the storage when the size is unchanged (no allocation; see adapters.h).
+  const int n = msg.num_rows;
+  rows->J_v.resize(n, 3);
+  rows->J_w.resize(n, 3);
+  rows->W_body.resize(n, n);
+  rows->body_rhs.resize(n);
+  for (int i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      rows->J_v(i, c) = msg.J_v[i][c];
+      rows->J_w(i, c) = msg.J_w[i][c];
+    }
+    for (int c = 0; c < n; ++c) rows->W_body(i, c) = msg.W_body[i][c];
+    rows->body_rhs[i] = msg.body_rhs[i];
+  }
+  return true;
+}
+
+}  // namespace hapsim::messages
