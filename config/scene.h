@@ -59,6 +59,8 @@
 //     stabilization_beta: 0.2          # in [0, 1]: fraction of a penetration undone per frame
 //     restitution: 0.0                 # in [0, 1]
 //     margin_m: 0.001                  # ≥ 0: contacts are detected up to this gap
+//     compliance: warped               # warped | exact: the body's contact compliance
+//                                      # (contact/visual_frame.h ComplianceMethod)
 //   haptic:                            # optional (with a tool), defaults as shown
 //     rate_hz: 1000                    # > 0; rate_hz · dt_s must be an integer ≥ 1 (to 1e-9):
 //                                      # the number of haptic steps per visual frame
@@ -78,6 +80,7 @@
 #include <vector>
 
 #include "contact/contact_solver.h"
+#include "contact/visual_frame.h"
 #include "core/rigid_tool.h"
 #include "core/virtual_coupling.h"
 #include "device/haptic_mode.h"
@@ -157,6 +160,7 @@ struct ContactScene {
   double stabilization_beta = 0.2;    // in [0, 1]
   double restitution = 0.0;           // e in [0, 1]
   double margin_m = 1e-3;             // detection margin, m
+  contact::ComplianceMethod compliance = contact::ComplianceMethod::kWarped;
 };
 
 // What the haptic side renders: see device/haptic_mode.h.

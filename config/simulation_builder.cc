@@ -13,6 +13,7 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   options.response.solve.friction_coefficient = scene.contact.friction_coefficient;
   options.response.stabilization_beta = scene.contact.stabilization_beta;
   options.response.restitution = scene.contact.restitution;
+  options.compliance = scene.contact.compliance;
   return options;
 }
 

@@ -24,6 +24,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
+constexpr contact::ComplianceMethod kComplianceMethods[] = {contact::ComplianceMethod::kWarped,
+                                                           contact::ComplianceMethod::kExact};
 constexpr ContactLaw kContactLaws[] = {ContactLaw::kEquality, ContactLaw::kUnilateral,
                                        ContactLaw::kFriction};
 constexpr HapticMode kHapticModes[] = {HapticMode::kLinear, HapticMode::kLcp, HapticMode::kCoupling,
@@ -138,7 +140,8 @@ CouplingParams ReadCoupling(const YamlMap& map) {
 }
 
 ContactScene ReadContact(const YamlMap& map) {
-  map.CheckKeys({"law", "friction_coefficient", "stabilization_beta", "restitution", "margin_m"});
+  map.CheckKeys({"law", "friction_coefficient", "stabilization_beta", "restitution", "margin_m",
+                 "compliance"});
   ContactScene contact;
   contact.law = map.GetEnumOr("law", Choices(kContactLaws), contact.law);
   if (contact.law == ContactLaw::kFriction) {
@@ -153,6 +156,8 @@ ContactScene ReadContact(const YamlMap& map) {
   contact.restitution =
       map.GetDoubleOr("restitution", contact.restitution, ClosedInterval(0.0, 1.0));
   contact.margin_m = map.GetDoubleOr("margin_m", contact.margin_m, AtLeast(0.0));
+  contact.compliance =
+      map.GetEnumOr("compliance", Choices(kComplianceMethods), contact.compliance);
   return contact;
 }
 

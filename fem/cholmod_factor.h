@@ -26,8 +26,12 @@ class CholmodFactor {
   // x = A⁻¹ b with the last successful factor. Precondition: Factorize returned true.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
 
+  // X = A⁻¹ B for a dense B of several columns, in one supernodal solve (BLAS-3 across the
+  // columns). Precondition: Factorize returned true.
+  Eigen::MatrixXd SolveColumns(const Eigen::MatrixXd& B);
+
   // J A⁻¹ Jᵀ for sparse J (rows x n): with A = Pᵀ L Lᵀ P it is Zᵀ Z, Z = L⁻¹ P Jᵀ, computed by
-  // sparse forward solves only (each column of Jᵀ has a few entries, so Z stays sparse).
+  // forward solves only (Z is nonzero only on the elimination-tree paths of J's columns).
   // Precondition: Factorize returned true. Returns a dense symmetric (rows x rows) matrix.
   Eigen::MatrixXd CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J);
 

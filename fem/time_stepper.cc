@@ -68,13 +68,24 @@ void TimeStepper::Advance(const Eigen::VectorXd& dv_m_s, State* state) const {
   state->x_m += dt_s_ * state->v_m_s;
 }
 
-void TimeStepper::ApplyFixedDofsToSystem() {
-  double* values = system_.valuePtr();
+void TimeStepper::TurnStiffnessIntoSystemMatrix(Eigen::SparseMatrix<double>* K) const {
+  const double h = dt_s_;
+  const double alpha = model_.material.rayleigh_alpha_1_s;
+  const double beta = model_.material.rayleigh_beta_s;
+  double* values = K->valuePtr();
+  Eigen::Map<Eigen::VectorXd>(values, K->nonZeros()) *= h * beta + h * h;
+  for (int i = 0; i < model_.num_dofs(); ++i)
+    values[assembler_.diagonal_value_index()[i]] += (1.0 + h * alpha) * model_.dof_mass_kg[i];
   for (int k : fixed_offdiagonal_value_index_) values[k] = 0.0;
-  for (int i : fixed_dofs_) {
-    values[assembler_.diagonal_value_index()[i]] = 1.0;
-    rhs_[i] = 0.0;
-  }
+  for (int i : fixed_dofs_) values[assembler_.diagonal_value_index()[i]] = 1.0;
+}
+
+Eigen::SparseMatrix<double> TimeStepper::MakeRestSystemMatrix() const {
+  Eigen::SparseMatrix<double> A = assembler_.MakeMatrix();
+  assembler_.Assemble(model_, std::vector<Eigen::Matrix3d>(model_.num_tets(),
+                                                           Eigen::Matrix3d::Identity()), &A);
+  TurnStiffnessIntoSystemMatrix(&A);
+  return A;
 }
 
 StepStats TimeStepper::CalcImplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s) {
@@ -94,12 +105,8 @@ StepStats TimeStepper::CalcImplicitVelocityChange(const State& state, Eigen::Vec
   rhs_ = h *
          (external_force_N_ + elastic_force_N_ -
           alpha * model_.dof_mass_kg.cwiseProduct(state.v_m_s) - (beta + h) * stiffness_times_v_N_);
-  // A = (1 + Δt α) M + (Δt β + Δt²) K, in place over K.
-  Eigen::Map<Eigen::VectorXd>(system_.valuePtr(), system_.nonZeros()) *= h * beta + h * h;
-  for (int i = 0; i < model_.num_dofs(); ++i)
-    system_.valuePtr()[assembler_.diagonal_value_index()[i]] +=
-        (1.0 + h * alpha) * model_.dof_mass_kg[i];
-  ApplyFixedDofsToSystem();
+  TurnStiffnessIntoSystemMatrix(&system_);
+  for (int i : fixed_dofs_) rhs_[i] = 0.0;
   stats.assembly_s = stage.Lap();
 
   if (dv_m_s->size() != rhs_.size()) dv_m_s->setZero(rhs_.size());

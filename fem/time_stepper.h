@@ -61,11 +61,15 @@ class TimeStepper {
   const LinearSolver* solver() const { return solver_.get(); }
   // A = M + Δt D + Δt² K of the last CalcFreeVelocityChange (identity rows/columns at fixed dofs).
   const Eigen::SparseMatrix<double>& system_matrix() const { return system_; }
+  // The same A at rest (every element rotation the identity): the matrix whose inverse the
+  // warped contact compliance precomputes (fem/warped_compliance.h).
+  Eigen::SparseMatrix<double> MakeRestSystemMatrix() const;
 
  private:
   StepStats CalcImplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s);
   StepStats CalcExplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s);
-  void ApplyFixedDofsToSystem();
+  // K → A = (1 + Δt α) M + (Δt β + Δt²) K in place, with identity rows and columns at fixed dofs.
+  void TurnStiffnessIntoSystemMatrix(Eigen::SparseMatrix<double>* K) const;
 
   const Model& model_;
   FemOptions options_;

@@ -254,6 +254,8 @@ const BadCase kBadCases[] = {
      "must be >= 0"},
     {"UnknownContactKey", "margin_m:", "margin:", 15, "contact.margin",
      "allowed keys here: law, friction_coefficient"},
+    {"UnknownCompliance", "margin_m: 0.002", "margin_m: 0.002\n  compliance: cached", 16,
+     "contact.compliance", "one of: warped, exact"},
     // haptic
     {"ZeroRate", "rate_hz: 500", "rate_hz: 0", 17, "haptic.rate_hz", "must be > 0"},
     {"FractionalStepsPerFrame", "rate_hz: 500", "rate_hz: 1000.5", 17, "haptic.rate_hz",

@@ -1,0 +1,82 @@
+#include "fem/warped_compliance.h"
+
+#include <stdexcept>
+
+#include "fem/polar_decomposition.h"
+
+namespace hapsim::fem {
+
+WarpedCompliance::WarpedCompliance(const Model& model, const TimeStepper& stepper)
+    : model_(model),
+      node_tets_(model.num_nodes()),
+      slot_of_node_(model.num_nodes(), -1) {
+  if (!factor_.Factorize(stepper.MakeRestSystemMatrix()))
+    throw std::runtime_error("WarpedCompliance: the rest system matrix is not positive definite");
+  for (int e = 0; e < model.num_tets(); ++e)
+    for (int k = 0; k < 4; ++k) node_tets_[model.mesh.tets(k, e)].push_back(e);
+}
+
+void WarpedCompliance::SolveForNewNodes(const std::vector<int>& nodes) {
+  if (nodes.empty()) return;
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(model_.num_dofs(), 3 * nodes.size());
+  for (size_t k = 0; k < nodes.size(); ++k)
+    for (int d = 0; d < 3; ++d) E(3 * nodes[k] + d, 3 * k + d) = 1.0;
+  const Eigen::MatrixXd X = factor_.SolveColumns(E);
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    slot_of_node_[nodes[k]] = static_cast<int>(node_of_slot_.size());
+    node_of_slot_.push_back(nodes[k]);
+    columns_.emplace_back(X.middleCols<3>(3 * k));
+  }
+}
+
+Eigen::Matrix3d WarpedCompliance::CalcNodeRotation(
+    int node, const std::vector<Eigen::Matrix3d>& element_rotations) const {
+  for (int d = 0; d < 3; ++d)
+    if (model_.dof_is_fixed[3 * node + d]) return Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (int e : node_tets_[node]) sum += element_rotations[e];
+  return CalcRotationOfDeformation(sum);
+}
+
+Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
+                                       const std::vector<Eigen::Matrix3d>& element_rotations) {
+  // Per row, the nodes it touches with j, its 3 entries there. J_uᵀ is column-major with sorted
+  // rows, so its column r lists row r's entries node by node.
+  struct Entry {
+    int node;
+    Eigen::Vector3d g;  // j, then R_nᵀ j: the entries in the node's rotated frame
+  };
+  const Eigen::Index rows = J_u.rows();
+  const Eigen::SparseMatrix<double> Jt = J_u.transpose();
+  std::vector<std::vector<Entry>> entries(rows);
+  std::vector<int> new_nodes;
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Jt, r); it; ++it) {
+      const int node = static_cast<int>(it.row() / 3);
+      if (entries[r].empty() || entries[r].back().node != node)
+        entries[r].push_back({node, Eigen::Vector3d::Zero()});
+      entries[r].back().g[it.row() % 3] = it.value();
+      if (slot_of_node_[node] == -1) {
+        slot_of_node_[node] = -2;  // queued for this frame's solve
+        new_nodes.push_back(node);
+      }
+    }
+  SolveForNewNodes(new_nodes);
+  for (auto& row : entries)
+    for (Entry& entry : row)
+      entry.g = CalcNodeRotation(entry.node, element_rotations).transpose() * entry.g;
+  Eigen::MatrixXd W(rows, rows);
+  for (Eigen::Index c = 0; c < rows; ++c)
+    for (Eigen::Index r = c; r < rows; ++r) {
+      double sum = 0.0;
+      for (const Entry& b : entries[c]) {
+        const Eigen::Matrix<double, Eigen::Dynamic, 3>& A0_inv_E_b = columns_[slot_of_node_[b.node]];
+        for (const Entry& a : entries[r])
+          sum += a.g.dot(A0_inv_E_b.middleRows<3>(3 * a.node) * b.g);  // C₀_ab = E_aᵀ A₀⁻¹ E_b
+      }
+      W(r, c) = W(c, r) = sum;
+    }
+  return W;
+}
+
+}  // namespace hapsim::fem
