@@ -526,7 +526,8 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   ws.num_factorizations = 0;
   const int n = rows.num_rows();
   if (n > ws.max_rows || rows.J_w.rows() != n || rows.W_body.rows() != n ||
-      rows.W_body.cols() != n || rows.body_rhs.size() != n || !(tool.dt_s > 0.0))
+      rows.W_body.cols() != n || rows.body_rhs.size() != n || !(tool.dt_s > 0.0) ||
+      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n))
     return false;
   const double dt_s = tool.dt_s;
   const Eigen::Matrix3d A_v_inv = tool.A_v.inverse();
@@ -548,9 +549,11 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   ws.r.head(n) = ws.body_rhs.head(n);
   ws.r.head(n).noalias() -= ws.U.topRows(n) * ws.s_free;
   if (new_rows) {
-    // New contacts (their indices say nothing about the old active set): guess the rows that
-    // ask for a push, r_i = b_i − c_free,i > 0.
-    for (int i = 0; i < n; ++i) ws.active[i] = ws.r[i] > 0.0;
+    // New contacts (their indices say nothing about the old active set): guess the frame's
+    // active set, or else the rows that ask for a push, r_i = b_i − c_free,i > 0.
+    const bool frame_set = rows.lambda_frame_N.size() == n;
+    for (int i = 0; i < n; ++i)
+      ws.active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : ws.r[i] > 0.0;
     ws.rebase_pending = true;
   }
   if (ws.rebase_pending) ws.Rebase();  // a dependent guess leaves an empty base: cold start

@@ -79,6 +79,7 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
     const ContactJacobian J_all = CalcContactJacobian(moved, tool.x_W_m, rows_per_contact_,
                                                       body_.num_dofs(), body_.dof_is_fixed);
     contact_rows_ = MakeContactRows(J_all, W_body_, b_all - J_all.J_u * body.v_m_s + held_m_s);
+    contact_rows_.lambda_frame_N = lambda_;
   }
 }
 

@@ -123,7 +123,10 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
          CheckRowArray(msg.J_w, n, 3, "contact_model_t.J_w", error) &&
          CheckRowArray(msg.W_body, n, n, "contact_model_t.W_body", error) &&
          CheckSize(msg.body_rhs.size(), n, "contact_model_t.body_rhs", "entries", error) &&
-         CheckFinite(msg.body_rhs.data(), n, "contact_model_t.body_rhs", error);
+         CheckFinite(msg.body_rhs.data(), n, "contact_model_t.body_rhs", error) &&
+         CheckSize(msg.lambda_frame_N.size(), n, "contact_model_t.lambda_frame_N", "entries",
+                   error) &&
+         CheckFinite(msg.lambda_frame_N.data(), n, "contact_model_t.lambda_frame_N", error);
 }
 
 }  // namespace
@@ -219,7 +222,8 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   if (n == 0) return msg;
   const contact::ContactRows& rows = *rows_or_null;
   if (rows.J_w.rows() != n || rows.W_body.rows() != n || rows.W_body.cols() != n ||
-      rows.body_rhs.size() != n) {
+      rows.body_rhs.size() != n ||
+      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n)) {
     throw std::invalid_argument("messages::ToMessage: ContactRows sizes disagree with J_v's " +
                                 std::to_string(n) + " rows");
   }
@@ -227,6 +231,7 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   msg.J_w.assign(n, std::vector<double>(3));
   msg.W_body.assign(n, std::vector<double>(n));
   msg.body_rhs.resize(n);
+  msg.lambda_frame_N.assign(n, 0.0);
   for (int i = 0; i < n; ++i) {
     for (int c = 0; c < 3; ++c) {
       msg.J_v[i][c] = rows.J_v(i, c);
@@ -234,6 +239,7 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
     }
     for (int c = 0; c < n; ++c) msg.W_body[i][c] = rows.W_body(i, c);
     msg.body_rhs[i] = rows.body_rhs[i];
+    if (rows.lambda_frame_N.size() == n) msg.lambda_frame_N[i] = rows.lambda_frame_N[i];
   }
   return msg;
 }
@@ -268,6 +274,7 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
   rows->J_w.resize(n, 3);
   rows->W_body.resize(n, n);
   rows->body_rhs.resize(n);
+  rows->lambda_frame_N.resize(n);
   for (int i = 0; i < n; ++i) {
     for (int c = 0; c < 3; ++c) {
       rows->J_v(i, c) = msg.J_v[i][c];
@@ -275,6 +282,7 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
     }
     for (int c = 0; c < n; ++c) rows->W_body(i, c) = msg.W_body[i][c];
     rows->body_rhs[i] = msg.body_rhs[i];
+    rows->lambda_frame_N[i] = msg.lambda_frame_N[i];
   }
   return true;
 }

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -209,6 +210,8 @@ struct ContactModelFixture {
         Eigen::MatrixXd::NullaryExpr(num_rows, num_rows, [&] { return random(); });
     rows.W_body = A * A.transpose();
     rows.body_rhs = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
+    rows.lambda_frame_N =
+        Eigen::VectorXd::NullaryExpr(num_rows, [&] { return std::max(0.0, random()); });
     header = {1717000000000001, 99, 1.0 / 60.0, 1e-3, 1.65, random.Vector(), random.Rotation()};
   }
 };
@@ -229,6 +232,7 @@ void ExpectSameRowsAndHeader(const ContactModelFixture& in, const contact::Conta
   ExpectBitIdentical(rows.J_w, in.rows.J_w, "J_w");
   ExpectBitIdentical(rows.W_body, in.rows.W_body, "W_body");
   ExpectBitIdentical(rows.body_rhs, in.rows.body_rhs, "body_rhs");
+  ExpectBitIdentical(rows.lambda_frame_N, in.rows.lambda_frame_N, "lambda_frame_N");
   EXPECT_EQ(header.utime, in.header.utime);
   EXPECT_EQ(header.sequence, in.header.sequence);
   EXPECT_EQ(header.dt_visual_s, in.header.dt_visual_s);
@@ -286,6 +290,7 @@ TEST(ContactModelMessage, InconsistentOrNonFiniteMessagesAreRejected) {
       {"J_w[1]", [](auto* m) { m->J_w[1][2] = kNaN; }},
       {"W_body[0]", [](auto* m) { m->W_body[0][2] = kNaN; }},
       {"body_rhs", [](auto* m) { m->body_rhs[2] = kNaN; }},
+      {"lambda_frame_N", [](auto* m) { m->lambda_frame_N[1] = kNaN; }},
       {"x_W_m", [](auto* m) { m->x_W_m[0] = kNaN; }},
       {"q_WT", [](auto* m) { m->q_WT[0] *= 0.5; }},
       {"dt_haptic_s", [](auto* m) { m->dt_haptic_s = 0.0; }},

@@ -1,0 +1,100 @@
+// Google Benchmark: one whole haptic step (device read → coupling → free tool → contact → post-
+// contact state → output) per mode, on the contact models and rows of real visual frames of
+// scenes/block_press.yaml at peak press. Not a test: run `build/tests/haptic_step_benchmark` from
+// the repository root (it reads scenes/).
+//
+//  BM_HapticStep/mode:0  linear    the paper's model (four 3×3 products)
+//  BM_HapticStep/mode:1  lcp       the 1 kHz unilateral solve on the frame's rows, warm (same
+//                                  rows as the step before: 29 of 30 steps of a frame)
+//  BM_HapticStep/mode:2  lcp_new   the same, with the rows of another frame at every call (the
+//                                  first step of each frame: copy, check, factorise)
+//  BM_HapticStep/mode:3  coupling  standard multirate: the coupling to the visual tool only
+//
+// Counters: rows (contacts in the rows), model_contacts (active contacts in the linear model).
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+
+#include "config/body_builder.h"
+#include "config/scene.h"
+#include "config/simulation_builder.h"
+#include "contact/visual_frame.h"
+#include "device/haptic_step.h"
+#include "device/scripted_trajectory.h"
+
+namespace hapsim {
+namespace {
+
+constexpr double kPeakTime_s = 1.2;  // pressed 4 mm and sliding (scenes/block_press.yaml)
+
+struct Frames {
+  config::Scene scene;
+  ToolState tool_at_peak;
+  DeviceState device_at_peak;
+  contact::LinearContactModel model[2];
+  contact::ContactRows rows[2];  // two consecutive frames
+};
+
+// Runs the visual frames of the script up to the peak and keeps the last two frames' outputs.
+const Frames& GetFrames() {
+  static std::unique_ptr<Frames> frames;
+  if (frames) return *frames;
+  frames = std::make_unique<Frames>();
+  Frames& f = *frames;
+  f.scene = config::LoadScene("scenes/block_press.yaml");
+  const config::Body body = config::MakeBody(*f.scene.body, f.scene.gravity_m_s2);
+  contact::VisualFrameOptions options = config::MakeVisualFrameOptions(f.scene);
+  options.dt_s = f.scene.dt_s;
+  options.haptic_dt_s = 1.0 / f.scene.haptic.rate_hz;
+  options.export_contact_rows = true;
+  contact::VisualFrame frame(body.model, f.scene.body->options, body.external_force_N,
+                             f.scene.tool->model, options);
+  fem::State body_state = fem::MakeRestState(body.model);
+  ToolState tool = f.scene.tool->initial_state;
+  const device::ScriptedTrajectory script(f.scene.trajectory);
+  const int peak_frame = static_cast<int>(std::lround(kPeakTime_s / f.scene.dt_s));
+  for (int k = 0; k <= peak_frame; ++k) {
+    f.device_at_peak = script.Sample(k * f.scene.dt_s);
+    frame.Step(f.device_at_peak, &body_state, &tool);
+    f.model[k % 2] = frame.linear_model();
+    f.rows[k % 2] = frame.contact_rows();
+  }
+  f.tool_at_peak = tool;
+  return f;
+}
+
+void BM_HapticStep(benchmark::State& bench) {
+  const Frames& f = GetFrames();
+  const int mode = static_cast<int>(bench.range(0));
+  const config::Scene& scene = f.scene;
+  device::HapticStep step(scene.tool->model, scene.coupling, scene.gravity_m_s2,
+                          1.0 / scene.haptic.rate_hz, f.tool_at_peak, /*lcp_max_rows=*/512);
+  step.SetContactModel(f.model[0]);
+  if (mode == 1 || mode == 2) step.SetContactRows(&f.rows[0]);
+  long calls = 0, fallbacks = 0;
+  for (auto _ : bench) {
+    if (mode == 2) step.SetContactRows(&f.rows[++calls % 2]);
+    if (mode == 3) {
+      const CouplingWrench wrench =
+          CalcCouplingWrench(scene.coupling, f.device_at_peak, f.tool_at_peak,
+                             CalcAngularVelocity(scene.tool->model, f.tool_at_peak));
+      benchmark::DoNotOptimize(wrench);
+      continue;
+    }
+    const device::HapticOutput out = step.Step(f.device_at_peak);
+    fallbacks += out.lcp_fell_back;
+    benchmark::DoNotOptimize(out);
+  }
+  bench.counters["rows"] = f.rows[0].num_rows();
+  bench.counters["model_contacts"] = f.model[0].num_contacts;
+  bench.counters["lcp_fallbacks"] = static_cast<double>(fallbacks);
+}
+
+BENCHMARK(BM_HapticStep)->DenseRange(0, 3)->ArgName("mode")->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace hapsim
+
+BENCHMARK_MAIN();
