@@ -1,6 +1,6 @@
-// `hapsim sim SCENE --mode M [--visual-hz H] [--out DIR] [--summary FILE.json]`: the in-process
-// multirate simulator (device/multirate_simulator.h) on a scene with a body, a tool and a scripted
-// device. Writes <out>/haptic.csv (one row per haptic step: device force and torque, tool pose,
+// `hapsim sim SCENE --mode M [--compliance C] [--visual-hz H] [--out DIR] [--summary FILE.json]`:
+// the in-process multirate simulator (device/multirate_simulator.h) on a scene with a body, a tool
+// and a scripted device. Writes <out>/haptic.csv (one row per haptic step: device force and torque, tool pose,
 // contacts in the model, model age), <out>/frames.csv (one row per visual frame: stage timings,
 // contacts, solver figures, penetration) and a JSON summary; all after the run, atomically.
 
@@ -26,6 +26,7 @@ namespace {
 struct SimCommandOptions {
   std::string scene_path;
   std::string mode;          // empty: the scene's
+  std::string compliance;    // empty: the scene's contact.compliance
   double visual_hz = 0.0;    // 0: the scene's (1 / time.dt_s)
   std::string out_dir;       // default out/<scene name>_<mode>
   std::string summary_path;  // default <out>/summary.json
@@ -115,6 +116,7 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode, 
           {"num_haptic_steps", record.haptic.size()},
           {"num_frames", record.frames.size()},
           {"contact_law", contact::ToString(scene.contact.law)},
+          {"compliance", mode == "reference" ? "exact" : contact::ToString(scene.contact.compliance)},
           {"frame_stage_median_ms", medians},
           {"max_contacts", max_contacts},
           {"peak_force_N", peak_N},
@@ -124,7 +126,14 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode, 
 }
 
 void RunSim(const SimCommandOptions& options) {
-  const config::Scene scene = config::LoadScene(options.scene_path);
+  config::Scene scene = config::LoadScene(options.scene_path);
+  if (!options.compliance.empty()) {
+    const auto parsed = config::ParseComplianceMethod(options.compliance);
+    if (!parsed)
+      throw InputError("", 0, "--compliance",
+                       "unknown method '" + options.compliance + "' (warped, exact)");
+    scene.contact.compliance = *parsed;
+  }
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim sim` needs a tool");
   if (!scene.body)
     throw InputError(
@@ -198,8 +207,13 @@ void AddSimCommand(CLI::App* app) {
       ->required();
   sim->add_option(
       "--mode", options->mode,
-      "linear (the paper's model), coupling (standard multirate), reference (all at the\n"
-      "haptic rate); default: the scene's haptic.mode");
+      "linear (the paper's model), lcp (a unilateral solve on the frame's contact rows each\n"
+      "haptic step), coupling (standard multirate), reference (all at the haptic rate, exact\n"
+      "compliance); default: the scene's haptic.mode");
+  sim->add_option("--compliance", options->compliance,
+                  "Body contact compliance: warped (precomputed at rest, warped by node rotations)\n"
+                  "or exact (forward solves with the step's factor); default: the scene's\n"
+                  "contact.compliance");
   sim->add_option(
          "--visual-hz", options->visual_hz,
          "Visual frame rate; the haptic rate must be a whole multiple (default: 1/time.dt_s)")

@@ -176,6 +176,7 @@ struct HapticScene {
 // The value contact::ToString / device::ToString names `name`, or nullopt (command-line overrides).
 std::optional<ContactLaw> ParseContactLaw(const std::string& name);
 std::optional<HapticMode> ParseHapticMode(const std::string& name);
+std::optional<contact::ComplianceMethod> ParseComplianceMethod(const std::string& name);
 
 struct Scene {
   std::string file;  // the path it was loaded from

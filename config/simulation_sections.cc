@@ -246,6 +246,10 @@ std::optional<ContactLaw> ParseContactLaw(const std::string& name) {
   return Parse(kContactLaws, name);
 }
 
+std::optional<contact::ComplianceMethod> ParseComplianceMethod(const std::string& name) {
+  return Parse(kComplianceMethods, name);
+}
+
 std::optional<HapticMode> ParseHapticMode(const std::string& name) {
   return Parse(kHapticModes, name);
 }

@@ -11,6 +11,8 @@ contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual,
   visual.dt_s = ratio * o.haptic_dt_s;
   visual.haptic_dt_s = o.haptic_dt_s;
   visual.export_contact_rows = o.mode == HapticMode::kLcp;
+  // The ground truth takes no shortcut: the exact compliance, whatever the scene chose.
+  if (o.mode == HapticMode::kReference) visual.compliance = contact::ComplianceMethod::kExact;
   return visual;
 }
 

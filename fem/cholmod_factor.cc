@@ -92,30 +92,27 @@ Eigen::MatrixXd CholmodFactor::SolveColumns(const Eigen::MatrixXd& B) {
 
 Eigen::MatrixXd CholmodFactor::CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J) {
   if (!factored_) throw std::logic_error("CholmodFactor: no factor");
-  const Eigen::Index n = J.cols(), rows = J.rows();
-  if (J.nonZeros() == 0) return Eigen::MatrixXd::Zero(rows, rows);
-  // Z = L⁻¹ P Jᵀ by one dense multi-column solve: CHOLMOD's supernodal solve then runs BLAS-3 on
-  // all the columns at once (cholmod_spsolve works through them a few at a time; this is 1.2x
-  // faster at 3k dofs and 1.9x at 20k, BM_ContactCompliance).
-  const Eigen::MatrixXd Jt = J.transpose();
-  cholmod_dense Jt_view = ViewAsCholmod(Jt);
-  cholmod_dense* PJt = cholmod_solve(CHOLMOD_P, factor_, &Jt_view, &common_);
-  cholmod_dense* Z = PJt ? cholmod_solve(CHOLMOD_L, factor_, PJt, &common_) : nullptr;
-  cholmod_free_dense(&PJt, &common_);
-  if (!Z) throw std::runtime_error("CHOLMOD solve failed");
-  // Only the rows of Z on the elimination-tree paths of the contact dofs are nonzero (about a
-  // third on the reference block): the Gram product runs on those alone.
-  const Eigen::Map<const Eigen::MatrixXd> Z_map(static_cast<const double*>(Z->x), n, rows);
-  std::vector<Eigen::Index> nonzero_rows;
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (Z_map.row(i).squaredNorm() > 0.0) nonzero_rows.push_back(i);
-  Eigen::MatrixXd Z_nonzero(static_cast<Eigen::Index>(nonzero_rows.size()), rows);
-  for (size_t k = 0; k < nonzero_rows.size(); ++k) Z_nonzero.row(k) = Z_map.row(nonzero_rows[k]);
-  cholmod_free_dense(&Z, &common_);
-  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(rows, rows);
-  W.selfadjointView<Eigen::Lower>().rankUpdate(Z_nonzero.transpose());
-  W.triangularView<Eigen::StrictlyUpper>() = W.transpose();
-  return W;
+  // Sparse forward solves: a dense multi-column solve (BLAS-3 over the columns) was 1.3x faster
+  // at 125 rows in BM_ContactCompliance but 3x slower in the 1 kHz reference on block_press
+  // (~200 rows; cholmod_super_lsolve's gather over many small supernodes dominated).
+  // No body dof involved (every contact on fixed nodes): nothing to solve, and CHOLMOD's sparse
+  // solve refuses an all-zero right-hand side.
+  if (J.nonZeros() == 0) return Eigen::MatrixXd::Zero(J.rows(), J.rows());
+  Eigen::SparseMatrix<double> Jt = J.transpose();
+  Jt.makeCompressed();
+  cholmod_sparse Jt_view = ViewAsCholmod(Jt);
+  Jt_view.stype = 0;  // unsymmetric (rectangular)
+  cholmod_sparse* PJt = cholmod_spsolve(CHOLMOD_P, factor_, &Jt_view, &common_);
+  cholmod_sparse* Z = PJt ? cholmod_spsolve(CHOLMOD_L, factor_, PJt, &common_) : nullptr;
+  cholmod_free_sparse(&PJt, &common_);
+  if (!Z || !cholmod_sort(Z, &common_)) throw std::runtime_error("CHOLMOD sparse solve failed");
+  const Eigen::Map<const Eigen::SparseMatrix<double>> Z_map(
+      static_cast<Eigen::Index>(Z->nrow), static_cast<Eigen::Index>(Z->ncol),
+      static_cast<Eigen::Index>(cholmod_nnz(Z, &common_)), static_cast<const int*>(Z->p),
+      static_cast<const int*>(Z->i), static_cast<const double*>(Z->x));
+  Eigen::MatrixXd result = Eigen::MatrixXd(Z_map.transpose() * Z_map);
+  cholmod_free_sparse(&Z, &common_);
+  return result;
 }
 
 }  // namespace hapsim::fem

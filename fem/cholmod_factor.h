@@ -31,7 +31,7 @@ class CholmodFactor {
   Eigen::MatrixXd SolveColumns(const Eigen::MatrixXd& B);
 
   // J A⁻¹ Jᵀ for sparse J (rows x n): with A = Pᵀ L Lᵀ P it is Zᵀ Z, Z = L⁻¹ P Jᵀ, computed by
-  // forward solves only (Z is nonzero only on the elimination-tree paths of J's columns).
+  // sparse forward solves only (each column of Jᵀ has a few entries, so Z stays sparse).
   // Precondition: Factorize returned true. Returns a dense symmetric (rows x rows) matrix.
   Eigen::MatrixXd CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J);
 
