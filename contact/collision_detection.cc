@@ -73,11 +73,13 @@ CollisionDetector::CollisionDetector(const fem::Model& body, const ToolShape& to
       tool_distance_(tool),
       tool_features_(MakeToolFeatures(tool)),
       bvh_(body, bvh_kind),
-      node_visited_(body.num_nodes(), 0) {
+      node_visited_(body.num_nodes(), 0),
+      node_in_contact_(body.num_nodes(), 0) {
   CheckOptions(options_);
   if (tool.kind == ToolShape::Kind::kMesh)
     for (Eigen::Index i = 0; i < tool.mesh.vertices_m.cols(); ++i)
       mesh_box_T_m_.extend(Vector3d(tool.mesh.vertices_m.col(i)));
+  MakeEdgeTopology();
 }
 
 void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
@@ -97,12 +99,17 @@ void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
   FindCandidateTriangles(X_WT_start, statistics_.threshold_m + kBroadPhasePad_m);
   statistics_.num_candidate_triangles = static_cast<int>(candidate_triangles_.size());
 
+  AdvanceFrameStamp();
   AddNodeContacts(x_start_m, X_WT_start, contacts);
   const int first_feature_contact = static_cast<int>(contacts->size());
   AddFeatureContacts(x_start_m, X_WT_start, contacts);
+  const int first_edge_contact = static_cast<int>(contacts->size());
+  if (options_.edge_contacts) AddEdgeContacts(x_start_m, X_WT_start, contacts);
   statistics_.num_node_contacts = first_feature_contact;
+  statistics_.num_feature_contacts = first_edge_contact - first_feature_contact;
   statistics_.num_contacts_before_merge = static_cast<int>(contacts->size());
-  statistics_.num_feature_contacts = statistics_.num_contacts_before_merge - first_feature_contact;
+  statistics_.num_edge_contacts = statistics_.num_contacts_before_merge - first_edge_contact;
+  // Edge contacts come after the feature contacts and are merged the same way.
   MergeDuplicates(first_feature_contact, contacts);
   statistics_.num_contacts_after_merge = static_cast<int>(contacts->size());
 }
@@ -150,12 +157,19 @@ void CollisionDetector::FindCandidateTriangles(const Eigen::Isometry3d& X_WT, do
   }
 }
 
-void CollisionDetector::AddNodeContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
-                                        std::vector<Contact>* contacts) {
+// One stamp per Detect() marks the nodes and body edges already visited in this frame, so that
+// nothing is cleared per frame; the arrays are cleared only when the counter wraps.
+void CollisionDetector::AdvanceFrameStamp() {
   if (++frame_stamp_ == std::numeric_limits<int>::max()) {
     std::fill(node_visited_.begin(), node_visited_.end(), 0);
+    std::fill(edge_visited_.begin(), edge_visited_.end(), 0);
+    std::fill(node_in_contact_.begin(), node_in_contact_.end(), 0);
     frame_stamp_ = 1;
   }
+}
+
+void CollisionDetector::AddNodeContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
+                                        std::vector<Contact>* contacts) {
   const Eigen::Isometry3d X_TW = X_WT.inverse();
   for (int f : candidate_triangles_)
     for (int k = 0; k < 3; ++k) {
@@ -173,6 +187,7 @@ void CollisionDetector::AddNodeContacts(const Eigen::VectorXd& x_m, const Eigen:
       contact.nodes = {node, -1, -1};
       contact.weights = {1.0, 0.0, 0.0};
       contacts->push_back(contact);
+      node_in_contact_[node] = frame_stamp_;  // for the edge stage's flush test
     }
 }
 

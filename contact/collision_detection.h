@@ -1,7 +1,8 @@
 #pragma once
 // Collision detection between the rigid tool and the deformable body's surface (DESIGN.md §4,
-// stage 4 of the visual frame): node-versus-tool and tool-feature-versus-face contacts, with a
-// swept (speculative) search region so that a fast tool does not tunnel through a thin body.
+// stage 4 of the visual frame): node-versus-tool, tool-feature-versus-face and
+// tool-edge-versus-body-edge contacts, with a swept (speculative) search region so that a fast
+// tool does not tunnel through a thin body.
 //
 // Pipeline of Detect():
 //   1. refit the surface BVH at the start positions;
@@ -14,12 +15,27 @@
 //      m opposite to the point's normal-cone axis): the nearest such face whose closest point q
 //      has v − q within 45° of ±m gives φ = (v − q)·m (negative behind the face) and a contact
 //      when φ ≤ τ, distributed to the face's nodes with the barycentric weights of q;
-//   5. merge: a feature contact whose body point lies within feature_merge_distance of another
-//      contact's body point with normals within 10° is a duplicate: only the deeper one stays.
-// Edge-versus-edge contacts are not generated: a tool edge (box edge, rim segment, mesh edge)
-// pressed across a body face between its end points, with no body node inside the tool, sinks
-// in until a node or a feature point meets the other side; the error is bounded by the body's
-// mesh spacing (likewise a smooth tool between nodes sinks by up to the sagitta over one face).
+//   5. narrow phase (c) tool edge versus body edge (edge_contacts.cc): every edge of the
+//      candidate faces, once, against every sharp tool edge (box edge, rim segment, convex mesh
+//      edge between non-coplanar faces). The closest points of the two segments (Ericson §5.1.9)
+//      must lie strictly inside both (end points are nodes or feature points: stages 3 and 4);
+//      n = ±(d_tool × d_body)/|d_tool × d_body| out of the tool must lie in the tool edge's
+//      normal cone (the wedge between its two faces' normals) and have n·m < 0 for one of the
+//      body edge's two faces. Then φ = (p_body − p_tool)·n, a contact when −max_feature_penetration
+//      ≤ φ ≤ τ, on the body edge's two nodes with weights (1 − t, t); except that a body edge
+//      lying flat (within 1 mrad) against one of the tool edge's faces, with a node contact at
+//      its node on that face's side, is already held by that contact;
+//   6. merge: a feature or edge contact whose body point lies within feature_merge_distance of
+//      another contact's body point with normals within 10° is a duplicate: only the deeper one
+//      stays.
+// What is left approximate: on a flat or nearly flat stretch of the body, an edge contact's
+// normal is the common normal of the two segments, which tilts from the face normal by as much
+// as the tool edge tilts from the face (a valid separating direction for the two segments, not
+// the face's); a cylinder's rim, sharp or rounded, is the polygon through stage 4's rim points;
+// a flat-lying body edge left to a node contact may sink by up to its length × 1e-3; edges
+// within 1e-6 rad of parallel make no edge contact (the end point contacts of stages 3 and 4
+// hold them); a smooth tool (sphere, capsule) between nodes still sinks by up to the sagitta
+// over one face.
 //
 // Speculative contacts: with `continuous`, the sweep bound is |Δx_tool| + θ·R_tool + max|Δx_node|
 // (θ the rotation angle between the two poses, R_tool the tool's bounding radius), an upper
@@ -47,6 +63,7 @@ struct DetectionOptions {
   // behind-the-plane alone does not mean inside the body (a corner above a thin slab is behind
   // its bottom face). Penetrations are corrected every frame, so real ones stay shallow. m.
   double max_feature_penetration_m = 5e-3;
+  bool edge_contacts = true;  // tool-edge-versus-body-edge contacts (pipeline step 5)
 };
 
 // What the last Detect() call did.
@@ -54,7 +71,8 @@ struct DetectionStatistics {
   int num_candidate_triangles = 0;    // faces returned by the broad phase
   int num_node_contacts = 0;          // node-versus-tool contacts, before merging
   int num_feature_contacts = 0;       // tool-feature-versus-face contacts, before merging
-  int num_contacts_before_merge = 0;  // node + feature contacts
+  int num_edge_contacts = 0;          // tool-edge-versus-body-edge contacts, before merging
+  int num_contacts_before_merge = 0;  // node + feature + edge contacts
   int num_contacts_after_merge = 0;   // contacts returned
   double sweep_bound_m = 0.0;         // 0 without `continuous`
   double threshold_m = 0.0;           // margin + sweep bound
@@ -94,6 +112,12 @@ class CollisionDetector {
   void AddFeatureContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
                           std::vector<Contact>* contacts);
   void MergeDuplicates(int first_feature_contact, std::vector<Contact>* contacts);
+  void AdvanceFrameStamp();
+  // Edge stage (edge_contacts.cc): the body's surface edges and the tool's sharp edges, built
+  // once by the constructor; the contacts, per frame.
+  void MakeEdgeTopology();
+  void AddEdgeContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
+                       std::vector<Contact>* contacts);
 
   DetectionOptions options_;
   int num_body_nodes_ = 0;
@@ -105,9 +129,23 @@ class CollisionDetector {
   DetectionStatistics statistics_;
   // Scratch, reused between calls.
   std::vector<int> candidate_triangles_;
-  std::vector<int> node_visited_;  // frame stamp per body node
-  std::vector<char> merged_away_;  // per contact of the current call
+  std::vector<int> node_visited_;     // frame stamp per body node
+  std::vector<int> node_in_contact_;  // frame stamp per body node that made a node contact
+  std::vector<char> merged_away_;     // per contact of the current call
   int frame_stamp_ = 0;
+  // Body surface edges: end nodes and the (up to two; −1 = none) surface triangles holding each.
+  Eigen::Matrix<int, 2, Eigen::Dynamic> body_edge_nodes_;      // (2 x E_body)
+  Eigen::Matrix<int, 2, Eigen::Dynamic> body_edge_triangles_;  // (2 x E_body)
+  Matrix3Xi triangle_edges_;       // (3 x F) body edge of side k = (k, k+1 mod 3) of each triangle
+  std::vector<int> edge_visited_;  // frame stamp per body edge
+  // Sharp tool edges, in T: end points (indices into tool_features_.vertices_T_m); per edge
+  // three unit columns: the bisector of its two faces' outward normals, then those normals; and
+  // the cosine of the half-angle of the wedge they span (the edge's normal cone).
+  Eigen::Matrix<int, 2, Eigen::Dynamic> tool_edges_;  // (2 x E_tool)
+  Matrix3Xd tool_edge_normals_T_;                     // (3 x 3 E_tool)
+  Eigen::VectorXd tool_edge_cone_cosines_;            // (E_tool)
+  Matrix3Xd tool_edge_normals_W_;                     // scratch (3 x 3 E_tool), world
+  Matrix3Xd tool_vertices_W_m_;                       // scratch (3 x V_tool), world, m
 };
 
 }  // namespace hapsim::contact

@@ -5,8 +5,8 @@
 // Sign conventions: n_W points out of the tool, towards the body. The gap is measured along n_W
 // from the tool surface to the body point, gap = (p_body − p_tool)·n, negative when they
 // interpenetrate. The body point is a combination of up to three nodes with barycentric weights
-// (one node with weight 1 for a node-versus-tool contact; a face's three nodes for a tool vertex
-// or edge against a face).
+// (one node with weight 1 for a node-versus-tool contact; a face's three nodes for a tool feature
+// point against a face; a body edge's two nodes for a tool edge against a body edge).
 
 #include <Eigen/Core>
 #include <array>

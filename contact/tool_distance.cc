@@ -155,6 +155,32 @@ TrianglePoint CalcClosestPointOnTriangle(const Vector3d& p, const Vector3d& a, c
   return make(1.0 - v - w, v, w, 6);
 }
 
+SegmentPoints CalcClosestPointsOfSegments(const Vector3d& p1, const Vector3d& q1,
+                                          const Vector3d& p2, const Vector3d& q2) {
+  const Vector3d d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  double s = 0.0, t = 0.0;
+  if (a > 0.0 && e > 0.0) {
+    const double b = d1.dot(d2), c = d1.dot(r), denominator = a * e - b * b;  // ≥ 0
+    // Closest point of line 1 to line 2, clamped; for parallel lines any s will do: s = 0.
+    if (denominator > 0.0) s = std::clamp((b * f - c * e) / denominator, 0.0, 1.0);
+    t = (b * s + f) / e;
+    // t outside [0, 1]: clamp it and recompute s for the clamped t (Ericson's order).
+    if (t < 0.0) {
+      t = 0.0;
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else if (t > 1.0) {
+      t = 1.0;
+      s = std::clamp((b - c) / a, 0.0, 1.0);
+    }
+  } else if (a > 0.0) {  // segment 2 is a point
+    s = std::clamp(-d1.dot(r) / a, 0.0, 1.0);
+  } else if (e > 0.0) {  // segment 1 is a point
+    t = std::clamp(f / e, 0.0, 1.0);
+  }
+  return SegmentPoints{p1 + s * d1, p2 + t * d2, s, t};
+}
+
 ToolDistance CalcSphereDistance(double radius_m, const Vector3d& p_T_m) {
   return CalcBallDistance(radius_m, Vector3d::Zero(), p_T_m);
 }

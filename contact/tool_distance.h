@@ -31,6 +31,18 @@ struct TrianglePoint {
 TrianglePoint CalcClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                          const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 
+// Closest points of segments p1 + s (q1 − p1) and p2 + t (q2 − p2), s, t ∈ [0, 1] (Ericson,
+// Real-Time Collision Detection, §5.1.9, ClosestPtSegmentSegment). Parallel segments: one of the
+// closest pairs (s = 0 unless clamped). A segment collapsed to a point is handled as that point.
+struct SegmentPoints {
+  Eigen::Vector3d point1 = Eigen::Vector3d::Zero();  // p1 + s (q1 − p1)
+  Eigen::Vector3d point2 = Eigen::Vector3d::Zero();  // p2 + t (q2 − p2)
+  double s = 0.0;
+  double t = 0.0;
+};
+SegmentPoints CalcClosestPointsOfSegments(const Eigen::Vector3d& p1, const Eigen::Vector3d& q1,
+                                          const Eigen::Vector3d& p2, const Eigen::Vector3d& q2);
+
 // Primitives, centred on the origin of T. Where the normal is not unique (the centre of a sphere,
 // the axis of a capsule or cylinder), a fixed valid choice is returned.
 ToolDistance CalcSphereDistance(double radius_m, const Eigen::Vector3d& p_T_m);

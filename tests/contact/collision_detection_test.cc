@@ -8,12 +8,14 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <random>
 #include <set>
 #include <stdexcept>
 #include <string>
 
+#include "contact/contact_jacobian.h"
 #include "fem/lattice_mesher.h"
 #include "fem/model.h"
 
@@ -264,10 +266,21 @@ TEST(CollisionDetectionTest, BoxCornerIntoFaceGivesBarycentricFeatureContact) {
   CollisionDetector detector(body, box, DetectionOptions{});
   std::vector<Contact> contacts;
   detector.Detect(body.rest_positions_m, X_WT, body.rest_positions_m, X_WT, &contacts);
-  std::vector<Contact> features;
+  std::vector<Contact> features;  // face contacts: three nodes
   for (const Contact& k : contacts)
-    if (k.nodes[1] >= 0) features.push_back(k);
+    if (k.nodes[2] >= 0) features.push_back(k);
   ASSERT_EQ(features.size(), 1u);
+  // The three edges from the buried corner cross the top face 2.8 mm out; where they pass under
+  // a body edge, that edge's point is inside the cube (an edge contact is a real overlap).
+  const DetectionStatistics& statistics = detector.statistics();
+  EXPECT_EQ(statistics.num_edge_contacts, statistics.num_contacts_before_merge -
+                                              statistics.num_node_contacts -
+                                              statistics.num_feature_contacts);
+  for (const Contact& k : contacts)
+    if (k.nodes[1] >= 0 && k.nodes[2] < 0 && k.gap_m < 0.0) {
+      EXPECT_LT(ToolSdf(box, X_WT.inverse() * k.p_body_W_m), 0.0);
+      EXPECT_LT(k.p_tool_W_m.z(), 0.05);
+    }
   const Contact& k = features.front();
   EXPECT_LT((k.p_tool_W_m - corner_W).norm(), kExactTolerance_m);
   EXPECT_LT((k.p_body_W_m - Vector3d(0.0234, 0.0371, 0.05)).norm(), kExactTolerance_m);
@@ -301,7 +314,11 @@ void CheckDuplicateMerged(double node_lift_m, bool node_contact_survives) {
                                corner_W - box.half_extents_m.cwiseProduct(Vector3d(1, 1, -1)));
   Eigen::VectorXd x = body.rest_positions_m;
   x[3 * node + 2] += node_lift_m;
-  CollisionDetector detector(body, box, DetectionOptions{});
+  // The box's bottom edges, 2e-5 below the top face, cross body edges within the merge radius of
+  // other top nodes: their edge contacts merge too. This test is about the node/corner pair.
+  DetectionOptions options;
+  options.edge_contacts = false;
+  CollisionDetector detector(body, box, options);
   std::vector<Contact> contacts;
   detector.Detect(x, X_WT, x, X_WT, &contacts);
   const DetectionStatistics& statistics = detector.statistics();
@@ -369,6 +386,252 @@ TEST(CollisionDetectionTest, MeshToolMatchesPrimitive) {
     EXPECT_LT((from_mesh[i].p_tool_W_m - from_box[i].p_tool_W_m).norm(), kExactTolerance_m);
     EXPECT_LT((from_mesh[i].n_W - from_box[i].n_W).norm(), 1e-9);
   }
+}
+
+// Edge contacts of a detection: two nodes, the third slot unused.
+std::vector<Contact> EdgeContacts(const std::vector<Contact>& contacts) {
+  std::vector<Contact> edges;
+  for (const Contact& k : contacts)
+    if (k.nodes[1] >= 0 && k.nodes[2] < 0) edges.push_back(k);
+  return edges;
+}
+
+// A knife edge across the block's top-front edge (along x at y = 0, z = 0.05; its faces' outward
+// normals +z and −y). The box's edge runs along u = (0, 1, 1)/√2 in the plane x = x0, between box
+// faces with outward normals (x ± w)/√2 for w = (0, 1, −1)/√2, so the box lies above and in front
+// of the block and only its edge, at depth δ along w, dips into the block's corner. The block's
+// edge is inside the box for |x − x0| ≤ δ only: its nodes (x = 0.03, 0.04) stay 2.6 mm or more
+// outside the box, and the box's corners 13 mm or more from the block.
+struct KnifeEdge {
+  ToolShape box;
+  Isometry3d X_WT;
+  Vector3d u, w;         // edge direction; common normal of the two edges, into the block
+  Vector3d p_block_W_m;  // the block edge's point closest to the knife edge
+  Vector3d p_edge_W_m;   // the knife edge's point closest to the block edge
+};
+
+KnifeEdge MakeKnifeEdge(double depth_m) {
+  KnifeEdge knife;
+  knife.box.kind = ToolShape::Kind::kBox;
+  knife.box.half_extents_m = Vector3d(0.02, 0.01, 0.01);
+  knife.u = Vector3d(0.0, 1.0, 1.0) / std::sqrt(2.0);
+  knife.w = Vector3d(0.0, 1.0, -1.0) / std::sqrt(2.0);
+  Eigen::Matrix3d R;  // columns: T's x along the edge, T's y and z the normals of its two faces
+  R.col(0) = knife.u;
+  R.col(1) = (Vector3d::UnitX() + knife.w) / std::sqrt(2.0);
+  R.col(2) = (knife.w - Vector3d::UnitX()) / std::sqrt(2.0);
+  knife.p_block_W_m = Vector3d(0.0347, 0.0, 0.05);
+  knife.p_edge_W_m = knife.p_block_W_m + depth_m * knife.w;
+  // The box edge in T: (s, +h_y, +h_z), s ∈ [−h_x, h_x], with its middle at p_edge_W_m.
+  const Vector3d middle_T(0.0, knife.box.half_extents_m.y(), knife.box.half_extents_m.z());
+  knife.X_WT = Pose(R, knife.p_edge_W_m - R * middle_T);
+  return knife;
+}
+
+TEST(CollisionDetectionTest, ToolEdgeAcrossBodyEdgeMakesOneEdgeContact) {
+  const fem::Model body = MakeReferenceBlock();
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  {  // w is (d_tool × d_body)/|d_tool × d_body| for the edge directions u and x
+    const KnifeEdge knife = MakeKnifeEdge(0.0);
+    ASSERT_LT((knife.u.cross(Vector3d::UnitX()).normalized() - knife.w).norm(), 1e-15);
+  }
+  for (const double depth_m : {0.001, -0.0005}) {  // pushed in 1 mm; 0.5 mm clear (in margin)
+    SCOPED_TRACE("depth " + std::to_string(depth_m));
+    const KnifeEdge knife = MakeKnifeEdge(depth_m);
+    DetectionOptions options;
+    options.continuous = false;
+    std::vector<Contact> contacts;
+    options.edge_contacts = false;  // what the detector saw before: nothing at all
+    CollisionDetector(body, knife.box, options).Detect(x, knife.X_WT, x, knife.X_WT, &contacts);
+    EXPECT_TRUE(contacts.empty());
+
+    options.edge_contacts = true;
+    CollisionDetector detector(body, knife.box, options);
+    detector.Detect(x, knife.X_WT, x, knife.X_WT, &contacts);
+    ASSERT_EQ(contacts.size(), 1u);
+    EXPECT_EQ(detector.statistics().num_edge_contacts, 1);
+    const Contact& k = contacts.front();
+    ASSERT_EQ(EdgeContacts(contacts).size(), 1u);
+    // The segments' distance is |depth|, negative when the knife edge is inside the block; the
+    // normal leaves the tool into the block's corner: +w.
+    EXPECT_NEAR(k.gap_m, -depth_m, kExactTolerance_m);
+    EXPECT_LT((k.n_W - knife.w).norm(), 1e-12);
+    EXPECT_LT((k.p_body_W_m - knife.p_block_W_m).norm(), kExactTolerance_m);
+    EXPECT_LT((k.p_tool_W_m - knife.p_edge_W_m).norm(), kExactTolerance_m);
+    const Vector3d a = x.segment<3>(3 * k.nodes[0]), b = x.segment<3>(3 * k.nodes[1]);
+    EXPECT_NEAR(std::abs(a.x() - b.x()), 0.01, 1e-15);  // the block edge's cell at x0
+    EXPECT_LT((k.weights[0] * a + k.weights[1] * b - k.p_body_W_m).norm(), kExactTolerance_m);
+    EXPECT_NEAR(k.weights[0] + k.weights[1], 1.0, 1e-15);
+    EXPECT_EQ(k.weights[2], 0.0);
+  }
+}
+
+// The lowest edge of a box turned 45° about x lies along the block's top-front edge, 1 mm deep:
+// the edges are parallel and the block's nodes on it are inside the box (node contacts hold the
+// box). Turned 0.05 rad about z, the same edge crosses body edges and makes edge contacts.
+TEST(CollisionDetectionTest, ParallelEdgesMakeNoEdgeContact) {
+  const fem::Model body = MakeReferenceBlock();
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  ToolShape box;
+  box.kind = ToolShape::Kind::kBox;
+  box.half_extents_m = Vector3d(0.08, 0.01, 0.01);  // longer than the block
+  const double depth_m = 0.001, h = box.half_extents_m.y();
+  DetectionOptions options;
+  options.continuous = false;
+  for (const double yaw_rad : {0.0, 1e-7, 0.05}) {
+    SCOPED_TRACE("yaw " + std::to_string(yaw_rad));
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(yaw_rad, Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(M_PI / 4.0, Vector3d::UnitX()))
+                                  .matrix();
+    // The edge at T's (·, −h, −h) is lowest; its middle goes to (0.0347, 0, 0.05 − depth).
+    const Vector3d edge_middle_W(0.0347, 0.0, 0.05 - depth_m);
+    const Isometry3d X_WT = Pose(R, edge_middle_W - R * Vector3d(0.0, -h, -h));
+    CollisionDetector detector(body, box, options);
+    std::vector<Contact> contacts;
+    detector.Detect(x, X_WT, x, X_WT, &contacts);
+    const std::vector<Contact> edges = EdgeContacts(contacts);
+    if (yaw_rad < 1e-6) {
+      EXPECT_GE(detector.statistics().num_node_contacts, 5);
+      EXPECT_EQ(detector.statistics().num_edge_contacts, 0);
+      EXPECT_TRUE(edges.empty());
+    } else {
+      EXPECT_GE(edges.size(), 1u);
+      for (const Contact& k : edges) {  // across the top face's edges: straight down
+        EXPECT_LT((k.n_W - Vector3d(0.0, 0.0, -1.0)).norm(), 1e-12);
+        EXPECT_LT(k.gap_m, 0.0);
+      }
+    }
+  }
+}
+
+// A box edge 0.5 mm under the top face, inside the block, crossing the face's edges: pointing
+// down (the box above it) it presses on the face from outside and makes edge contacts; pointing
+// up (the box below it, buried) it meets the face from behind (n along the faces' outward
+// normal), where a positive gap would be wrong: no edge contact.
+TEST(CollisionDetectionTest, EdgeBehindBodyFacesMakesNoEdgeContact) {
+  const fem::Model body = MakeReferenceBlock();
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  ToolShape box;
+  box.kind = ToolShape::Kind::kBox;
+  box.half_extents_m = Vector3d(0.03, 0.01, 0.01);  // x ∈ [0.02, 0.08]: clear of the side faces
+  const double h = box.half_extents_m.y();
+  DetectionOptions options;
+  options.continuous = false;
+  for (const bool pointing_down : {true, false}) {
+    SCOPED_TRACE(pointing_down ? "edge pointing down" : "edge pointing up");
+    // The edge at T's (·, −h, −h) is lowest after 45° about x, highest after 225°.
+    const double roll_rad = (pointing_down ? 0.25 : 1.25) * M_PI;
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.05, Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(roll_rad, Vector3d::UnitX()))
+                                  .matrix();
+    const Isometry3d X_WT = Pose(R, Vector3d(0.05, 0.0347, 0.0495) - R * Vector3d(0.0, -h, -h));
+    CollisionDetector detector(body, box, options);
+    std::vector<Contact> contacts;
+    detector.Detect(x, X_WT, x, X_WT, &contacts);
+    const std::vector<Contact> edges = EdgeContacts(contacts);
+    if (pointing_down) {  // the lowest edge under the face's edges; near misses of the end edges
+      EXPECT_GE(std::count_if(edges.begin(), edges.end(),
+                              [](const Contact& k) {
+                                return std::abs(k.gap_m + 0.0005) < kExactTolerance_m &&
+                                       (k.n_W - Vector3d(0.0, 0.0, -1.0)).norm() < 1e-12;
+                              }),
+                5);
+    } else {
+      EXPECT_TRUE(edges.empty());
+    }
+  }
+}
+
+// Flat against the body. A 4 × 4 cm box face pressed 0.5 mm into the top face: every body edge
+// crossing its rim lies flat against it and has a node under it in contact, which holds the
+// face: no edge contacts. A 2 mm wide blade face, longer than the block, pressed 0.5 mm between
+// two rows of nodes: no node is under it and no corner over the body, so only the body edges
+// crossing its two long edges hold it (without them it would sink).
+TEST(CollisionDetectionTest, FlatFaceNeedsEdgeContactsOnlyWhereNoNodeIsUnderIt) {
+  const fem::Model body = MakeReferenceBlock();
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  DetectionOptions options;
+  options.continuous = false;
+  const double depth_m = 0.0005;
+  ToolShape box;
+  box.kind = ToolShape::Kind::kBox;
+  box.half_extents_m = Vector3d(0.02, 0.02, 0.01);
+  const Isometry3d X_box =
+      Pose(Eigen::Matrix3d::Identity(), Vector3d(0.0503, 0.0497, 0.06 - depth_m));
+  CollisionDetector box_detector(body, box, options);
+  std::vector<Contact> contacts;
+  box_detector.Detect(x, X_box, x, X_box, &contacts);
+  EXPECT_EQ(std::count_if(contacts.begin(), contacts.end(),  // the 4 × 4 nodes under the face
+                          [](const Contact& k) { return k.nodes[1] < 0 && k.gap_m < 0.0; }),
+            16);
+  EXPECT_EQ(box_detector.statistics().num_edge_contacts, 0);
+
+  ToolShape blade;
+  blade.kind = ToolShape::Kind::kBox;
+  blade.half_extents_m = Vector3d(0.06, 0.001, 0.01);  // x ∈ [−0.01, 0.11], y ∈ ±1 mm
+  const Isometry3d X_blade =
+      Pose(Eigen::Matrix3d::Identity(), Vector3d(0.05, 0.0347, 0.06 - depth_m));
+  for (const bool edges : {false, true}) {
+    options.edge_contacts = edges;
+    CollisionDetector detector(body, blade, options);
+    detector.Detect(x, X_blade, x, X_blade, &contacts);
+    if (!edges) {
+      EXPECT_TRUE(contacts.empty());
+      continue;
+    }
+    // 11 body edges along y (x = 0, 1, …, 10 cm) and the diagonals of the cells under the blade,
+    // each crossing both long edges of its bottom face.
+    EXPECT_GE(contacts.size(), 2u * 11u);
+    EXPECT_EQ(EdgeContacts(contacts).size(), contacts.size());
+    for (const Contact& k : contacts) {
+      EXPECT_NEAR(k.gap_m, -depth_m, kExactTolerance_m);
+      EXPECT_LT((k.n_W - Vector3d(0.0, 0.0, -1.0)).norm(), 1e-12);
+      EXPECT_NEAR(std::abs(k.p_tool_W_m.y() - 0.0347), 0.001, kExactTolerance_m);
+    }
+  }
+}
+
+// c = J_v v + J_ω ω + J_u u̇ is the rate of the gap of the two segments' lines, φ = (b − a)·n
+// with a, b any points of the tool and body lines and n their unit common normal: the edge
+// contact's row against a central difference of φ as the tool translates and rotates about its
+// centre of mass and the two body nodes move.
+TEST(CollisionDetectionTest, EdgeContactJacobianIsTheGapRate) {
+  const fem::Model body = MakeReferenceBlock();
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  const KnifeEdge knife = MakeKnifeEdge(0.001);
+  DetectionOptions options;
+  options.continuous = false;
+  CollisionDetector detector(body, knife.box, options);
+  std::vector<Contact> contacts;
+  detector.Detect(x, knife.X_WT, x, knife.X_WT, &contacts);
+  ASSERT_EQ(contacts.size(), 1u);
+  const Contact& k = contacts.front();
+  const Vector3d v(0.1, -0.2, 0.3), w(0.5, -0.3, 0.2);
+  Eigen::VectorXd u_dot = Eigen::VectorXd::Zero(body.num_dofs());
+  u_dot.segment<3>(3 * k.nodes[0]) = Vector3d(-0.2, 0.4, 0.1);
+  u_dot.segment<3>(3 * k.nodes[1]) = Vector3d(0.3, 0.1, -0.5);
+  const Vector3d edge_T[2] = {Vector3d(-0.02, 0.01, 0.01), Vector3d(0.02, 0.01, 0.01)};
+  const auto gap = [&](double tau) {
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(w.norm() * tau, w.normalized()) * knife.X_WT.linear();
+    const Vector3d x_tool = knife.X_WT.translation() + tau * v;
+    const Vector3d a0 = x_tool + R * edge_T[0], a1 = x_tool + R * edge_T[1];
+    const Vector3d b0 = x.segment<3>(3 * k.nodes[0]) + tau * u_dot.segment<3>(3 * k.nodes[0]);
+    const Vector3d b1 = x.segment<3>(3 * k.nodes[1]) + tau * u_dot.segment<3>(3 * k.nodes[1]);
+    Vector3d n = (a1 - a0).cross(b1 - b0).normalized();
+    if (n.dot(k.n_W) < 0.0) n = -n;
+    return (b0 - a0).dot(n);
+  };
+  EXPECT_NEAR(gap(0.0), k.gap_m, kExactTolerance_m);
+  const double step_s = 1e-6;
+  const double rate_m_s = (gap(step_s) - gap(-step_s)) / (2.0 * step_s);
+  const std::vector<std::uint8_t> fixed(body.num_dofs(), 0);
+  const ContactJacobian J =
+      CalcContactJacobian(contacts, knife.X_WT.translation(), 1, body.num_dofs(), fixed);
+  const double c_m_s = J.J_v.row(0).dot(v) + J.J_w.row(0).dot(w) + (J.J_u * u_dot)[0];
+  // Central difference: truncation O(step²) ≈ 1e-12 m/s; round-off ε·0.1 m / step ≈ 1e-11 m/s.
+  EXPECT_NEAR(c_m_s, rate_m_s, 1e-6 * std::abs(rate_m_s));
+  EXPECT_GT(std::abs(rate_m_s), 0.1);  // the motion does move the gap
 }
 
 TEST(CollisionDetectionTest, RejectsBadInput) {

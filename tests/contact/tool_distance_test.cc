@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -284,6 +286,61 @@ TEST(ToolDistanceTest, RejectsOpenOrBadMeshes) {
   ToolShape sphere;
   sphere.radius_m = 0.0;
   EXPECT_THROW(ToolDistanceField{sphere}, std::invalid_argument);
+}
+
+// |p(s) − q(t)|² is convex in (s, t), so the Karush–Kuhn–Tucker conditions on [0, 1]² certify
+// the minimum: ∂/∂s = d1·(p − q) is 0 inside, ≥ 0 at s = 0, ≤ 0 at s = 1; likewise t with −d2.
+// A 101 × 101 grid of (s, t) never beats it. Random pairs, then parallel, crossing and point
+// segments.
+void ExpectClosestPointsOfSegments(const Vector3d& p1, const Vector3d& q1, const Vector3d& p2,
+                                   const Vector3d& q2) {
+  const SegmentPoints r = CalcClosestPointsOfSegments(p1, q1, p2, q2);
+  const Vector3d d1 = q1 - p1, d2 = q2 - p2, offset = r.point1 - r.point2;
+  ASSERT_GE(r.s, 0.0);
+  ASSERT_LE(r.s, 1.0);
+  ASSERT_GE(r.t, 0.0);
+  ASSERT_LE(r.t, 1.0);
+  EXPECT_LT((p1 + r.s * d1 - r.point1).norm(), kExactTolerance_m);
+  EXPECT_LT((p2 + r.t * d2 - r.point2).norm(), kExactTolerance_m);
+  // Gradient components are O(|d|·|offset|) ≤ (1 cm)²: round-off ≈ 1e-18.
+  const double kkt_tolerance_m2 = 1e-15;
+  const auto expect_stationary = [kkt_tolerance_m2](double parameter, double gradient) {
+    if (parameter > 0.0) {
+      EXPECT_LE(gradient, kkt_tolerance_m2) << parameter;
+    }
+    if (parameter < 1.0) {
+      EXPECT_GE(gradient, -kkt_tolerance_m2) << parameter;
+    }
+  };
+  expect_stationary(r.s, d1.dot(offset));
+  expect_stationary(r.t, -d2.dot(offset));
+  double grid_min_m = std::numeric_limits<double>::infinity();
+  for (int i = 0; i <= 100; ++i)
+    for (int j = 0; j <= 100; ++j)
+      grid_min_m = std::min(grid_min_m, (p1 + 0.01 * i * d1 - p2 - 0.01 * j * d2).norm());
+  EXPECT_LE(offset.norm(), grid_min_m + kExactTolerance_m);
+}
+
+TEST(ToolDistanceTest, ClosestPointsOfSegmentsSatisfyOptimality) {
+  Points points(11);
+  const Vector3d extent = Vector3d::Constant(0.01);
+  for (int i = 0; i < 300; ++i)
+    ExpectClosestPointsOfSegments(points.In(extent), points.In(extent), points.In(extent),
+                                  points.In(extent));
+  const Vector3d a(0.001, 0.002, 0.003), x(0.01, 0.0, 0.0), y(0.0, 0.01, 0.0);
+  ExpectClosestPointsOfSegments(a, a + x, a + 0.5 * x + 0.002 * y, a + 2.0 * x + 0.002 * y);
+  ExpectClosestPointsOfSegments(a, a + x, a + x + 0.002 * y, a + 0.002 * y);  // antiparallel
+  ExpectClosestPointsOfSegments(a, a, a + y, a + x);                          // a point
+  ExpectClosestPointsOfSegments(a, a + x, a + y, a + y);                      // a point
+  ExpectClosestPointsOfSegments(a, a, a + y, a + y);                          // two points
+  // Crossing at right angles 1 mm apart: the interior points (0.3, 0.6 of the way), exactly.
+  const Vector3d up(0.0, 0.0, 0.001);
+  const SegmentPoints crossing =
+      CalcClosestPointsOfSegments(a - 0.3 * x, a + 0.7 * x, a + up - 0.6 * y, a + up + 0.4 * y);
+  EXPECT_NEAR(crossing.s, 0.3, 1e-12);
+  EXPECT_NEAR(crossing.t, 0.6, 1e-12);
+  EXPECT_LT((crossing.point1 - a).norm(), kExactTolerance_m);
+  EXPECT_LT((crossing.point2 - (a + up)).norm(), kExactTolerance_m);
 }
 
 TEST(ToolDistanceTest, FeaturesLieOnTheSurface) {
