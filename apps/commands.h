@@ -8,5 +8,14 @@ namespace hapsim::apps {
 
 void AddFemCommand(CLI::App* app);
 void AddSimCommand(CLI::App* app);
+void AddRunCommand(CLI::App* app);
+void AddHapticCommand(CLI::App* app);
+void AddReplayCommand(CLI::App* app);
+
+// Thrown by a command that ends without an error message of its own but with a non-zero exit
+// code (e.g. 130 after SIGINT); main() returns the code.
+struct RunExit {
+  int code;
+};
 
 }  // namespace hapsim::apps

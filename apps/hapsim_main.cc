@@ -17,10 +17,15 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   hapsim::apps::AddFemCommand(&app);
   hapsim::apps::AddSimCommand(&app);
+  hapsim::apps::AddRunCommand(&app);
+  hapsim::apps::AddHapticCommand(&app);
+  hapsim::apps::AddReplayCommand(&app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     return app.exit(error);
+  } catch (const hapsim::apps::RunExit& exit) {
+    return exit.code;
   } catch (const hapsim::InputError& error) {
     std::fprintf(stderr, "hapsim: error: %s\n", error.what());
     return 2;

@@ -68,11 +68,17 @@
 //                                      # the friction law; its 1 kHz rows are normal only)
 //     lcp_max_rows: 512                # ≥ 1: rows the 1 kHz lcp solver holds (≈ 16 n² bytes);
 //                                      # a frame with more falls back to the linear model
+//     safety:                          # optional: the haptic process's limits (device/haptic_safety.h)
+//       {max_force_N: 10, max_torque_N_m: 0.5, max_force_rate_N_s: 5000,
+//        max_torque_rate_N_m_s: 250, device_stale_s: 0.005, model_stale_s: 0.1,
+//        blend_time_s: 0.01}           # > 0 each; any subset, the rest as shown
 //   device:                            # required with a tool
 //     trajectory:                      # scripted device motion (device/scripted_trajectory.h)
 //       - {t_s: 0.0, position_m: [0, 0, 0.09], rotation_vector_rad: [0, 0, 0]}
 //                                      # ≥ 1 waypoint; t_s ≥ 0 and strictly increasing;
 //                                      # rotation_vector_rad optional, default 0
+//     hand: {mass_kg: 0.3, k_N_m: 300, b_N_s_m: 10}   # optional: the simulated hand of
+//                                      # `hapsim haptic --device hand`; mass > 0, k, b ≥ 0
 
 #include <Eigen/Core>
 #include <optional>
@@ -83,7 +89,9 @@
 #include "contact/visual_frame.h"
 #include "core/rigid_tool.h"
 #include "core/virtual_coupling.h"
+#include "device/device_backend.h"
 #include "device/haptic_mode.h"
+#include "device/haptic_safety.h"
 #include "device/scripted_trajectory.h"
 #include "fem/fem_options.h"
 #include "fem/material.h"
@@ -170,6 +178,7 @@ struct HapticScene {
   double rate_hz = 1000.0;
   HapticMode mode = HapticMode::kLinear;
   int lcp_max_rows = 512;
+  device::SafetyLimits safety;
   int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
 };
 
@@ -193,6 +202,7 @@ struct Scene {
   ContactScene contact;
   HapticScene haptic;
   std::vector<device::Waypoint> trajectory;  // device.trajectory, times strictly increasing
+  device::HandParams hand;                   // device.hand: `hapsim haptic --device hand`
 };
 
 // Loads and validates a scene file. Throws hapsim::InputError naming file, line and key.

@@ -177,22 +177,49 @@ int CalcStepsPerFrame(double rate_hz, const YamlMap& time, const std::optional<Y
   time.FailKey("dt_s", message.str() + " (haptic.rate_hz is not given: 1000 Hz by default)");
 }
 
+device::SafetyLimits ReadSafety(const YamlMap& map) {
+  map.CheckKeys({"max_force_N", "max_torque_N_m", "max_force_rate_N_s", "max_torque_rate_N_m_s",
+                 "device_stale_s", "model_stale_s", "blend_time_s"});
+  device::SafetyLimits limits;
+  limits.max_force_N = map.GetDoubleOr("max_force_N", limits.max_force_N, Above(0.0));
+  limits.max_torque_N_m = map.GetDoubleOr("max_torque_N_m", limits.max_torque_N_m, Above(0.0));
+  limits.max_force_rate_N_s =
+      map.GetDoubleOr("max_force_rate_N_s", limits.max_force_rate_N_s, Above(0.0));
+  limits.max_torque_rate_N_m_s =
+      map.GetDoubleOr("max_torque_rate_N_m_s", limits.max_torque_rate_N_m_s, Above(0.0));
+  limits.device_stale_s = map.GetDoubleOr("device_stale_s", limits.device_stale_s, Above(0.0));
+  limits.model_stale_s = map.GetDoubleOr("model_stale_s", limits.model_stale_s, Above(0.0));
+  limits.blend_time_s = map.GetDoubleOr("blend_time_s", limits.blend_time_s, Above(0.0));
+  return limits;
+}
+
 HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, ContactLaw law) {
   HapticScene haptic;
   if (map.has_value()) {
-    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows"});
+    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "safety"});
     haptic.rate_hz = map->GetDoubleOr("rate_hz", haptic.rate_hz, Above(0.0));
     haptic.mode = map->GetEnumOr("mode", Choices(kHapticModes), haptic.mode);
     if (haptic.mode == HapticMode::kLcp && law == ContactLaw::kFriction)
       map->FailKey("mode", "lcp solves normal rows only; it cannot be used with contact law friction");
     haptic.lcp_max_rows = map->GetIntOr("lcp_max_rows", haptic.lcp_max_rows, AtLeast(1));
+    if (const std::optional<YamlMap> safety = map->FindMap("safety"))
+      haptic.safety = ReadSafety(*safety);
   }
   haptic.steps_per_frame = CalcStepsPerFrame(haptic.rate_hz, time, map);
   return haptic;
 }
 
+device::HandParams ReadHand(const YamlMap& map) {
+  map.CheckKeys({"mass_kg", "k_N_m", "b_N_s_m"});
+  device::HandParams hand;
+  hand.mass_kg = map.GetDoubleOr("mass_kg", hand.mass_kg, Above(0.0));
+  hand.k_N_m = map.GetDoubleOr("k_N_m", hand.k_N_m, AtLeast(0.0));
+  hand.b_N_s_m = map.GetDoubleOr("b_N_s_m", hand.b_N_s_m, AtLeast(0.0));
+  return hand;
+}
+
 std::vector<device::Waypoint> ReadTrajectory(const YamlMap& device) {
-  device.CheckKeys({"trajectory"});
+  device.CheckKeys({"trajectory", "hand"});
   if (!device.Has("trajectory")) device.FailKey("trajectory", "missing required key");
   const std::vector<YamlMap> items = device.GetMapList("trajectory");
   if (items.empty()) device.FailKey("trajectory", "must hold at least one waypoint");
@@ -239,7 +266,9 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
     scene->contact = ReadContact(*contact);
   }
   scene->haptic = ReadHaptic(root.FindMap("haptic"), time, scene->contact.law);
-  scene->trajectory = ReadTrajectory(root.GetMap("device"));
+  const YamlMap device = root.GetMap("device");
+  scene->trajectory = ReadTrajectory(device);
+  if (const std::optional<YamlMap> hand = device.FindMap("hand")) scene->hand = ReadHand(*hand);
 }
 
 std::optional<ContactLaw> ParseContactLaw(const std::string& name) {

@@ -1,0 +1,87 @@
+// hapsim_example_driver: a minimal external device driver for `hapsim haptic --device external`
+// (protocol: docs/DEVICE.md). It stands in for a real device's SDK: every millisecond it reads
+// the "device" (here a simulated hand pulled along the scene's scripted trajectory, so the loop
+// is closed) and publishes DEVICE_STATE, and it applies the newest DEVICE_FORCE it received.
+// Replace ReadHandle() and ApplyWrench() with the SDK's calls.
+//
+//   hapsim_example_driver SCENE [--lcm-url URL] [--duration S]
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+
+#include "apps/realtime.h"
+#include "config/scene.h"
+#include "device/device_backend.h"
+#include "messages/adapters.h"
+#include "messages/channels.h"
+
+namespace {
+
+class Driver {
+ public:
+  Driver(const hapsim::config::Scene& scene, double dt_s)
+      : hand_(hapsim::device::ScriptedTrajectory(scene.trajectory), scene.hand, dt_s) {}
+
+  // SDK: read the handle's pose and velocity (world frame, SI units).
+  hapsim::DeviceState ReadHandle(double t_s) {
+    double age_s;
+    long sequence;
+    return hand_.Read(t_s, &age_s, &sequence);
+  }
+  // SDK: command the wrench to the motors. A real driver also clamps to its own limits here.
+  void ApplyWrench() { hand_.Write(force_W_N_, torque_W_N_m_); }
+
+  void OnForce(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_force_t* m) {
+    std::string error;
+    if (!hapsim::messages::FromMessage(*m, &force_W_N_, &torque_W_N_m_, &error)) {
+      force_W_N_.setZero();  // never apply a wrench that failed validation
+      torque_W_N_m_.setZero();
+    }
+  }
+
+ private:
+  hapsim::device::SimulatedHand hand_;
+  Eigen::Vector3d force_W_N_ = Eigen::Vector3d::Zero(), torque_W_N_m_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Example external device driver for `hapsim haptic --device external`."};
+  std::string scene_path, url = hapsim::messages::kDefaultLcmUrl;
+  double duration_s = 0.0;
+  app.add_option("scene", scene_path, "Scene file: its device trajectory and device.hand")
+      ->required();
+  app.add_option("--lcm-url", url, "LCM provider URL")->capture_default_str();
+  app.add_option("--duration", duration_s, "Seconds (default: the scene's script)");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    const hapsim::config::Scene scene = hapsim::config::LoadScene(scene_path);
+    const double dt_s = 1.0 / scene.haptic.rate_hz;
+    const long steps = std::lround((duration_s > 0.0 ? duration_s : scene.num_steps * scene.dt_s) / dt_s);
+    lcm::LCM lcm(url);
+    if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + url);
+    Driver driver(scene, dt_s);
+    lcm.subscribe(hapsim::messages::kDeviceForceChannel, &Driver::OnForce, &driver);
+    hapsim::apps::InstallStopHandlers();
+    const std::int64_t dt_ns = std::llround(1e9 * dt_s);
+    std::int64_t deadline_ns = hapsim::apps::MonotonicNs();
+    for (long k = 0; k < steps && !hapsim::apps::g_stop_requested.load(); ++k) {
+      while (lcm.handleTimeout(0) > 0) {}  // apply the newest force first
+      driver.ApplyWrench();
+      const hapsim::DeviceState state = driver.ReadHandle(k * dt_s);
+      const hapsim_lcm::device_state_t msg =
+          hapsim::messages::ToMessage(state, hapsim::apps::WallMicros(), k);
+      lcm.publish(hapsim::messages::kDeviceStateChannel, &msg);
+      deadline_ns += dt_ns;
+      hapsim::apps::SleepUntil(deadline_ns);
+    }
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "hapsim_example_driver: error: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,385 @@
+// `hapsim haptic SCENE`: the separate 1 kHz haptic process (DESIGN.md §5, issue 4).
+//
+// A fixed-period loop on absolute deadlines (SCHED_FIFO and mlockall when permitted). Each step:
+// read the device (scripted trajectory, simulated hand or external driver: --device), take the newest contact model from the
+// receive thread (ModelMailbox: a swap, no lock), run device::HapticLoop (haptic step, safety,
+// passivity observer), then publish DEVICE_STATE, DEVICE_FORCE and HAPTIC_STATE from buffers
+// encoded in place. A receive thread decodes CONTACT_MODEL messages into the mailbox. At exit
+// (script done, --duration reached, SIGINT/SIGTERM) it prints the loop statistics and, with
+// --summary, writes them as JSON.
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <thread>
+#include <vector>
+
+#include "apps/commands.h"
+#include "apps/realtime.h"
+#include "apps/receive_thread.h"
+#include "config/scene.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "device/device_backend.h"
+#include "device/haptic_loop.h"
+#include "device/scripted_trajectory.h"
+#include "messages/adapters.h"
+#include "messages/channels.h"
+
+namespace hapsim::apps {
+namespace {
+
+struct HapticCommandOptions {
+  std::string scene_path;
+  std::string device = "scripted";  // scripted | hand | external
+  double wait_for_model_s = 10.0;   // 0: start the clock at once
+  std::string lcm_url = messages::kDefaultLcmUrl;
+  std::string mode;         // empty: the scene's haptic.mode
+  double duration_s = 0.0;  // 0: the scene's script (time.num_steps · time.dt_s)
+  std::string summary_path;
+};
+
+// Decodes CONTACT_MODEL into the mailbox and records each model's latency from publication
+// (same-machine clocks) in a preallocated buffer.
+class ModelReceiver {
+ public:
+  explicit ModelReceiver(device::ModelMailbox* mailbox) : mailbox_(mailbox) {
+    latencies_s_.reserve(1 << 16);
+  }
+  void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::contact_model_t* msg) {
+    device::ContactModelUpdate* slot = mailbox_->writer_slot();
+    messages::ContactModelHeader header;
+    std::string error;
+    if (!messages::FromMessage(*msg, &slot->model, &slot->rows, &header, &error)) {
+      std::fprintf(stderr, "hapsim haptic: dropped a contact model: %s\n", error.c_str());
+      ++rejected_;
+      return;
+    }
+    slot->sequence = header.sequence;
+    mailbox_->Publish();
+    if (latencies_s_.size() < latencies_s_.capacity())
+      latencies_s_.push_back(1e-6 * static_cast<double>(WallMicros() - header.utime));
+  }
+  std::vector<double>& latencies_s() { return latencies_s_; }
+  long rejected() const { return rejected_; }
+
+ private:
+  device::ModelMailbox* mailbox_;
+  std::vector<double> latencies_s_;
+  long rejected_ = 0;
+};
+
+// DEVICE_STATE from an external driver process (docs/DEVICE.md). The receive thread decodes
+// each message into a triple buffer; the loop reads the newest and its age. A state that fails
+// validation (a bad quaternion) arrives as NaN, so the safety layer answers it with zero force.
+class ExternalDevice : public device::DeviceBackend {
+ public:
+  struct Sample {
+    DeviceState state;
+    std::int64_t sequence = -1;
+    std::int64_t received_ns = 0;
+  };
+  void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_state_t* msg) {
+    Sample* slot = buffer_.writer_slot();
+    std::string error;
+    if (!messages::FromMessage(*msg, &slot->state, &error))
+      slot->state.x_W_m.setConstant(std::numeric_limits<double>::quiet_NaN());
+    slot->sequence = msg->sequence;
+    slot->received_ns = MonotonicNs();
+    buffer_.Publish();
+  }
+  DeviceState Read(double, double* age_s, long* sequence) override {
+    if (const Sample* newest = buffer_.TakeNewest()) latest_ = *newest;
+    *sequence = latest_.sequence;
+    if (latest_.sequence < 0) {  // nothing yet: not finite, infinitely old
+      *age_s = std::numeric_limits<double>::infinity();
+      DeviceState none;
+      none.x_W_m.setConstant(std::numeric_limits<double>::quiet_NaN());
+      return none;
+    }
+    *age_s = 1e-9 * static_cast<double>(MonotonicNs() - latest_.received_ns);
+    return latest_.state;
+  }
+  void Write(const Eigen::Vector3d&, const Eigen::Vector3d&) override {}  // DEVICE_FORCE
+
+ private:
+  device::TripleBuffer<Sample> buffer_;
+  Sample latest_;
+};
+
+// Loop statistics, filled without allocation (buffers reserved for the whole run).
+struct LoopStats {
+  std::vector<double> period_error_s;  // |period − Δt| per step
+  std::vector<double> compute_s;       // CPU time of the step's work
+  long overruns = 0, zeroed_steps = 0, passivity_alarms = 0;
+  double max_force_sent_N = 0.0;
+  // Fade-out when the models stop (the visual process died): the step the last model arrived,
+  // the last step with a non-zero force, and the largest force sent with a stale model.
+  long last_model_step = -1, last_nonzero_step = -1;
+  double force_after_stale_N = 0.0;
+};
+
+// What one step read from the device.
+struct DeviceReading {
+  DeviceState state;
+  double age_s = 0.0;
+  long sequence = 0;
+  bool in_process = true;  // scripted or simulated hand: this process publishes DEVICE_STATE
+};
+
+void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
+                 const device::HapticLoop& loop, const device::HapticLoopOutput& out,
+                 const LoopStats& stats, double period_s, std::vector<std::uint8_t>* buffer) {
+  const std::int64_t utime = WallMicros();
+  const auto publish = [&](const char* channel, const auto& msg) {
+    const int size = msg.getEncodedSize();
+    if (static_cast<int>(buffer->size()) < size) return;  // sized at start; never grows here
+    msg.encode(buffer->data(), 0, size);
+    lcm->publish(channel, buffer->data(), size);
+  };
+  if (device.in_process)
+    publish(messages::kDeviceStateChannel,
+            messages::ToMessage(device.state, utime, device.sequence));
+  hapsim_lcm::haptic_state_t state{};
+  state.utime = utime;
+  state.step = step;
+  state.device_sequence = device.sequence;
+  state.device_age_s = device.age_s;
+  messages::PoseToMessage(loop.tool_state(), state.x_W_m, state.q_WT);
+  for (int i = 0; i < 3; ++i) {
+    state.v_W_m_s[i] = loop.tool_state().v_W_m_s[i];
+    state.L_W_kg_m2_s[i] = loop.tool_state().L_W_kg_m2_s[i];
+    state.force_device_W_N[i] = out.sent.force_W_N[i];
+    state.torque_device_W_N_m[i] = out.sent.torque_W_N_m[i];
+    state.force_contact_W_N[i] = out.rendered.contact_force_W_N[i];
+    state.torque_contact_W_N_m[i] = out.rendered.contact_torque_W_N_m[i];
+  }
+  state.model_sequence = out.model_sequence;
+  state.model_age_s = std::isfinite(out.model_age_s) ? out.model_age_s : -1.0;
+  state.period_s = period_s;
+  state.overruns = stats.overruns;
+  state.zeroed = out.sent.zeroed;
+  if (out.sent.zeroed) state.reason = device::ToString(out.sent.state);
+  state.passivity_energy_J = out.passivity_energy_J;
+  publish(messages::kHapticStateChannel, state);
+  publish(messages::kDeviceForceChannel,
+          messages::ToMessage(out.sent.force_W_N, out.sent.torque_W_N_m, utime, device.sequence,
+                              out.sent.zeroed ? device::ToString(out.sent.state) : ""));
+}
+
+// Before its clock starts, the haptic process announces itself (HAPTIC_STATE with step −1, the
+// initial tool; DEVICE_STATE with sequence −1 for an in-process device) every 10 ms until the
+// first contact model arrives, so that model is in use from step 0 as in the in-process
+// simulator, rather than after the visual process's first (slowest) frame. Returns the model;
+// throws if none came within timeout_s.
+const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, device::ModelMailbox* mailbox,
+                                                   const config::Scene& scene,
+                                                   const device::HapticLoop& loop,
+                                                   bool in_process_device, double timeout_s) {
+  const std::int64_t give_up_ns = MonotonicNs() + std::llround(1e9 * timeout_s);
+  const DeviceState device = device::ScriptedTrajectory(scene.trajectory).Sample(0.0);
+  while (!g_stop_requested.load()) {
+    if (const device::ContactModelUpdate* model = mailbox->TakeNewest()) return model;
+    if (MonotonicNs() > give_up_ns)
+      throw std::runtime_error("no contact model within " + std::to_string(timeout_s) +
+                               " s: is `hapsim run` running on the same --lcm-url?");
+    const std::int64_t utime = WallMicros();
+    if (in_process_device) {
+      const hapsim_lcm::device_state_t msg = messages::ToMessage(device, utime, -1);
+      lcm->publish(messages::kDeviceStateChannel, &msg);
+    }
+    hapsim_lcm::haptic_state_t state{};
+    state.utime = utime;
+    state.step = -1;
+    state.device_sequence = -1;
+    state.model_sequence = -1;
+    state.model_age_s = -1.0;
+    messages::PoseToMessage(loop.tool_state(), state.x_W_m, state.q_WT);
+    for (int i = 0; i < 3; ++i) {
+      state.v_W_m_s[i] = loop.tool_state().v_W_m_s[i];
+      state.L_W_kg_m2_s[i] = loop.tool_state().L_W_kg_m2_s[i];
+    }
+    lcm->publish(messages::kHapticStateChannel, &state);
+    SleepUntil(MonotonicNs() + 10000000);
+  }
+  return nullptr;
+}
+
+nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, double dt_s,
+                         double model_stale_s) {
+  // The models stopped before the end (stale for the last model_stale_s or more): how long the
+  // force took to reach zero after the last one arrived.
+  const bool models_stopped =
+      stats->last_model_step >= 0 && (steps - stats->last_model_step) * dt_s > model_stale_s;
+  nlohmann::json fade = nullptr;
+  if (models_stopped)
+    fade = (stats->last_nonzero_step + 1 - stats->last_model_step) * dt_s;
+  nlohmann::json period = {{"p50_us", 1e6 * Quantile(&stats->period_error_s, 0.5)},
+                           {"p99_us", 1e6 * Quantile(&stats->period_error_s, 0.99)},
+                           {"p999_us", 1e6 * Quantile(&stats->period_error_s, 0.999)},
+                           {"max_us", 1e6 * Quantile(&stats->period_error_s, 1.0)}};
+  nlohmann::json latency = {{"p50_ms", 1e3 * Quantile(&receiver->latencies_s(), 0.5)},
+                            {"p99_ms", 1e3 * Quantile(&receiver->latencies_s(), 0.99)},
+                            {"count", receiver->latencies_s().size()}};
+  return {{"steps", steps},
+          {"dt_s", dt_s},
+          {"period_error", period},
+          {"compute_p50_us", 1e6 * Quantile(&stats->compute_s, 0.5)},
+          {"compute_max_us", 1e6 * Quantile(&stats->compute_s, 1.0)},
+          {"overruns", stats->overruns},
+          {"zeroed_steps", stats->zeroed_steps},
+          {"passivity_alarms", stats->passivity_alarms},
+          {"max_force_sent_N", stats->max_force_sent_N},
+          {"model_latency", latency},
+          {"models_rejected", receiver->rejected()},
+          {"model_stale_s", model_stale_s},
+          {"fade_after_last_model_s", fade},
+          {"force_after_stale_N", stats->force_after_stale_N}};
+}
+
+void RunHaptic(const HapticCommandOptions& options) {
+  const config::Scene scene = config::LoadScene(options.scene_path);
+  if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim haptic` needs a tool");
+  device::HapticMode mode = scene.haptic.mode;
+  if (!options.mode.empty()) {
+    const auto parsed = config::ParseHapticMode(options.mode);
+    if (!parsed) throw InputError("", 0, "--mode", "unknown mode '" + options.mode + "'");
+    mode = *parsed;
+  }
+  if (mode != device::HapticMode::kLinear && mode != device::HapticMode::kLcp)
+    throw InputError("", 0, options.mode.empty() ? "haptic.mode" : "--mode",
+                     std::string("the haptic process renders linear or lcp; ") +
+                         device::ToString(mode) + " runs in `hapsim sim`");
+  device::HapticLoopOptions loop_options;
+  loop_options.mode = mode;
+  loop_options.dt_s = 1.0 / scene.haptic.rate_hz;
+  loop_options.lcp_max_rows = scene.haptic.lcp_max_rows;
+  loop_options.safety = scene.haptic.safety;
+  device::HapticLoop loop(scene.tool->model, scene.coupling, scene.gravity_m_s2,
+                          scene.tool->initial_state, loop_options);
+  const double duration_s =
+      options.duration_s > 0.0 ? options.duration_s : scene.num_steps * scene.dt_s;
+  const long num_steps = std::lround(duration_s / loop_options.dt_s);
+
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
+  device::ModelMailbox mailbox;
+  ModelReceiver receiver(&mailbox);
+  lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver);
+  std::unique_ptr<device::DeviceBackend> backend;
+  if (options.device == "scripted") {
+    backend = std::make_unique<device::ScriptedDevice>(device::ScriptedTrajectory(scene.trajectory));
+  } else if (options.device == "hand") {
+    backend = std::make_unique<device::SimulatedHand>(device::ScriptedTrajectory(scene.trajectory),
+                                                      scene.hand, loop_options.dt_s);
+  } else {
+    auto external = std::make_unique<ExternalDevice>();
+    lcm.subscribe(messages::kDeviceStateChannel, &ExternalDevice::Handle, external.get());
+    backend = std::move(external);
+  }
+  const bool in_process_device = options.device != "external";
+  InstallStopHandlers();
+  ReceiveThread receive_thread(&lcm);
+  const std::string rt_failure = RequestRealtime(80);
+  if (!rt_failure.empty())
+    std::fprintf(stderr, "hapsim haptic: warning: normal scheduling (%s)\n", rt_failure.c_str());
+  std::printf("hapsim haptic: %s, mode %s, %ld steps at %g Hz on %s\n", scene.name.c_str(),
+              device::ToString(mode), num_steps, scene.haptic.rate_hz, options.lcm_url.c_str());
+  std::fflush(stdout);
+
+  const device::ContactModelUpdate* first_model =
+      options.wait_for_model_s > 0.0
+          ? WaitForFirstModel(&lcm, &mailbox, scene, loop, in_process_device,
+                              options.wait_for_model_s)
+          : nullptr;
+
+  LoopStats stats;
+  stats.period_error_s.reserve(num_steps);
+  stats.compute_s.reserve(num_steps);
+  std::vector<std::uint8_t> buffer(1 << 16);
+  const std::int64_t dt_ns = std::llround(1e9 * loop_options.dt_s);
+  std::int64_t deadline_ns = MonotonicNs() + dt_ns, previous_start_ns = 0;
+  long step = 0;
+  for (; step < num_steps && !g_stop_requested.load(); ++step) {
+    SleepUntil(deadline_ns);
+    const std::int64_t start_ns = MonotonicNs();
+    const double period_s = step == 0 ? loop_options.dt_s : 1e-9 * (start_ns - previous_start_ns);
+    previous_start_ns = start_ns;
+    if (step > 0) stats.period_error_s.push_back(std::abs(period_s - loop_options.dt_s));
+    DeviceReading device;
+    device.in_process = in_process_device;
+    device.state = backend->Read(step * loop_options.dt_s, &device.age_s, &device.sequence);
+    const device::ContactModelUpdate* update =
+        step == 0 && first_model != nullptr ? first_model : mailbox.TakeNewest();
+    const device::HapticLoopOutput out = loop.Step(device.state, device.age_s, update);
+    backend->Write(out.sent.force_W_N, out.sent.torque_W_N_m);
+    if (update != nullptr) stats.last_model_step = step;
+    if (out.sent.force_W_N.squaredNorm() > 0.0) stats.last_nonzero_step = step;
+    if (out.model_age_s > loop_options.safety.model_stale_s)
+      stats.force_after_stale_N = std::max(stats.force_after_stale_N, out.sent.force_W_N.norm());
+    stats.compute_s.push_back(1e-9 * (MonotonicNs() - start_ns));
+    stats.zeroed_steps += out.sent.zeroed;
+    stats.passivity_alarms += out.passivity_alarm;
+    stats.max_force_sent_N = std::max(stats.max_force_sent_N, out.sent.force_W_N.norm());
+    if (out.passivity_alarm)
+      std::fprintf(stderr, "hapsim haptic: warning: passivity observer active at step %ld\n", step);
+    PublishStep(&lcm, step, device, loop, out, stats, period_s, &buffer);
+    if (MonotonicNs() > deadline_ns + dt_ns) ++stats.overruns;
+    deadline_ns += dt_ns;
+  }
+  receive_thread.Stop();
+  const nlohmann::json summary = Summarize(&stats, &receiver, step, loop_options.dt_s,
+                                           loop_options.safety.model_stale_s);
+  std::printf("hapsim haptic: %ld steps; period error p50 %.1f us, p99 %.1f us, max %.1f us; "
+              "%ld overruns; model latency p50 %.2f ms; max force sent %.3f N\n",
+              step, summary["period_error"]["p50_us"].get<double>(),
+              summary["period_error"]["p99_us"].get<double>(),
+              summary["period_error"]["max_us"].get<double>(), stats.overruns,
+              summary["model_latency"]["p50_ms"].get<double>(), stats.max_force_sent_N);
+  if (!summary["fade_after_last_model_s"].is_null())
+    std::printf("hapsim haptic: models stopped at step %ld; fade-out after the last model %.1f ms "
+                "(stale threshold %.1f ms)\n",
+                stats.last_model_step, 1e3 * summary["fade_after_last_model_s"].get<double>(),
+                1e3 * loop_options.safety.model_stale_s);
+  if (!options.summary_path.empty())
+    WriteFileAtomically(options.summary_path,
+                        [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
+}
+
+}  // namespace
+
+void AddHapticCommand(CLI::App* app) {
+  auto options = std::make_shared<HapticCommandOptions>();
+  CLI::App* haptic = app->add_subcommand(
+      "haptic",
+      "The 1 kHz haptic process: renders the contact models that `hapsim run` publishes over LCM\n"
+      "to the scene's scripted device, with force and rate limits, zero force on stale or\n"
+      "non-finite input, and a passivity observer. Usually spawned by `hapsim run`.");
+  haptic->add_option("scene", options->scene_path, "Scene file (YAML) with a tool and a device")
+      ->required();
+  haptic->add_option("--lcm-url", options->lcm_url, "LCM provider URL")->capture_default_str();
+  haptic->add_option("--mode", options->mode, "linear or lcp (default: the scene's haptic.mode)");
+  haptic->add_option("--device", options->device,
+                     "scripted (the scene's trajectory), hand (a simulated hand pulled along it,\n"
+                     "closing the loop; the scene's device.hand), or external (a driver process\n"
+                     "publishing DEVICE_STATE, see docs/DEVICE.md)")
+      ->check(CLI::IsMember({"scripted", "hand", "external"}))
+      ->capture_default_str();
+  haptic->add_option("--wait-for-model", options->wait_for_model_s,
+                     "Seconds to wait for the first contact model before the clock starts\n"
+                     "(0: start at once and render zero force until a model arrives)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  haptic->add_option("--duration", options->duration_s,
+                     "Seconds to run (default: the scene's time.num_steps * time.dt_s)")
+      ->check(CLI::PositiveNumber);
+  haptic->add_option("--summary", options->summary_path, "Write the loop statistics as JSON");
+  haptic->callback([options] { RunHaptic(*options); });
+}
+
+}  // namespace hapsim::apps

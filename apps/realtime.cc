@@ -1,0 +1,68 @@
+#include "apps/realtime.h"
+
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <ctime>
+
+namespace hapsim::apps {
+
+std::atomic<bool> g_stop_requested{false};
+
+std::int64_t MonotonicNs() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+
+std::int64_t WallMicros() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+void SleepUntil(std::int64_t deadline_ns) {
+  timespec ts;
+  ts.tv_sec = deadline_ns / 1000000000;
+  ts.tv_nsec = deadline_ns % 1000000000;
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    if (g_stop_requested.load()) return;
+  }
+}
+
+std::string RequestRealtime(int priority) {
+  std::string failed;
+  sched_param param{};
+  param.sched_priority = priority;
+  if (sched_setscheduler(0, SCHED_FIFO, &param) != 0)
+    failed += std::string("SCHED_FIFO: ") + std::strerror(errno);
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+    failed += (failed.empty() ? "" : "; ") + std::string("mlockall: ") + std::strerror(errno);
+  return failed;
+}
+
+namespace {
+void OnStopSignal(int) { g_stop_requested.store(true); }
+}  // namespace
+
+void InstallStopHandlers() {
+  struct sigaction action {};
+  action.sa_handler = OnStopSignal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+double Quantile(std::vector<double>* values, double q) {
+  if (values->empty()) return 0.0;
+  const size_t k = std::min(values->size() - 1, static_cast<size_t>(q * (values->size() - 1) + 0.5));
+  std::nth_element(values->begin(), values->begin() + k, values->end());
+  return (*values)[k];
+}
+
+}  // namespace hapsim::apps

@@ -1,0 +1,31 @@
+#pragma once
+// Real-time plumbing shared by the two processes of a run (issue 4): the monotonic clock, an
+// absolute-deadline sleep, the request for SCHED_FIFO and locked memory, and a SIGINT/SIGTERM
+// flag. Linux only (clock_nanosleep, sched_setscheduler, mlockall).
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hapsim::apps {
+
+// CLOCK_MONOTONIC, ns.
+std::int64_t MonotonicNs();
+// Wall clock, µs since the Unix epoch (LCM's utime).
+std::int64_t WallMicros();
+// Sleeps until the monotonic time `deadline_ns` (absolute: no drift accumulates).
+void SleepUntil(std::int64_t deadline_ns);
+
+// Asks for SCHED_FIFO at `priority` and mlockall. Returns "" on success, else what failed (the
+// caller warns and carries on with normal scheduling).
+std::string RequestRealtime(int priority);
+
+// SIGINT and SIGTERM set this flag (installed by InstallStopHandlers); loops poll it.
+extern std::atomic<bool> g_stop_requested;
+void InstallStopHandlers();
+
+// Quantile q in [0, 1] of `values` (sorted in place; 0 when empty).
+double Quantile(std::vector<double>* values, double q);
+
+}  // namespace hapsim::apps

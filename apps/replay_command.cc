@@ -1,0 +1,189 @@
+// `hapsim replay LOG`: re-runs the haptic loop (device::HapticLoop) from an LCM event log of a
+// `hapsim run` and checks that it reproduces every logged device force bit for bit, or reports
+// the first step that differs (issue 4). The inputs of each step are in the log: the device state
+// (DEVICE_STATE, sequence = step), the contact model in use (HAPTIC_STATE.model_sequence: a new
+// model is applied at the first step that names it; its CONTACT_MODEL message by sequence) and
+// the scene (RUN_INFO.scene_path, or --scene). --csv exports the logged haptic steps. A truncated
+// or corrupt log is an error naming the byte where reading stopped.
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+
+#include "apps/commands.h"
+#include "config/scene.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "device/haptic_loop.h"
+#include "messages/adapters.h"
+#include "messages/channels.h"
+
+namespace hapsim::apps {
+namespace {
+
+struct ReplayOptions {
+  std::string log_path;
+  std::string scene_path;  // empty: RUN_INFO's
+  std::string csv_path;
+};
+
+struct LogContents {
+  std::string scene_path;
+  std::map<long, hapsim_lcm::haptic_state_t> steps;                     // by step
+  std::map<long, DeviceState> devices;                                   // by sequence
+  std::map<long, std::unique_ptr<device::ContactModelUpdate>> models;  // by sequence
+};
+
+template <typename Message>
+Message Decode(const lcm::LogEvent& event, const std::string& log_path) {
+  Message msg;
+  if (msg.decode(event.data, 0, event.datalen) != event.datalen)
+    throw InputError(log_path, 0, event.channel,
+                     "event " + std::to_string(event.eventnum) + " does not decode");
+  return msg;
+}
+
+LogContents ReadLog(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw InputError(path, 0, "", "no such log file");
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw InputError(path, 0, "", "cannot open as an LCM log");
+  LogContents contents;
+  long events = 0, end_of_last_event = 0;
+  while (const lcm::LogEvent* event = log.readNextEvent()) {
+    ++events;
+    end_of_last_event = std::ftell(log.getFilePtr());
+    const std::string& channel = event->channel;
+    if (channel == messages::kRunInfoChannel) {
+      contents.scene_path = Decode<hapsim_lcm::run_info_t>(*event, path).scene_path;
+    } else if (channel == messages::kDeviceStateChannel) {
+      const auto msg = Decode<hapsim_lcm::device_state_t>(*event, path);
+      DeviceState device;
+      std::string error;
+      // As the haptic process's ExternalDevice does: a state that fails validation is NaN.
+      if (!messages::FromMessage(msg, &device, &error))
+        device.x_W_m.setConstant(std::numeric_limits<double>::quiet_NaN());
+      contents.devices[msg.sequence] = device;
+    } else if (channel == messages::kHapticStateChannel) {
+      const auto msg = Decode<hapsim_lcm::haptic_state_t>(*event, path);
+      if (msg.step >= 0) contents.steps[msg.step] = msg;  // −1: waiting for the first model
+    } else if (channel == messages::kContactModelChannel) {
+      const auto msg = Decode<hapsim_lcm::contact_model_t>(*event, path);
+      auto update = std::make_unique<device::ContactModelUpdate>();
+      messages::ContactModelHeader header;
+      std::string error;
+      if (!messages::FromMessage(msg, &update->model, &update->rows, &header, &error))
+        throw InputError(path, 0, channel, error);
+      update->sequence = header.sequence;
+      contents.models[header.sequence] = std::move(update);
+    }
+  }
+  // readNextEvent stops at the end or at the first event it cannot read (a cut or garbled one):
+  // the last complete event must end where the file does.
+  const long size = static_cast<long>(std::filesystem::file_size(path));
+  if (end_of_last_event != size)
+    throw InputError(path, 0, "", "truncated or corrupt LCM log: the last complete event ends at byte " +
+                                      std::to_string(end_of_last_event) + " of " +
+                                      std::to_string(size) + " (after " + std::to_string(events) +
+                                      " events)");
+  if (contents.steps.empty()) throw InputError(path, 0, "", "no haptic steps in the log");
+  return contents;
+}
+
+void WriteCsv(const std::string& path, const LogContents& log) {
+  WriteFileAtomically(path, [&](std::ostream& out) {
+    out << "step,force_x_N,force_y_N,force_z_N,torque_x_N_m,torque_y_N_m,torque_z_N_m,tool_x_m,"
+           "tool_y_m,tool_z_m,model_sequence,model_age_s,zeroed,passivity_energy_J\n";
+    out.precision(17);
+    for (const auto& [step, s] : log.steps) {
+      out << step << ',' << s.force_device_W_N[0] << ',' << s.force_device_W_N[1] << ','
+          << s.force_device_W_N[2] << ',' << s.torque_device_W_N_m[0] << ','
+          << s.torque_device_W_N_m[1] << ',' << s.torque_device_W_N_m[2] << ',' << s.x_W_m[0]
+          << ',' << s.x_W_m[1] << ',' << s.x_W_m[2] << ',' << s.model_sequence << ','
+          << s.model_age_s << ',' << s.zeroed << ',' << s.passivity_energy_J << '\n';
+    }
+  });
+}
+
+// Re-runs the loop; returns the number of steps compared, or throws at the first difference.
+long Replay(const config::Scene& scene, const LogContents& log) {
+  device::HapticLoopOptions options;
+  options.mode = scene.haptic.mode;
+  options.dt_s = 1.0 / scene.haptic.rate_hz;
+  options.lcp_max_rows = scene.haptic.lcp_max_rows;
+  options.safety = scene.haptic.safety;
+  device::HapticLoop loop(scene.tool->model, scene.coupling, scene.gravity_m_s2,
+                          scene.tool->initial_state, options);
+  long expected_step = log.steps.begin()->first, compared = 0;
+  std::int64_t model_in_use = -1;
+  for (const auto& [step, logged] : log.steps) {
+    if (step != expected_step)
+      throw std::runtime_error("the log misses the haptic state of step " +
+                               std::to_string(expected_step));
+    ++expected_step;
+    const auto device = log.devices.find(logged.device_sequence);
+    if (device == log.devices.end())
+      throw std::runtime_error("step " + std::to_string(step) + " used device state " +
+                               std::to_string(logged.device_sequence) + ", which is not in the log");
+    const device::ContactModelUpdate* update = nullptr;
+    if (logged.model_sequence != model_in_use) {
+      const auto found = log.models.find(logged.model_sequence);
+      if (found == log.models.end())
+        throw std::runtime_error("step " + std::to_string(step) + " used contact model " +
+                                 std::to_string(logged.model_sequence) + ", which is not in the log");
+      update = found->second.get();
+      model_in_use = logged.model_sequence;
+    }
+    const device::HapticLoopOutput out = loop.Step(device->second, logged.device_age_s, update);
+    for (int i = 0; i < 3; ++i) {
+      if (out.sent.force_W_N[i] != logged.force_device_W_N[i] ||
+          out.sent.torque_W_N_m[i] != logged.torque_device_W_N_m[i]) {
+        char message[256];
+        std::snprintf(message, sizeof(message),
+                      "step %ld differs: replayed force (%.17g, %.17g, %.17g) N, logged (%.17g, "
+                      "%.17g, %.17g) N",
+                      step, out.sent.force_W_N.x(), out.sent.force_W_N.y(), out.sent.force_W_N.z(),
+                      logged.force_device_W_N[0], logged.force_device_W_N[1],
+                      logged.force_device_W_N[2]);
+        throw std::runtime_error(message);
+      }
+    }
+    ++compared;
+  }
+  return compared;
+}
+
+void RunReplay(const ReplayOptions& options) {
+  const LogContents log = ReadLog(options.log_path);
+  if (!options.csv_path.empty()) WriteCsv(options.csv_path, log);
+  const std::string scene_path = options.scene_path.empty() ? log.scene_path : options.scene_path;
+  if (scene_path.empty())
+    throw InputError(options.log_path, 0, "RUN_INFO", "no scene in the log; give --scene");
+  const config::Scene scene = config::LoadScene(scene_path);
+  if (!scene.tool) throw InputError(scene.file, 0, "tool", "the scene has no tool");
+  const long compared = Replay(scene, log);
+  std::printf("hapsim replay: %ld haptic steps of %s reproduced bit for bit (%zu contact models)\n",
+              compared, options.log_path.c_str(), log.models.size());
+  if (!options.csv_path.empty()) std::printf("  wrote %s\n", options.csv_path.c_str());
+}
+
+}  // namespace
+
+void AddReplayCommand(CLI::App* app) {
+  auto options = std::make_shared<ReplayOptions>();
+  CLI::App* replay = app->add_subcommand(
+      "replay",
+      "Re-runs the haptic loop from an LCM log of `hapsim run` (its device states and contact\n"
+      "models) and checks that every logged device force is reproduced bit for bit.");
+  replay->add_option("log", options->log_path, "LCM event log (hapsim run --log, lcm-logger)")
+      ->required();
+  replay->add_option("--scene", options->scene_path, "Scene file (default: the log's RUN_INFO)");
+  replay->add_option("--csv", options->csv_path, "Export the logged haptic steps as CSV");
+  replay->callback([options] { RunReplay(*options); });
+}
+
+}  // namespace hapsim::apps

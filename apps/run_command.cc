@@ -1,0 +1,328 @@
+// `hapsim run SCENE`: the visual process of a two-process run (DESIGN.md §1, issue 4).
+//
+// It spawns `hapsim haptic SCENE` (unless --no-spawn) and follows its clock: visual frame k runs
+// once the haptic process has published step k · (haptic steps per frame), with the newest
+// device state and haptic tool state it published. Each frame publishes CONTACT_MODEL (the
+// linear model linearised at the haptic tool, plus the rows in lcp mode) and SIM_FRAME (nodes,
+// surface, tool, contacts, stage timings). The run stops when the script is done, at
+// --duration, on SIGINT/SIGTERM (both processes shut down cleanly) or when the haptic process
+// dies (a clear message and a non-zero exit). --log writes every channel to a standard LCM
+// event log (a temporary name, renamed when the run ends).
+
+#include <lcm/lcm-cpp.hpp>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <thread>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+
+#include "apps/commands.h"
+#include "apps/realtime.h"
+#include "apps/receive_thread.h"
+#include "config/body_builder.h"
+#include "config/scene.h"
+#include "config/simulation_builder.h"
+#include "contact/visual_frame.h"
+#include "core/error.h"
+#include "fem/tet_mesh.h"
+#include "messages/adapters.h"
+#include "messages/channels.h"
+
+namespace hapsim::apps {
+namespace {
+
+struct RunCommandOptions {
+  std::string scene_path;
+  std::string lcm_url = messages::kDefaultLcmUrl;
+  bool no_spawn = false;
+  double duration_s = 0.0;  // 0: the scene's script
+  std::string log_path;
+  std::string haptic_summary_path;  // passed to the spawned haptic process
+};
+
+// The newest DEVICE_STATE and HAPTIC_STATE, and (with --log) every message to the log file.
+// Runs in the receive thread, which handles LCM continuously so that nothing is dropped while a
+// visual frame computes; the frame loop reads a consistent snapshot under the mutex (this
+// process is not the real-time one).
+class Listener {
+ public:
+  struct Snapshot {
+    DeviceState device;
+    ToolState haptic_tool;
+    long haptic_step = -1;  // −1: the haptic process waits for the first model
+  };
+
+  void OnDevice(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_state_t* m) {
+    DeviceState device;
+    std::string error;
+    if (!messages::FromMessage(*m, &device, &error) || !device.x_W_m.allFinite()) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    latest_device_ = device;
+    have_device_ = true;
+  }
+  void OnHaptic(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::haptic_state_t* m) {
+    ToolState tool;
+    std::string error;
+    if (!messages::PoseFromMessage(m->x_W_m, m->q_WT, &tool, &error)) return;
+    for (int i = 0; i < 3; ++i) {
+      tool.v_W_m_s[i] = m->v_W_m_s[i];
+      tool.L_W_kg_m2_s[i] = m->L_W_kg_m2_s[i];
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    snapshot_.haptic_tool = tool;
+    snapshot_.haptic_step = m->step;
+    have_haptic_ = true;
+  }
+  void OnAny(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!log_) return;
+    lcm::LogEvent event;
+    event.eventnum = num_logged_++;
+    event.timestamp = buffer->recv_utime;
+    event.channel = channel;
+    event.datalen = static_cast<int32_t>(buffer->data_size);
+    event.data = buffer->data;
+    log_->writeEvent(&event);
+  }
+  void OpenLog(const std::string& path) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    log_ = std::make_unique<lcm::LogFile>(path, "w");
+    if (!log_->good()) throw std::runtime_error("cannot write the LCM log " + path);
+  }
+  void CloseLog() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    log_.reset();
+  }
+  // The newest states, once both a device state and a haptic state have arrived.
+  bool Get(Snapshot* snapshot) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!have_device_ || !have_haptic_) return false;
+    *snapshot = snapshot_;
+    snapshot->device = latest_device_;
+    return true;
+  }
+
+ private:
+  std::mutex mutex_;
+  bool have_device_ = false, have_haptic_ = false;
+  DeviceState latest_device_;
+  Snapshot snapshot_;
+  std::unique_ptr<lcm::LogFile> log_;
+  long num_logged_ = 0;
+};
+
+pid_t SpawnHaptic(const RunCommandOptions& options) {
+  std::vector<std::string> args = {"hapsim", "haptic", options.scene_path, "--lcm-url",
+                                   options.lcm_url};
+  if (options.duration_s > 0.0) args.insert(args.end(), {"--duration", std::to_string(options.duration_s)});
+  if (!options.haptic_summary_path.empty())
+    args.insert(args.end(), {"--summary", options.haptic_summary_path});
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("cannot fork the haptic process");
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (std::string& arg : args) argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    execv("/proc/self/exe", argv.data());
+    std::perror("hapsim run: exec of the haptic process failed");
+    _exit(127);
+  }
+  return pid;
+}
+
+// "" while the child runs; else how it ended.
+std::string CheckChild(pid_t pid, int* exit_code) {
+  int status = 0;
+  if (pid <= 0 || waitpid(pid, &status, WNOHANG) != pid) return "";
+  if (WIFEXITED(status)) {
+    *exit_code = WEXITSTATUS(status);
+    return "exited with code " + std::to_string(*exit_code);
+  }
+  *exit_code = 128 + WTERMSIG(status);
+  return std::string("was killed by signal ") + strsignal(WTERMSIG(status));
+}
+
+hapsim_lcm::sim_frame_t MakeSimFrame(const fem::State& body, const Matrix3Xi& surface,
+                                     const ToolState& tool, const contact::VisualFrame& frame,
+                                     const contact::VisualFrameStats& stats, long k, double t_s) {
+  hapsim_lcm::sim_frame_t msg{};
+  msg.utime = WallMicros();
+  msg.sequence = k;
+  msg.t_s = t_s;
+  msg.num_nodes = static_cast<int32_t>(body.x_m.size() / 3);
+  msg.positions_W_m.assign(msg.num_nodes, std::vector<float>(3));
+  for (int n = 0; n < msg.num_nodes; ++n)
+    for (int d = 0; d < 3; ++d) msg.positions_W_m[n][d] = static_cast<float>(body.x_m[3 * n + d]);
+  msg.num_triangles = static_cast<int32_t>(surface.cols());
+  msg.triangles.assign(msg.num_triangles, std::vector<int32_t>(3));
+  for (int f = 0; f < msg.num_triangles; ++f)
+    for (int d = 0; d < 3; ++d) msg.triangles[f][d] = surface(d, f);
+  messages::PoseToMessage(tool, msg.x_W_m, msg.q_WT);
+  const auto& contacts = frame.contacts();
+  const int rows_per_contact = frame.jacobian().rows_per_contact;
+  msg.num_contacts = static_cast<int32_t>(contacts.size());
+  msg.p_W_m.assign(msg.num_contacts, std::vector<double>(3));
+  msg.n_W.assign(msg.num_contacts, std::vector<double>(3));
+  msg.lambda_N.resize(msg.num_contacts);
+  for (int i = 0; i < msg.num_contacts; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      msg.p_W_m[i][d] = contacts[i].p_body_W_m[d];
+      msg.n_W[i][d] = contacts[i].n_W[d];
+    }
+    msg.lambda_N[i] = frame.impulses()[rows_per_contact * i];
+  }
+  msg.time_coupling_s = stats.coupling_s;
+  msg.time_free_tool_s = stats.free_tool_s;
+  msg.time_free_fem_s = stats.free_fem_s;
+  msg.time_detection_s = stats.detection_s;
+  msg.time_response_s = stats.response_s;
+  msg.time_model_s = stats.model_s;
+  msg.time_sanity_s = stats.sanity_s;
+  msg.time_total_s = stats.total_s;
+  return msg;
+}
+
+// Visual frames slaved to the haptic clock; returns the number of frames run.
+// The haptic process is spawned (unless --no-spawn) only once the body and the frame are built,
+// so that its clock starts when the first model can follow within one frame's computation.
+long RunFrames(const config::Scene& scene, const RunCommandOptions& options, lcm::LCM* lcm,
+               Listener* listener, pid_t* child, int* child_code, std::string* child_end) {
+  const config::Body body = config::MakeBody(*scene.body, scene.gravity_m_s2);
+  contact::VisualFrameOptions visual = config::MakeVisualFrameOptions(scene);
+  visual.dt_s = scene.dt_s;
+  visual.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
+  visual.export_contact_rows = scene.haptic.mode == device::HapticMode::kLcp;
+  contact::VisualFrame frame(body.model, scene.body->options, body.external_force_N,
+                             scene.tool->model, visual);
+  fem::State body_state = fem::MakeRestState(body.model);
+  ToolState visual_tool = scene.tool->initial_state;
+  const Matrix3Xi surface = fem::ExtractBoundarySurface(body.model.mesh);
+  *child = options.no_spawn ? -1 : SpawnHaptic(options);
+  const double duration_s = options.duration_s > 0.0 ? options.duration_s : scene.num_steps * scene.dt_s;
+  const long num_frames = std::lround(duration_s / scene.dt_s);
+  const int steps_per_frame = scene.haptic.steps_per_frame;
+  long k = 0;
+  for (; k < num_frames && !g_stop_requested.load(); ++k) {
+    // Wait for the haptic clock to reach the frame: frame k needs the state after step
+    // k·steps_per_frame − 1 (frame 0: the announcement of a haptic process waiting, step −1).
+    Listener::Snapshot now;
+    while (!g_stop_requested.load() &&
+           !(listener->Get(&now) && now.haptic_step >= k * steps_per_frame - 1)) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      *child_end = CheckChild(*child, child_code);
+      if (!child_end->empty()) return k;
+    }
+    if (g_stop_requested.load()) break;
+    const contact::VisualFrameStats stats =
+        frame.Step(now.device, &body_state, &visual_tool, &now.haptic_tool);
+    messages::ContactModelHeader header;
+    header.utime = WallMicros();
+    header.sequence = k;
+    header.dt_visual_s = scene.dt_s;
+    header.dt_haptic_s = visual.haptic_dt_s;
+    header.t_frame_s = (k + 1) * scene.dt_s;
+    header.x_W_m = now.haptic_tool.x_W_m;
+    header.q_WT = now.haptic_tool.q_WT;
+    const hapsim_lcm::contact_model_t model_msg = messages::ToMessage(
+        frame.linear_model(), visual.export_contact_rows ? &frame.contact_rows() : nullptr, header);
+    lcm->publish(messages::kContactModelChannel, &model_msg);
+    const hapsim_lcm::sim_frame_t sim_frame =
+        MakeSimFrame(body_state, surface, visual_tool, frame, stats, k, k * scene.dt_s);
+    lcm->publish(messages::kSimFrameChannel, &sim_frame);
+  }
+  return k;
+}
+
+int RunVisual(const RunCommandOptions& options) {
+  const config::Scene scene = config::LoadScene(options.scene_path);
+  if (!scene.tool || !scene.body)
+    throw InputError(scene.file, 0, scene.tool ? "body" : "tool",
+                     "`hapsim run` needs a deformable body and a tool");
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
+  Listener listener;
+  lcm.subscribe(messages::kDeviceStateChannel, &Listener::OnDevice, &listener);
+  lcm.subscribe(messages::kHapticStateChannel, &Listener::OnHaptic, &listener);
+  const std::string log_tmp = options.log_path + ".tmp";
+  if (!options.log_path.empty()) {
+    listener.OpenLog(log_tmp);
+    lcm.subscribe(".*", &Listener::OnAny, &listener);
+  }
+  InstallStopHandlers();
+  ReceiveThread receive_thread(&lcm);
+  hapsim_lcm::run_info_t info{};
+  info.utime = WallMicros();
+  info.scene_path = scene.file;
+  info.mode = device::ToString(scene.haptic.mode);
+  info.visual_rate_hz = 1.0 / scene.dt_s;
+  info.haptic_rate_hz = scene.haptic.rate_hz;
+  info.hapsim_version = HAPSIM_VERSION;
+  lcm.publish(messages::kRunInfoChannel, &info);
+  pid_t child = -1;
+  int child_code = 0;
+  std::string child_end;
+  const long frames = RunFrames(scene, options, &lcm, &listener, &child, &child_code, &child_end);
+  // Shutdown: the haptic process ends its script by itself; on a stop request it gets SIGTERM.
+  if (child > 0 && child_end.empty()) {
+    if (g_stop_requested.load()) kill(child, SIGTERM);
+    for (int waited_ms = 0; child_end.empty() && waited_ms < 5000; waited_ms += 5) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      child_end = CheckChild(child, &child_code);
+    }
+    if (child_end.empty()) {
+      kill(child, SIGKILL);
+      child_end = CheckChild(child, &child_code);
+      child_end = "did not stop within 5 s and was killed";
+      child_code = 1;
+    }
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the last messages in flight
+  receive_thread.Stop();
+  if (!options.log_path.empty()) {
+    listener.CloseLog();
+    std::filesystem::rename(log_tmp, options.log_path);
+  }
+  std::printf("hapsim run: %ld visual frames; haptic process %s\n", frames,
+              child > 0 ? child_end.c_str() : "not spawned");
+  if (!options.log_path.empty()) std::printf("  wrote %s\n", options.log_path.c_str());
+  if (child > 0 && child_code != 0) {
+    std::fprintf(stderr, "hapsim run: error: the haptic process %s\n", child_end.c_str());
+    return 1;
+  }
+  return g_stop_requested.load() ? 130 : 0;
+}
+
+}  // namespace
+
+void AddRunCommand(CLI::App* app) {
+  auto options = std::make_shared<RunCommandOptions>();
+  CLI::App* run = app->add_subcommand(
+      "run",
+      "Two-process run: this visual process (FEM, contact, linear contact model) publishes\n"
+      "models over LCM to `hapsim haptic`, which it spawns and supervises, at 1 kHz.");
+  run->add_option("scene", options->scene_path, "Scene file (YAML) with body, tool and device")
+      ->required();
+  run->add_option("--lcm-url", options->lcm_url, "LCM provider URL")->capture_default_str();
+  run->add_flag("--no-spawn", options->no_spawn,
+                "Do not start `hapsim haptic` (run it yourself, e.g. on the device's machine)");
+  run->add_option("--duration", options->duration_s,
+                  "Seconds of simulated time (default: the scene's script)")
+      ->check(CLI::PositiveNumber);
+  run->add_option("--log", options->log_path, "Write every channel to this LCM event log");
+  run->add_option("--haptic-summary", options->haptic_summary_path,
+                  "Have the haptic process write its loop statistics to this JSON file");
+  run->callback([options] {
+    const int code = RunVisual(*options);
+    if (code != 0) throw RunExit{code};
+  });
+}
+
+}  // namespace hapsim::apps

@@ -1,0 +1,62 @@
+#include "device/haptic_loop.h"
+
+#include <stdexcept>
+
+namespace hapsim::device {
+
+bool IsFinite(const DeviceState& device) {
+  return device.x_W_m.allFinite() && device.v_W_m_s.allFinite() &&
+         device.q_WD.coeffs().allFinite() && device.w_W_rad_s.allFinite();
+}
+
+HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
+                       const Eigen::Vector3d& gravity_m_s2, const ToolState& initial_tool,
+                       const HapticLoopOptions& options)
+    : options_(options),
+      step_(tool, coupling, gravity_m_s2, options.dt_s, initial_tool,
+            options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0),
+      safety_(options.safety, options.dt_s),
+      passivity_(options.passivity_threshold_J) {
+  if (options.mode != HapticMode::kLinear && options.mode != HapticMode::kLcp)
+    throw std::invalid_argument(std::string("the haptic process renders linear or lcp, not ") +
+                                ToString(options.mode));
+}
+
+HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s,
+                                  const ContactModelUpdate* new_model) noexcept {
+  HapticLoopOutput out;
+  // 1. The newest model: from this step on (age 0 at the step it arrives).
+  if (new_model != nullptr) {
+    step_.SetContactModel(new_model->model);
+    if (options_.mode == HapticMode::kLcp)
+      step_.SetContactRows(new_model->rows.num_rows() > 0 ? &new_model->rows : nullptr);
+    model_sequence_ = new_model->sequence;
+    model_age_s_ = 0.0;
+  } else if (model_sequence_ >= 0) {
+    model_age_s_ += options_.dt_s;
+  }
+  // 2. The haptic step, on a finite device state only.
+  const bool device_finite = IsFinite(device);
+  if (device_finite) out.rendered = step_.Step(device);
+  // 3. Safety.
+  SafetyInputs inputs;
+  inputs.device_age_s = device_age_s;
+  inputs.model_age_s = model_age_s_;
+  inputs.new_model = new_model != nullptr;
+  inputs.device_finite = device_finite;
+  out.sent = safety_.Filter(out.rendered.device_force_W_N, out.rendered.device_torque_W_N_m,
+                            inputs);
+  // 4. Passivity of what was sent.
+  const bool was_active = passivity_.active();
+  if (device_finite)
+    passivity_.Update(out.sent.force_W_N, out.sent.torque_W_N_m, device.v_W_m_s,
+                      device.w_W_rad_s, options_.dt_s);
+  out.passivity_energy_J = passivity_.energy_in_J();
+  out.passivity_alarm = passivity_.active() && !was_active;
+  out.model_sequence = model_sequence_;
+  out.model_age_s = model_age_s_;
+  ++num_steps_;
+  return out;
+}
+
+}  // namespace hapsim::device

@@ -1,0 +1,71 @@
+#pragma once
+// The work of one step of the separate 1 kHz haptic process (DESIGN.md §5, issue 4), without
+// its clock or its I/O, so that `hapsim haptic` runs it against wall time and `hapsim replay`
+// re-runs it from a log and gets the same forces bit for bit:
+//   1 take the newest contact model, if one arrived (linear model, and the rows in lcp mode)
+//   2 the haptic step (device/haptic_step.h) — skipped on a non-finite device state, which would
+//     poison the haptic tool's state
+//   3 the safety layer (device/haptic_safety.h): NaN/stale → zero, blend, rate limit, clamp
+//   4 the passivity observer on what was actually sent (device/passivity_observer.h)
+// Deterministic: the output depends only on the sequence of (device state, device age, model)
+// given to Step. Allocates nothing after construction (the lcp solver is sized by
+// lcp_max_rows).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <limits>
+
+#include "device/haptic_mode.h"
+#include "device/haptic_safety.h"
+#include "device/haptic_step.h"
+#include "device/model_mailbox.h"
+#include "device/passivity_observer.h"
+
+namespace hapsim::device {
+
+struct HapticLoopOptions {
+  HapticMode mode = HapticMode::kLinear;  // linear or lcp
+  double dt_s = 1e-3;
+  int lcp_max_rows = 512;
+  SafetyLimits safety;
+  double passivity_threshold_J = 1e-3;
+};
+
+struct HapticLoopOutput {
+  HapticOutput rendered;  // what the haptic step computed (zero when skipped)
+  SafeWrench sent;        // what may go to the device
+  std::int64_t model_sequence = -1;
+  double model_age_s = std::numeric_limits<double>::infinity();
+  double passivity_energy_J = 0.0;
+  bool passivity_alarm = false;  // the observer turned active at this step
+};
+
+class HapticLoop {
+ public:
+  // Throws std::invalid_argument for a mode other than linear or lcp, or bad safety limits.
+  HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
+             const Eigen::Vector3d& gravity_m_s2, const ToolState& initial_tool,
+             const HapticLoopOptions& options);
+
+  // One step. device_age_s: how old `device` is; new_model: the update that arrived since the
+  // last step, or nullptr (it must stay unchanged until the next non-null new_model).
+  HapticLoopOutput Step(const DeviceState& device, double device_age_s,
+                        const ContactModelUpdate* new_model) noexcept;
+
+  const ToolState& tool_state() const { return step_.tool_state(); }
+  long num_steps() const { return num_steps_; }
+
+ private:
+  HapticLoopOptions options_;
+  HapticStep step_;
+  HapticSafety safety_;
+  PassivityObserver passivity_;
+  std::int64_t model_sequence_ = -1;
+  double model_age_s_ = std::numeric_limits<double>::infinity();
+  long num_steps_ = 0;
+};
+
+// Every entry of the device state is finite (quaternion included).
+bool IsFinite(const DeviceState& device);
+
+}  // namespace hapsim::device

@@ -1,0 +1,59 @@
+#pragma once
+// Hands the newest contact model from the receive thread to the 1 kHz haptic loop without a lock
+// (issue 4: "a receive thread double-buffers the newest model; the loop takes no lock beyond a
+// swap"). A triple buffer: the writer fills its private slot and swaps it with the shared middle
+// slot; the loop, when the middle slot holds something new, swaps its own slot with it. Each side
+// touches only its own slot between swaps, so neither waits, and a model is never torn. Models
+// that arrive faster than the loop takes them are overwritten (only the newest matters).
+//
+// One writer thread and one reader thread; the swaps are single atomic exchanges. The same
+// buffer carries the external driver's device states (apps/haptic_command.cc).
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+
+#include "contact/haptic_contact_rows.h"
+#include "contact/linear_contact_model.h"
+
+namespace hapsim::device {
+
+// One visual frame's output as the haptic loop uses it.
+struct ContactModelUpdate {
+  std::int64_t sequence = -1;         // visual frame index (contact_model_t.sequence)
+  contact::LinearContactModel model;  // the paper's model
+  contact::ContactRows rows;          // lcp mode: the frame's rows (num_rows 0 otherwise)
+};
+
+// The newest value from one writer thread to one reader thread.
+template <typename T>
+class TripleBuffer {
+ public:
+  // Writer: the slot to fill (private to the writer until Publish).
+  T* writer_slot() { return &slots_[writer_]; }
+  // Writer: makes the filled slot the newest; the writer gets another slot to fill next.
+  void Publish() {
+    // acq_rel: the slot's contents happen-before the reader's acquire of the same exchange chain.
+    const std::uint8_t old = middle_.exchange(writer_ | kFresh, std::memory_order_acq_rel);
+    writer_ = old & 3;
+  }
+  // Reader: the newest value if one was published since the last call, else nullptr. The slot
+  // stays the reader's (unchanged) until its next call that returns non-null.
+  const T* TakeNewest() {
+    if (!(middle_.load(std::memory_order_acquire) & kFresh)) return nullptr;
+    const std::uint8_t old = middle_.exchange(reader_, std::memory_order_acq_rel);
+    reader_ = old & 3;
+    return &slots_[reader_];
+  }
+
+ private:
+  static constexpr std::uint8_t kFresh = 4;  // bit set in middle_ while it holds an unread value
+  std::array<T, 3> slots_;
+  std::atomic<std::uint8_t> middle_{1};
+  std::uint8_t writer_ = 0;  // touched by the writer only
+  std::uint8_t reader_ = 2;  // touched by the reader only
+};
+
+using ModelMailbox = TripleBuffer<ContactModelUpdate>;
+
+}  // namespace hapsim::device

@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# Cross-process checks of `hapsim run` (visual process) + `hapsim haptic` (spawned, 1 kHz) over
+# LCM on scenes/block_press.yaml (run by ctest from the repository root). Traffic stays on this
+# machine: inside a private network namespace when root (unshare -n, loopback up, a multicast
+# route on lo), otherwise on a port unique to this test run with ttl=0.
+#  1. a whole run completes (exit 0), the haptic process ran one step per millisecond of the
+#     script, and its device forces agree with the in-process simulator (`hapsim sim`) within
+#     the tolerance message timing allows (see the comment at the check);
+#  2. `hapsim replay` of that log reproduces every logged force bit for bit; a truncated log is
+#     a clear error (exit 2);
+#  3. killing the haptic process mid-run makes `hapsim run` report it and exit non-zero;
+#  4. killing the visual process mid-run: the haptic force fades to zero within the model stale
+#     threshold.
+set -euo pipefail
+hapsim="$(realpath "$1")"
+if [ -z "${HAPSIM_IN_NETNS:-}" ] && [ "$(id -u)" -eq 0 ] && unshare -n true 2>/dev/null; then
+  exec env HAPSIM_IN_NETNS=1 unshare -n bash -c \
+    'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' "$0" "$@"
+fi
+port=$((20000 + $$ % 20000))
+url="udpm://239.255.76.67:$port?ttl=0"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+scene=scenes/block_press.yaml
+
+# 1. A whole run, logged.
+"$hapsim" run "$scene" --lcm-url "$url" --log "$work/run.lcm" \
+  --haptic-summary "$work/haptic.json" > "$work/run.out" 2>&1 || fail "run: $(cat "$work/run.out")"
+[ -s "$work/run.lcm" ] || fail "no log written"
+"$hapsim" replay "$work/run.lcm" --csv "$work/logged.csv" > "$work/replay.out" 2>&1 ||
+  fail "replay: $(cat "$work/replay.out")"
+grep -q "reproduced bit for bit" "$work/replay.out" || fail "replay: $(cat "$work/replay.out")"
+"$hapsim" sim "$scene" --mode linear --out "$work/sim" > /dev/null
+/usr/bin/python3 - "$work/haptic.json" "$work/logged.csv" "$work/sim/haptic.csv" <<'PY'
+import csv, json, math, sys
+summary = json.load(open(sys.argv[1]))
+logged = list(csv.DictReader(open(sys.argv[2])))
+inproc = list(csv.DictReader(open(sys.argv[3])))
+# One haptic step per millisecond of the 3 s script, every one logged, none skipped.
+assert summary["steps"] == 3000, summary["steps"]
+assert [int(r["step"]) for r in logged] == list(range(3000)), "steps missing from the log"
+# Forces against the in-process run, where frame k's model is used from step 30k on. Across
+# processes frame k starts once the haptic process has published step 30k − 1 and its model
+# arrives one frame computation plus transport later (median 9 steps here, up to a frame when a
+# frame runs long), so the haptic tool runs a few ms longer on each previous model. Tolerance:
+# 0.05 N RMS over the run, 1.6% of the 3.1 N peak and about the model's own error against the
+# 1 kHz reference (0.047 N); measured 0.022 N (docs/BENCHMARKS.md). The peak within 5%.
+n = min(len(logged), len(inproc))
+err = math.sqrt(sum((float(logged[i][f"force_{a}_N"]) - float(inproc[i][f"force_{a}_N"])) ** 2
+                    for i in range(n) for a in "xyz") / n)
+peak = lambda rows: max(abs(float(r["force_z_N"])) for r in rows)
+print(f"device force RMS difference from the in-process run: {err:.4f} N; peaks "
+      f"{peak(logged):.3f} / {peak(inproc):.3f} N")
+assert err < 0.05, err
+assert abs(peak(logged) - peak(inproc)) < 0.05 * peak(inproc)
+PY
+
+# 2. A truncated log: exit 2 and a message naming it.
+head -c $(( $(stat -c %s "$work/run.lcm") / 2 )) "$work/run.lcm" > "$work/cut.lcm"
+set +e
+"$hapsim" replay "$work/cut.lcm" > "$work/cut.out" 2>&1
+status=$?
+set -e
+[ "$status" -eq 2 ] || fail "truncated log should exit 2, got $status: $(cat "$work/cut.out")"
+grep -q "cut.lcm.*truncated or corrupt" "$work/cut.out" || fail "message: $(cat "$work/cut.out")"
+
+# 3. Kill the haptic process mid-run: `hapsim run` reports it and exits non-zero.
+"$hapsim" run "$scene" --lcm-url "$url" > "$work/kill_haptic.out" 2>&1 &
+run_pid=$!
+sleep 1.5
+pkill -KILL -f "hapsim haptic $scene --lcm-url udpm://239.255.76.67:$port" || fail "no haptic process to kill"
+set +e
+wait "$run_pid"
+status=$?
+set -e
+[ "$status" -ne 0 ] || fail "run should fail when the haptic process dies"
+grep -q "haptic process was killed by signal" "$work/kill_haptic.out" ||
+  fail "message: $(cat "$work/kill_haptic.out")"
+
+# 4. Kill the visual process mid-run: the haptic force fades to zero within model_stale_s.
+"$hapsim" haptic "$scene" --lcm-url "$url" --duration 3 --summary "$work/fade.json" \
+  > "$work/fade_haptic.out" 2>&1 &
+haptic_pid=$!
+"$hapsim" run "$scene" --lcm-url "$url" --no-spawn > /dev/null 2>&1 &
+visual_pid=$!
+sleep 1.6
+kill -KILL "$visual_pid"
+wait "$haptic_pid" || fail "haptic process failed: $(cat "$work/fade_haptic.out")"
+grep -q "fade-out after the last model" "$work/fade_haptic.out" || fail "$(cat "$work/fade_haptic.out")"
+/usr/bin/python3 - "$work/fade.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+fade = s["fade_after_last_model_s"]
+print(f"force faded to zero {1e3 * fade:.0f} ms after the last model (stale threshold {1e3 * s['model_stale_s']:.0f} ms)")
+assert fade is not None and fade <= s["model_stale_s"] + 1e-9, (fade, s["model_stale_s"])
+assert s["force_after_stale_N"] == 0.0, s["force_after_stale_N"]
+PY
+echo "two-process checks passed"
