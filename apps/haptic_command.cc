@@ -44,13 +44,10 @@ struct HapticCommandOptions {
   std::string summary_path;
 };
 
-// Decodes CONTACT_MODEL into the mailbox and records each model's latency from publication
-// (same-machine clocks) in a preallocated buffer.
+// Decodes CONTACT_MODEL into the mailbox.
 class ModelReceiver {
  public:
-  explicit ModelReceiver(device::ModelMailbox* mailbox) : mailbox_(mailbox) {
-    latencies_s_.reserve(1 << 16);
-  }
+  explicit ModelReceiver(device::ModelMailbox* mailbox) : mailbox_(mailbox) {}
   void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::contact_model_t* msg) {
     device::ContactModelUpdate* slot = mailbox_->writer_slot();
     messages::ContactModelHeader header;
@@ -61,16 +58,14 @@ class ModelReceiver {
       return;
     }
     slot->sequence = header.sequence;
+    slot->published_utime = header.utime;
+    slot->visual_tool = header.visual_tool;
     mailbox_->Publish();
-    if (latencies_s_.size() < latencies_s_.capacity())
-      latencies_s_.push_back(1e-6 * static_cast<double>(WallMicros() - header.utime));
   }
-  std::vector<double>& latencies_s() { return latencies_s_; }
   long rejected() const { return rejected_; }
 
  private:
   device::ModelMailbox* mailbox_;
-  std::vector<double> latencies_s_;
   long rejected_ = 0;
 };
 
@@ -116,6 +111,9 @@ class ExternalDevice : public device::DeviceBackend {
 struct LoopStats {
   std::vector<double> period_error_s;  // |period − Δt| per step
   std::vector<double> compute_s;       // CPU time of the step's work
+  // Per model: from its publication to the start of the step that first used it (same-machine
+  // wall clocks), s.
+  std::vector<double> model_latency_s;
   long overruns = 0, zeroed_steps = 0, passivity_alarms = 0;
   double max_force_sent_N = 0.0;
   // Fade-out when the models stop (the visual process died): the step the last model arrived,
@@ -223,9 +221,10 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, 
                            {"p99_us", 1e6 * Quantile(&stats->period_error_s, 0.99)},
                            {"p999_us", 1e6 * Quantile(&stats->period_error_s, 0.999)},
                            {"max_us", 1e6 * Quantile(&stats->period_error_s, 1.0)}};
-  nlohmann::json latency = {{"p50_ms", 1e3 * Quantile(&receiver->latencies_s(), 0.5)},
-                            {"p99_ms", 1e3 * Quantile(&receiver->latencies_s(), 0.99)},
-                            {"count", receiver->latencies_s().size()}};
+  nlohmann::json latency = {{"p50_ms", 1e3 * Quantile(&stats->model_latency_s, 0.5)},
+                            {"p99_ms", 1e3 * Quantile(&stats->model_latency_s, 0.99)},
+                            {"max_ms", 1e3 * Quantile(&stats->model_latency_s, 1.0)},
+                            {"count", stats->model_latency_s.size()}};
   return {{"steps", steps},
           {"dt_s", dt_s},
           {"period_error", period},
@@ -251,10 +250,10 @@ void RunHaptic(const HapticCommandOptions& options) {
     if (!parsed) throw InputError("", 0, "--mode", "unknown mode '" + options.mode + "'");
     mode = *parsed;
   }
-  if (mode != device::HapticMode::kLinear && mode != device::HapticMode::kLcp)
+  if (mode == device::HapticMode::kReference)
     throw InputError("", 0, options.mode.empty() ? "haptic.mode" : "--mode",
-                     std::string("the haptic process renders linear or lcp; ") +
-                         device::ToString(mode) + " runs in `hapsim sim`");
+                     "the reference mode runs in `hapsim sim` only (everything at 1 kHz in one "
+                     "process)");
   device::HapticLoopOptions loop_options;
   loop_options.mode = mode;
   loop_options.dt_s = 1.0 / scene.haptic.rate_hz;
@@ -301,6 +300,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   LoopStats stats;
   stats.period_error_s.reserve(num_steps);
   stats.compute_s.reserve(num_steps);
+  stats.model_latency_s.reserve(num_steps);
   std::vector<std::uint8_t> buffer(1 << 16);
   const std::int64_t dt_ns = std::llround(1e9 * loop_options.dt_s);
   std::int64_t deadline_ns = MonotonicNs() + dt_ns, previous_start_ns = 0;
@@ -308,6 +308,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   for (; step < num_steps && !g_stop_requested.load(); ++step) {
     SleepUntil(deadline_ns);
     const std::int64_t start_ns = MonotonicNs();
+    const std::int64_t step_start_utime = WallMicros();
     const double period_s = step == 0 ? loop_options.dt_s : 1e-9 * (start_ns - previous_start_ns);
     previous_start_ns = start_ns;
     if (step > 0) stats.period_error_s.push_back(std::abs(period_s - loop_options.dt_s));
@@ -318,7 +319,12 @@ void RunHaptic(const HapticCommandOptions& options) {
         step == 0 && first_model != nullptr ? first_model : mailbox.TakeNewest();
     const device::HapticLoopOutput out = loop.Step(device.state, device.age_s, update);
     backend->Write(out.sent.force_W_N, out.sent.torque_W_N_m);
-    if (update != nullptr) stats.last_model_step = step;
+    if (update != nullptr) {
+      stats.last_model_step = step;
+      if (stats.model_latency_s.size() < stats.model_latency_s.capacity())
+        stats.model_latency_s.push_back(1e-6 * static_cast<double>(step_start_utime -
+                                                                    update->published_utime));
+    }
     if (out.sent.force_W_N.squaredNorm() > 0.0) stats.last_nonzero_step = step;
     if (out.model_age_s > loop_options.safety.model_stale_s)
       stats.force_after_stale_N = std::max(stats.force_after_stale_N, out.sent.force_W_N.norm());
@@ -336,7 +342,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   const nlohmann::json summary = Summarize(&stats, &receiver, step, loop_options.dt_s,
                                            loop_options.safety.model_stale_s);
   std::printf("hapsim haptic: %ld steps; period error p50 %.1f us, p99 %.1f us, max %.1f us; "
-              "%ld overruns; model latency p50 %.2f ms; max force sent %.3f N\n",
+              "%ld overruns; model latency (publish to first use) p50 %.2f ms; max force sent %.3f N\n",
               step, summary["period_error"]["p50_us"].get<double>(),
               summary["period_error"]["p99_us"].get<double>(),
               summary["period_error"]["max_us"].get<double>(), stats.overruns,

@@ -34,6 +34,7 @@ struct ReplayOptions {
 
 struct LogContents {
   std::string scene_path;
+  std::string mode;  // RUN_INFO.mode: the haptic process's
   std::map<long, hapsim_lcm::haptic_state_t> steps;                     // by step
   std::map<long, DeviceState> devices;                                   // by sequence
   std::map<long, std::unique_ptr<device::ContactModelUpdate>> models;  // by sequence
@@ -59,7 +60,9 @@ LogContents ReadLog(const std::string& path) {
     end_of_last_event = std::ftell(log.getFilePtr());
     const std::string& channel = event->channel;
     if (channel == messages::kRunInfoChannel) {
-      contents.scene_path = Decode<hapsim_lcm::run_info_t>(*event, path).scene_path;
+      const auto info = Decode<hapsim_lcm::run_info_t>(*event, path);
+      contents.scene_path = info.scene_path;
+      contents.mode = info.mode;
     } else if (channel == messages::kDeviceStateChannel) {
       const auto msg = Decode<hapsim_lcm::device_state_t>(*event, path);
       DeviceState device;
@@ -79,6 +82,8 @@ LogContents ReadLog(const std::string& path) {
       if (!messages::FromMessage(msg, &update->model, &update->rows, &header, &error))
         throw InputError(path, 0, channel, error);
       update->sequence = header.sequence;
+      update->published_utime = header.utime;
+      update->visual_tool = header.visual_tool;
       contents.models[header.sequence] = std::move(update);
     }
   }
@@ -113,6 +118,7 @@ void WriteCsv(const std::string& path, const LogContents& log) {
 long Replay(const config::Scene& scene, const LogContents& log) {
   device::HapticLoopOptions options;
   options.mode = scene.haptic.mode;
+  if (const auto logged_mode = config::ParseHapticMode(log.mode)) options.mode = *logged_mode;
   options.dt_s = 1.0 / scene.haptic.rate_hz;
   options.lcp_max_rows = scene.haptic.lcp_max_rows;
   options.safety = scene.haptic.safety;

@@ -42,6 +42,7 @@ namespace {
 struct RunCommandOptions {
   std::string scene_path;
   std::string lcm_url = messages::kDefaultLcmUrl;
+  std::string mode;  // empty: the scene's haptic.mode
   bool no_spawn = false;
   double duration_s = 0.0;  // 0: the scene's script
   std::string log_path;
@@ -122,6 +123,7 @@ class Listener {
 pid_t SpawnHaptic(const RunCommandOptions& options) {
   std::vector<std::string> args = {"hapsim", "haptic", options.scene_path, "--lcm-url",
                                    options.lcm_url};
+  if (!options.mode.empty()) args.insert(args.end(), {"--mode", options.mode});
   if (options.duration_s > 0.0) args.insert(args.end(), {"--duration", std::to_string(options.duration_s)});
   if (!options.haptic_summary_path.empty())
     args.insert(args.end(), {"--summary", options.haptic_summary_path});
@@ -193,13 +195,16 @@ hapsim_lcm::sim_frame_t MakeSimFrame(const fem::State& body, const Matrix3Xi& su
 // Visual frames slaved to the haptic clock; returns the number of frames run.
 // The haptic process is spawned (unless --no-spawn) only once the body and the frame are built,
 // so that its clock starts when the first model can follow within one frame's computation.
-long RunFrames(const config::Scene& scene, const RunCommandOptions& options, lcm::LCM* lcm,
-               Listener* listener, pid_t* child, int* child_code, std::string* child_end) {
+long RunFrames(const config::Scene& scene, device::HapticMode mode,
+               const RunCommandOptions& options, lcm::LCM* lcm, Listener* listener, pid_t* child,
+               int* child_code, std::string* child_end) {
   const config::Body body = config::MakeBody(*scene.body, scene.gravity_m_s2);
   contact::VisualFrameOptions visual = config::MakeVisualFrameOptions(scene);
   visual.dt_s = scene.dt_s;
   visual.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
-  visual.export_contact_rows = scene.haptic.mode == device::HapticMode::kLcp;
+  visual.export_contact_rows = mode == device::HapticMode::kLcp;
+  // coupling: there is no haptic tool; the model is linearised at the visual tool (and unused).
+  const bool haptic_tool = mode != device::HapticMode::kCoupling;
   contact::VisualFrame frame(body.model, scene.body->options, body.external_force_N,
                              scene.tool->model, visual);
   fem::State body_state = fem::MakeRestState(body.model);
@@ -222,7 +227,7 @@ long RunFrames(const config::Scene& scene, const RunCommandOptions& options, lcm
     }
     if (g_stop_requested.load()) break;
     const contact::VisualFrameStats stats =
-        frame.Step(now.device, &body_state, &visual_tool, &now.haptic_tool);
+        frame.Step(now.device, &body_state, &visual_tool, haptic_tool ? &now.haptic_tool : nullptr);
     messages::ContactModelHeader header;
     header.utime = WallMicros();
     header.sequence = k;
@@ -231,6 +236,7 @@ long RunFrames(const config::Scene& scene, const RunCommandOptions& options, lcm
     header.t_frame_s = (k + 1) * scene.dt_s;
     header.x_W_m = now.haptic_tool.x_W_m;
     header.q_WT = now.haptic_tool.q_WT;
+    header.visual_tool = visual_tool;
     const hapsim_lcm::contact_model_t model_msg = messages::ToMessage(
         frame.linear_model(), visual.export_contact_rows ? &frame.contact_rows() : nullptr, header);
     lcm->publish(messages::kContactModelChannel, &model_msg);
@@ -246,6 +252,19 @@ int RunVisual(const RunCommandOptions& options) {
   if (!scene.tool || !scene.body)
     throw InputError(scene.file, 0, scene.tool ? "body" : "tool",
                      "`hapsim run` needs a deformable body and a tool");
+  device::HapticMode mode = scene.haptic.mode;
+  if (!options.mode.empty()) {
+    const auto parsed = config::ParseHapticMode(options.mode);
+    if (!parsed || *parsed == device::HapticMode::kReference)
+      throw InputError("", 0, "--mode",
+                       "'" + options.mode + "': the two processes render linear, lcp or coupling");
+    mode = *parsed;
+  }
+  if (mode == device::HapticMode::kReference)
+    throw InputError(scene.file, 0, "haptic.mode",
+                     "reference runs in `hapsim sim` only; give --mode linear, lcp or coupling");
+  if (mode == device::HapticMode::kLcp && scene.contact.law == contact::ContactLaw::kFriction)
+    throw InputError("", 0, "--mode", "lcp solves normal rows only; the contact law is friction");
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   Listener listener;
@@ -261,7 +280,7 @@ int RunVisual(const RunCommandOptions& options) {
   hapsim_lcm::run_info_t info{};
   info.utime = WallMicros();
   info.scene_path = scene.file;
-  info.mode = device::ToString(scene.haptic.mode);
+  info.mode = device::ToString(mode);
   info.visual_rate_hz = 1.0 / scene.dt_s;
   info.haptic_rate_hz = scene.haptic.rate_hz;
   info.hapsim_version = HAPSIM_VERSION;
@@ -269,7 +288,8 @@ int RunVisual(const RunCommandOptions& options) {
   pid_t child = -1;
   int child_code = 0;
   std::string child_end;
-  const long frames = RunFrames(scene, options, &lcm, &listener, &child, &child_code, &child_end);
+  const long frames =
+      RunFrames(scene, mode, options, &lcm, &listener, &child, &child_code, &child_end);
   // Shutdown: the haptic process ends its script by itself; on a stop request it gets SIGTERM.
   if (child > 0 && child_end.empty()) {
     if (g_stop_requested.load()) kill(child, SIGTERM);
@@ -311,6 +331,9 @@ void AddRunCommand(CLI::App* app) {
   run->add_option("scene", options->scene_path, "Scene file (YAML) with body, tool and device")
       ->required();
   run->add_option("--lcm-url", options->lcm_url, "LCM provider URL")->capture_default_str();
+  run->add_option("--mode", options->mode,
+                  "linear (the paper), lcp (1 kHz unilateral solve on the frame's rows) or\n"
+                  "coupling (standard multirate); default: the scene's haptic.mode");
   run->add_flag("--no-spawn", options->no_spawn,
                 "Do not start `hapsim haptic` (run it yourself, e.g. on the device's machine)");
   run->add_option("--duration", options->duration_s,

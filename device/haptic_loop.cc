@@ -13,13 +13,15 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
                        const Eigen::Vector3d& gravity_m_s2, const ToolState& initial_tool,
                        const HapticLoopOptions& options)
     : options_(options),
+      tool_(tool),
+      coupling_(coupling),
       step_(tool, coupling, gravity_m_s2, options.dt_s, initial_tool,
             options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0),
+      visual_tool_(initial_tool),
       safety_(options.safety, options.dt_s),
       passivity_(options.passivity_threshold_J) {
-  if (options.mode != HapticMode::kLinear && options.mode != HapticMode::kLcp)
-    throw std::invalid_argument(std::string("the haptic process renders linear or lcp, not ") +
-                                ToString(options.mode));
+  if (options.mode == HapticMode::kReference)
+    throw std::invalid_argument("the reference mode runs in the in-process simulator only");
 }
 
 HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s,
@@ -30,6 +32,7 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
     step_.SetContactModel(new_model->model);
     if (options_.mode == HapticMode::kLcp)
       step_.SetContactRows(new_model->rows.num_rows() > 0 ? &new_model->rows : nullptr);
+    visual_tool_ = new_model->visual_tool;
     model_sequence_ = new_model->sequence;
     model_age_s_ = 0.0;
   } else if (model_sequence_ >= 0) {
@@ -37,7 +40,14 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
   }
   // 2. The haptic step, on a finite device state only.
   const bool device_finite = IsFinite(device);
-  if (device_finite) out.rendered = step_.Step(device);
+  if (device_finite && options_.mode == HapticMode::kCoupling) {
+    const CouplingWrench wrench = CalcCouplingWrench(coupling_, device, visual_tool_,
+                                                     CalcAngularVelocity(tool_, visual_tool_));
+    out.rendered.device_force_W_N = -wrench.F_W_N;
+    out.rendered.device_torque_W_N_m = -wrench.T_W_N_m;
+  } else if (device_finite) {
+    out.rendered = step_.Step(device);
+  }
   // 3. Safety.
   SafetyInputs inputs;
   inputs.device_age_s = device_age_s;

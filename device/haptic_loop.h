@@ -4,7 +4,8 @@
 // re-runs it from a log and gets the same forces bit for bit:
 //   1 take the newest contact model, if one arrived (linear model, and the rows in lcp mode)
 //   2 the haptic step (device/haptic_step.h) — skipped on a non-finite device state, which would
-//     poison the haptic tool's state
+//     poison the haptic tool's state; in the coupling mode instead the coupling between the
+//     device and the visual tool of the last frame, held until the next (standard multirate)
 //   3 the safety layer (device/haptic_safety.h): NaN/stale → zero, blend, rate limit, clamp
 //   4 the passivity observer on what was actually sent (device/passivity_observer.h)
 // Deterministic: the output depends only on the sequence of (device state, device age, model)
@@ -24,7 +25,7 @@
 namespace hapsim::device {
 
 struct HapticLoopOptions {
-  HapticMode mode = HapticMode::kLinear;  // linear or lcp
+  HapticMode mode = HapticMode::kLinear;  // linear, lcp or coupling
   double dt_s = 1e-3;
   int lcp_max_rows = 512;
   SafetyLimits safety;
@@ -42,7 +43,7 @@ struct HapticLoopOutput {
 
 class HapticLoop {
  public:
-  // Throws std::invalid_argument for a mode other than linear or lcp, or bad safety limits.
+  // Throws std::invalid_argument for the reference mode (in-process only) or bad safety limits.
   HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
              const Eigen::Vector3d& gravity_m_s2, const ToolState& initial_tool,
              const HapticLoopOptions& options);
@@ -52,12 +53,18 @@ class HapticLoop {
   HapticLoopOutput Step(const DeviceState& device, double device_age_s,
                         const ContactModelUpdate* new_model) noexcept;
 
-  const ToolState& tool_state() const { return step_.tool_state(); }
+  // The haptic tool (linear, lcp) or the visual tool of the last frame (coupling).
+  const ToolState& tool_state() const {
+    return options_.mode == HapticMode::kCoupling ? visual_tool_ : step_.tool_state();
+  }
   long num_steps() const { return num_steps_; }
 
  private:
   HapticLoopOptions options_;
+  ToolModel tool_;
+  CouplingParams coupling_;
   HapticStep step_;
+  ToolState visual_tool_;  // coupling mode
   HapticSafety safety_;
   PassivityObserver passivity_;
   std::int64_t model_sequence_ = -1;

@@ -15,14 +15,17 @@
 
 #include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
+#include "core/rigid_tool.h"
 
 namespace hapsim::device {
 
 // One visual frame's output as the haptic loop uses it.
 struct ContactModelUpdate {
   std::int64_t sequence = -1;         // visual frame index (contact_model_t.sequence)
+  std::int64_t published_utime = 0;   // when the visual process published it, µs (latency)
   contact::LinearContactModel model;  // the paper's model
   contact::ContactRows rows;          // lcp mode: the frame's rows (num_rows 0 otherwise)
+  ToolState visual_tool;              // coupling mode: the visual tool after the frame
 };
 
 // The newest value from one writer thread to one reader thread.

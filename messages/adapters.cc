@@ -113,6 +113,9 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
   const int n = msg.num_rows;
   return CheckFinite(&msg.t_frame_s, 1, "contact_model_t.t_frame_s", error) &&
          CheckFinite(msg.x_W_m, 3, "contact_model_t.x_W_m", error) &&
+         CheckFinite(msg.visual_x_W_m, 3, "contact_model_t.visual_x_W_m", error) &&
+         CheckFinite(msg.visual_v_W_m_s, 3, "contact_model_t.visual_v_W_m_s", error) &&
+         CheckFinite(msg.visual_L_W_kg_m2_s, 3, "contact_model_t.visual_L_W_kg_m2_s", error) &&
          CheckFinite(msg.F_c0_N, 3, "contact_model_t.F_c0_N", error) &&
          CheckFinite(msg.T_c0_N_m, 3, "contact_model_t.T_c0_N_m", error) &&
          CheckFinite(&msg.dFc_dF[0][0], 9, "contact_model_t.dFc_dF", error) &&
@@ -209,6 +212,10 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   msg.t_frame_s = header.t_frame_s;
   VectorToArray(header.x_W_m, msg.x_W_m);
   QuaternionToArray(header.q_WT, msg.q_WT);
+  VectorToArray(header.visual_tool.x_W_m, msg.visual_x_W_m);
+  QuaternionToArray(header.visual_tool.q_WT, msg.visual_q_WT);
+  VectorToArray(header.visual_tool.v_W_m_s, msg.visual_v_W_m_s);
+  VectorToArray(header.visual_tool.L_W_kg_m2_s, msg.visual_L_W_kg_m2_s);
   msg.num_contacts = model.num_contacts;
   VectorToArray(model.F_c0_N, msg.F_c0_N);
   VectorToArray(model.T_c0_N_m, msg.T_c0_N_m);
@@ -246,9 +253,10 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
 
 bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactModel* model,
                  contact::ContactRows* rows, ContactModelHeader* header, std::string* error) {
-  Eigen::Quaterniond q_WT;
+  Eigen::Quaterniond q_WT, visual_q_WT;
   if (!CheckContactModel(msg, error) ||
-      !ReadUnitQuaternion(msg.q_WT, "contact_model_t.q_WT", &q_WT, error)) {
+      !ReadUnitQuaternion(msg.q_WT, "contact_model_t.q_WT", &q_WT, error) ||
+      !ReadUnitQuaternion(msg.visual_q_WT, "contact_model_t.visual_q_WT", &visual_q_WT, error)) {
     return false;
   }
   header->utime = msg.utime;
@@ -258,6 +266,10 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
   header->t_frame_s = msg.t_frame_s;
   header->x_W_m = ArrayToVector(msg.x_W_m);
   header->q_WT = q_WT;
+  header->visual_tool.x_W_m = ArrayToVector(msg.visual_x_W_m);
+  header->visual_tool.q_WT = visual_q_WT;
+  header->visual_tool.v_W_m_s = ArrayToVector(msg.visual_v_W_m_s);
+  header->visual_tool.L_W_kg_m2_s = ArrayToVector(msg.visual_L_W_kg_m2_s);
 
   model->num_contacts = msg.num_contacts;
   model->F_c0_N = ArrayToVector(msg.F_c0_N);

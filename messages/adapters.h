@@ -96,6 +96,7 @@ struct ContactModelHeader {
   double t_frame_s = 0.0;                           // simulated time at the end of the frame
   Eigen::Vector3d x_W_m = Eigen::Vector3d::Zero();  // tool COM at linearisation
   Eigen::Quaterniond q_WT = Eigen::Quaterniond::Identity();  // tool orientation there
+  ToolState visual_tool;  // after the frame (coupling mode)
 };
 
 // rows_or_null: the lcp mode's rows, or null for num_rows = 0. Allocates (visual process).

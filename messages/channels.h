@@ -10,7 +10,9 @@ inline constexpr char kHapticStateChannel[] = "HAPTIC_STATE";    // haptic_state
 inline constexpr char kSimFrameChannel[] = "SIM_FRAME";          // sim_frame_t, per frame
 inline constexpr char kRunInfoChannel[] = "RUN_INFO";            // run_info_t, at start
 
-// Default transport: UDP multicast that stays on this machine (ttl=0).
-inline constexpr char kDefaultLcmUrl[] = "udpm://239.255.76.67:7667?ttl=0";
+// Default transport: UDP multicast that stays on this machine (ttl=0), with a 4 MB receive
+// buffer: an lcp contact model of ~200 rows is ~330 kB, sent in fragments that must all fit in
+// the socket buffer at once (the kernel default, 208 kB, dropped them).
+inline constexpr char kDefaultLcmUrl[] = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 
 }  // namespace hapsim::messages

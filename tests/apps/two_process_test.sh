@@ -10,7 +10,9 @@
 #     a clear error (exit 2);
 #  3. killing the haptic process mid-run makes `hapsim run` report it and exit non-zero;
 #  4. killing the visual process mid-run: the haptic force fades to zero within the model stale
-#     threshold.
+#     threshold;
+#  5. the lcp mode with a force limit below the scene's peak, recorded by the stock lcm-logger:
+#     that log replays bit for bit too, and no force beyond the clamp was sent in the whole run.
 set -euo pipefail
 hapsim="$(realpath "$1")"
 if [ -z "${HAPSIM_IN_NETNS:-}" ] && [ "$(id -u)" -eq 0 ] && unshare -n true 2>/dev/null; then
@@ -18,7 +20,7 @@ if [ -z "${HAPSIM_IN_NETNS:-}" ] && [ "$(id -u)" -eq 0 ] && unshare -n true 2>/d
     'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' "$0" "$@"
 fi
 port=$((20000 + $$ % 20000))
-url="udpm://239.255.76.67:$port?ttl=0"
+url="udpm://239.255.76.67:$port?ttl=0&recv_buf_size=4194304"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
@@ -86,6 +88,7 @@ haptic_pid=$!
 visual_pid=$!
 sleep 1.6
 kill -KILL "$visual_pid"
+wait "$visual_pid" 2> /dev/null || true  # killed on purpose
 wait "$haptic_pid" || fail "haptic process failed: $(cat "$work/fade_haptic.out")"
 grep -q "fade-out after the last model" "$work/fade_haptic.out" || fail "$(cat "$work/fade_haptic.out")"
 /usr/bin/python3 - "$work/fade.json" <<'PY'
@@ -95,5 +98,27 @@ fade = s["fade_after_last_model_s"]
 print(f"force faded to zero {1e3 * fade:.0f} ms after the last model (stale threshold {1e3 * s['model_stale_s']:.0f} ms)")
 assert fade is not None and fade <= s["model_stale_s"] + 1e-9, (fade, s["model_stale_s"])
 assert s["force_after_stale_N"] == 0.0, s["force_after_stale_N"]
+PY
+# 5. lcp, clamped at 2 N (the run peaks at 3.1 N), logged by the stock lcm-logger.
+sed 's/^  mode: linear$/  mode: lcp\n  safety: {max_force_N: 2.0}/' "$scene" > "$work/clamped.yaml"
+grep -q "max_force_N: 2.0" "$work/clamped.yaml" || fail "could not make the clamped scene"
+lcm-logger --lcm-url="$url" --quiet "$work/stock.lcm" > /dev/null 2>&1 &
+logger_pid=$!
+sleep 0.5
+"$hapsim" run "$work/clamped.yaml" --lcm-url "$url" > "$work/clamped.out" 2>&1 ||
+  fail "clamped run: $(cat "$work/clamped.out")"
+sleep 0.3
+kill -INT "$logger_pid"
+wait "$logger_pid" || true
+"$hapsim" replay "$work/stock.lcm" --csv "$work/stock.csv" > "$work/stock_replay.out" 2>&1 ||
+  fail "replay of the lcm-logger log: $(cat "$work/stock_replay.out")"
+/usr/bin/python3 - "$work/stock.csv" <<'PY'
+import csv, math, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+assert len(rows) == 3000, len(rows)
+peak = max(math.sqrt(sum(float(r[f"force_{a}_N"]) ** 2 for a in "xyz")) for r in rows)
+print(f"lcp run clamped at 2 N: largest force sent {peak:.6f} N")
+assert peak <= 2.0 + 1e-12, peak
+assert peak > 2.0 - 1e-6, "the clamp should have been reached"
 PY
 echo "two-process checks passed"

@@ -212,7 +212,12 @@ struct ContactModelFixture {
     rows.body_rhs = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
     rows.lambda_frame_N =
         Eigen::VectorXd::NullaryExpr(num_rows, [&] { return std::max(0.0, random()); });
-    header = {1717000000000001, 99, 1.0 / 60.0, 1e-3, 1.65, random.Vector(), random.Rotation()};
+    header = {1717000000000001, 99, 1.0 / 60.0, 1e-3, 1.65, random.Vector(), random.Rotation(),
+              ToolState{}};
+    header.visual_tool.x_W_m = random.Vector();
+    header.visual_tool.q_WT = random.Rotation();
+    header.visual_tool.v_W_m_s = random.Vector();
+    header.visual_tool.L_W_kg_m2_s = random.Vector();
   }
 };
 
@@ -240,6 +245,11 @@ void ExpectSameRowsAndHeader(const ContactModelFixture& in, const contact::Conta
   EXPECT_EQ(header.t_frame_s, in.header.t_frame_s);
   ExpectBitIdentical(header.x_W_m, in.header.x_W_m, "x_W_m");
   ExpectBitIdentical(header.q_WT, in.header.q_WT, "q_WT");
+  ExpectBitIdentical(header.visual_tool.x_W_m, in.header.visual_tool.x_W_m, "visual_x_W_m");
+  ExpectBitIdentical(header.visual_tool.q_WT, in.header.visual_tool.q_WT, "visual_q_WT");
+  ExpectBitIdentical(header.visual_tool.v_W_m_s, in.header.visual_tool.v_W_m_s, "visual_v_W_m_s");
+  ExpectBitIdentical(header.visual_tool.L_W_kg_m2_s, in.header.visual_tool.L_W_kg_m2_s,
+                     "visual_L_W_kg_m2_s");
 }
 
 TEST(ContactModelMessage, RoundTripWithRowsIsBitIdentical) {

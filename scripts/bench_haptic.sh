@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Regenerates the 1 kHz loop figures of docs/BENCHMARKS.md (issue 4): two-process runs of
+# scenes/block_press.yaml (`hapsim run`, which spawns `hapsim haptic`) in the linear and lcp
+# modes, each once as is (the visual process busy on the other core ~20% of the time) and once
+# with an extra CPU-bound job (`hapsim fem` on the 28,800-tet block) competing for the cores.
+# Reports the haptic period error p50/p99/p99.9/max, model latency from publication to first use
+# and CPU time per haptic step, from each run's --haptic-summary. Not part of ctest (timing is
+# measured, never asserted). Outputs in out/bench_haptic/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+out=out/bench_haptic
+mkdir -p "$out"
+for mode in linear lcp; do
+  build/apps/hapsim run scenes/block_press.yaml --mode "$mode" --haptic-summary "$out/$mode.json" > /dev/null
+  build/apps/hapsim fem scenes/block_large.yaml --steps 400 --out "$out/load" > /dev/null 2>&1 &
+  load_pid=$!
+  build/apps/hapsim run scenes/block_press.yaml --mode "$mode" --haptic-summary "$out/${mode}_loaded.json" > /dev/null
+  kill "$load_pid" 2> /dev/null || true
+  wait "$load_pid" 2> /dev/null || true
+done
+/usr/bin/python3 - "$out" <<'PY'
+import json, os, sys
+out = sys.argv[1]
+print("| run | period error p50 / p99 / p99.9 / max (us) | overruns | model latency p50 / p99 (ms) | compute p50 / max (us) |")
+print("|---|---|---|---|---|")
+for name in ["linear", "linear_loaded", "lcp", "lcp_loaded"]:
+    s = json.load(open(os.path.join(out, name + ".json")))
+    p, l = s["period_error"], s["model_latency"]
+    print(f"| {name} | {p['p50_us']:.1f} / {p['p99_us']:.1f} / {p['p999_us']:.1f} / {p['max_us']:.0f} | "
+          f"{s['overruns']} | {l['p50_ms']:.2f} / {l['p99_ms']:.2f} | "
+          f"{s['compute_p50_us']:.1f} / {s['compute_max_us']:.0f} |")
+PY
