@@ -110,6 +110,8 @@ class ExternalDevice : public device::DeviceBackend {
 // Loop statistics, filled without allocation (buffers reserved for the whole run).
 struct LoopStats {
   std::vector<double> period_error_s;  // |period − Δt| per step
+  TimingHistogram period_histogram;    // the same, for the quantiles published every step
+  double period_p50_s = 0.0, period_p99_s = 0.0;  // refreshed every 100 steps
   std::vector<double> compute_s;       // CPU time of the step's work
   // Per model: from its publication to the start of the step that first used it (same-machine
   // wall clocks), s.
@@ -160,6 +162,9 @@ void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
   state.model_sequence = out.model_sequence;
   state.model_age_s = std::isfinite(out.model_age_s) ? out.model_age_s : -1.0;
   state.period_s = period_s;
+  state.period_error_p50_s = stats.period_p50_s;
+  state.period_error_p99_s = stats.period_p99_s;
+  state.period_error_max_s = stats.period_histogram.max_s();
   state.overruns = stats.overruns;
   state.zeroed = out.sent.zeroed;
   if (out.sent.zeroed) state.reason = device::ToString(out.sent.state);
@@ -311,7 +316,14 @@ void RunHaptic(const HapticCommandOptions& options) {
     const std::int64_t step_start_utime = WallMicros();
     const double period_s = step == 0 ? loop_options.dt_s : 1e-9 * (start_ns - previous_start_ns);
     previous_start_ns = start_ns;
-    if (step > 0) stats.period_error_s.push_back(std::abs(period_s - loop_options.dt_s));
+    if (step > 0) {
+      stats.period_error_s.push_back(std::abs(period_s - loop_options.dt_s));
+      stats.period_histogram.Add(std::abs(period_s - loop_options.dt_s));
+      if (step % 100 == 0) {
+        stats.period_p50_s = stats.period_histogram.Quantile(0.5);
+        stats.period_p99_s = stats.period_histogram.Quantile(0.99);
+      }
+    }
     DeviceReading device;
     device.in_process = in_process_device;
     device.state = backend->Read(step * loop_options.dt_s, &device.age_s, &device.sequence);

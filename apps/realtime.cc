@@ -65,4 +65,22 @@ double Quantile(std::vector<double>* values, double q) {
   return (*values)[k];
 }
 
+void TimingHistogram::Add(double error_s) {
+  const double us = std::max(0.0, 1e6 * error_s);
+  ++bins_[us >= kBins - 1 ? kBins - 1 : static_cast<int>(us)];
+  ++count_;
+  max_s_ = std::max(max_s_, error_s);
+}
+
+double TimingHistogram::Quantile(double q) const {
+  if (count_ == 0) return 0.0;
+  const long rank = static_cast<long>(q * (count_ - 1));
+  long seen = 0;
+  for (int b = 0; b < kBins; ++b) {
+    seen += bins_[b];
+    if (seen > rank) return b == kBins - 1 ? max_s_ : 1e-6 * (b + 1);
+  }
+  return max_s_;
+}
+
 }  // namespace hapsim::apps

@@ -3,6 +3,7 @@
 // absolute-deadline sleep, the request for SCHED_FIFO and locked memory, and a SIGINT/SIGTERM
 // flag. Linux only (clock_nanosleep, sched_setscheduler, mlockall).
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <string>
@@ -27,5 +28,21 @@ void InstallStopHandlers();
 
 // Quantile q in [0, 1] of `values` (sorted in place; 0 when empty).
 double Quantile(std::vector<double>* values, double q);
+
+// Running quantiles of a timing error without allocation (for the 1 kHz loop's published
+// statistics): 1 µs bins up to 5 ms, the last bin holding everything beyond.
+class TimingHistogram {
+ public:
+  void Add(double error_s);
+  // The upper edge of the bin holding quantile q, s (0 when empty). O(bins): call it sparingly.
+  double Quantile(double q) const;
+  double max_s() const { return max_s_; }
+
+ private:
+  static constexpr int kBins = 5001;
+  std::array<long, kBins> bins_{};
+  long count_ = 0;
+  double max_s_ = 0.0;
+};
 
 }  // namespace hapsim::apps

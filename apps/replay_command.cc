@@ -3,8 +3,9 @@
 // the first step that differs (issue 4). The inputs of each step are in the log: the device state
 // (DEVICE_STATE, sequence = step), the contact model in use (HAPTIC_STATE.model_sequence: a new
 // model is applied at the first step that names it; its CONTACT_MODEL message by sequence) and
-// the scene (RUN_INFO.scene_path, or --scene). --csv exports the logged haptic steps. A truncated
-// or corrupt log is an error naming the byte where reading stopped.
+// the scene (RUN_INFO.scene_path, or --scene). --csv exports the logged haptic steps;
+// --republish [--speed X] plays the log to LCM for viewers instead. A truncated or corrupt log is
+// an error naming the byte where reading stopped.
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -16,6 +17,7 @@
 #include <stdexcept>
 
 #include "apps/commands.h"
+#include "apps/realtime.h"
 #include "config/scene.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -30,7 +32,31 @@ struct ReplayOptions {
   std::string log_path;
   std::string scene_path;  // empty: RUN_INFO's
   std::string csv_path;
+  bool republish = false;  // play the log to LCM instead of re-running the loop
+  double speed = 1.0;
+  std::string lcm_url = messages::kDefaultLcmUrl;
 };
+
+// Publishes every event of the log on its channel, at its logged time scaled by 1/speed (for
+// viewers such as lcm-spy). Returns the number of events played.
+long Republish(const ReplayOptions& options) {
+  lcm::LogFile log(options.log_path, "r");
+  if (!log.good()) throw InputError(options.log_path, 0, "", "cannot open as an LCM log");
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
+  InstallStopHandlers();
+  long played = 0;
+  std::int64_t first_utime = -1, start_ns = MonotonicNs();
+  while (const lcm::LogEvent* event = log.readNextEvent()) {
+    if (g_stop_requested.load()) break;
+    if (first_utime < 0) first_utime = event->timestamp;
+    SleepUntil(start_ns +
+               std::llround(1e3 * static_cast<double>(event->timestamp - first_utime) / options.speed));
+    lcm.publish(event->channel, event->data, static_cast<unsigned>(event->datalen));
+    ++played;
+  }
+  return played;
+}
 
 struct LogContents {
   std::string scene_path;
@@ -164,6 +190,13 @@ long Replay(const config::Scene& scene, const LogContents& log) {
 }
 
 void RunReplay(const ReplayOptions& options) {
+  if (options.republish) {
+    ReadLog(options.log_path);  // a truncated or corrupt log is an error before anything is sent
+    const long played = Republish(options);
+    std::printf("hapsim replay: published %ld events of %s at %gx on %s\n", played,
+                options.log_path.c_str(), options.speed, options.lcm_url.c_str());
+    return;
+  }
   const LogContents log = ReadLog(options.log_path);
   if (!options.csv_path.empty()) WriteCsv(options.csv_path, log);
   const std::string scene_path = options.scene_path.empty() ? log.scene_path : options.scene_path;
@@ -189,6 +222,14 @@ void AddReplayCommand(CLI::App* app) {
       ->required();
   replay->add_option("--scene", options->scene_path, "Scene file (default: the log's RUN_INFO)");
   replay->add_option("--csv", options->csv_path, "Export the logged haptic steps as CSV");
+  replay->add_flag("--republish", options->republish,
+                   "Play the log to LCM (every channel, logged timing) for viewers, instead of\n"
+                   "re-running the haptic loop");
+  replay->add_option("--speed", options->speed, "Playback speed factor for --republish")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  replay->add_option("--lcm-url", options->lcm_url, "LCM provider URL for --republish")
+      ->capture_default_str();
   replay->callback([options] { RunReplay(*options); });
 }
 

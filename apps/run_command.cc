@@ -43,7 +43,9 @@ struct RunCommandOptions {
   std::string scene_path;
   std::string lcm_url = messages::kDefaultLcmUrl;
   std::string mode;  // empty: the scene's haptic.mode
+  std::string device = "scripted";  // the haptic process's --device
   bool no_spawn = false;
+  bool free_running = false;  // frames back to back instead of following the haptic clock
   double duration_s = 0.0;  // 0: the scene's script
   std::string log_path;
   std::string haptic_summary_path;  // passed to the spawned haptic process
@@ -124,6 +126,7 @@ pid_t SpawnHaptic(const RunCommandOptions& options) {
   std::vector<std::string> args = {"hapsim", "haptic", options.scene_path, "--lcm-url",
                                    options.lcm_url};
   if (!options.mode.empty()) args.insert(args.end(), {"--mode", options.mode});
+  args.insert(args.end(), {"--device", options.device});
   if (options.duration_s > 0.0) args.insert(args.end(), {"--duration", std::to_string(options.duration_s)});
   if (!options.haptic_summary_path.empty())
     args.insert(args.end(), {"--summary", options.haptic_summary_path});
@@ -218,9 +221,10 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
   for (; k < num_frames && !g_stop_requested.load(); ++k) {
     // Wait for the haptic clock to reach the frame: frame k needs the state after step
     // k·steps_per_frame − 1 (frame 0: the announcement of a haptic process waiting, step −1).
+    // Free-running: any state will do, so frames follow each other as fast as they compute.
     Listener::Snapshot now;
-    while (!g_stop_requested.load() &&
-           !(listener->Get(&now) && now.haptic_step >= k * steps_per_frame - 1)) {
+    const long needed_step = options.free_running ? -1 : k * steps_per_frame - 1;
+    while (!g_stop_requested.load() && !(listener->Get(&now) && now.haptic_step >= needed_step)) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
       *child_end = CheckChild(*child, child_code);
       if (!child_end->empty()) return k;
@@ -334,6 +338,13 @@ void AddRunCommand(CLI::App* app) {
   run->add_option("--mode", options->mode,
                   "linear (the paper), lcp (1 kHz unilateral solve on the frame's rows) or\n"
                   "coupling (standard multirate); default: the scene's haptic.mode");
+  run->add_option("--device", options->device,
+                  "The haptic process's device: scripted, hand or external (docs/DEVICE.md)")
+      ->check(CLI::IsMember({"scripted", "hand", "external"}))
+      ->capture_default_str();
+  run->add_flag("--free-running", options->free_running,
+                "Run visual frames back to back (as fast as they compute) instead of at the\n"
+                "scene's rate on the haptic clock; each uses the newest haptic state");
   run->add_flag("--no-spawn", options->no_spawn,
                 "Do not start `hapsim haptic` (run it yourself, e.g. on the device's machine)");
   run->add_option("--duration", options->duration_s,
