@@ -1,5 +1,6 @@
 #include "contact/linear_contact_model.h"
 
+#include <Eigen/LU>
 #include <Eigen/QR>
 #include <stdexcept>
 
@@ -17,12 +18,21 @@ LinearContactModel MakeLinearContactModel(const ContactJacobian& J, const Eigen:
   LinearContactModel model;
   model.num_contacts = J.num_rows() / J.rows_per_contact;
   if (J.num_rows() == 0) return model;
-  // Rank-revealing: two contacts with the same body point and normal (or more than six on a rigid
-  // part) make W singular; the minimum-norm solution then shares the force between them.
-  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> W_lu(W);
-  const Eigen::MatrixX3d Y_v = W_lu.solve(J.J_v);  // W⁻¹ J_v  (three solves)
-  const Eigen::MatrixX3d Y_w = W_lu.solve(J.J_w);  // W⁻¹ J_ω  (three solves)
-  const Eigen::VectorXd y_0 = W_lu.solve(body_rhs) / tool.dt_s;
+  // The seven right-hand sides [J_v J_ω b − J_u u̇] in one solve. A partial-pivoting LU first
+  // (2n³/3 flops): the unilateral solver's active set leaves W nonsingular. Two contacts with the
+  // same body point and normal (equality constraints, or more than six on a rigid part) make W
+  // singular; the LU's residual then shows it, and the rank-revealing complete orthogonal
+  // decomposition (several times slower) gives the minimum-norm solution, which shares the force
+  // between them.
+  const Eigen::Index n = W.rows();
+  Eigen::MatrixXd B(n, 7);
+  B << J.J_v, J.J_w, body_rhs;
+  Eigen::MatrixXd Y = Eigen::PartialPivLU<Eigen::MatrixXd>(W).solve(B);
+  if (!Y.allFinite() || (W * Y - B).norm() > 1e-10 * B.norm())
+    Y = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(W).solve(B);
+  const Eigen::MatrixX3d Y_v = Y.leftCols<3>();         // W⁻¹ J_v
+  const Eigen::MatrixX3d Y_w = Y.middleCols<3>(3);      // W⁻¹ J_ω
+  const Eigen::VectorXd y_0 = Y.col(6) / tool.dt_s;     // W⁻¹ (b − J_u u̇) / Δt
   const Eigen::Matrix3d A_v_inv = tool.A_v.inverse();
   const Eigen::Matrix3d M_inv_A_L_inv = tool.M_inv_W * tool.A_L.inverse();
   model.F_c0_N = J.J_v.transpose() * y_0;
