@@ -47,7 +47,10 @@ struct HapticCommandOptions {
 // Decodes CONTACT_MODEL into the mailbox.
 class ModelReceiver {
  public:
-  explicit ModelReceiver(device::ModelMailbox* mailbox) : mailbox_(mailbox) {}
+  // lcp: each update's solver is prepared here, off the loop (PrepareLcpUpdate).
+  ModelReceiver(device::ModelMailbox* mailbox, const config::Scene& scene,
+                const device::HapticLoopOptions& options)
+      : mailbox_(mailbox), scene_(scene), options_(options) {}
   void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::contact_model_t* msg) {
     device::ContactModelUpdate* slot = mailbox_->writer_slot();
     messages::ContactModelHeader header;
@@ -60,12 +63,21 @@ class ModelReceiver {
     slot->sequence = header.sequence;
     slot->published_utime = header.utime;
     slot->visual_tool = header.visual_tool;
+    slot->linearised_tool = ToolState{};
+    slot->linearised_tool.x_W_m = header.x_W_m;
+    slot->linearised_tool.q_WT = header.q_WT;
+    if (!device::PrepareLcpUpdate(scene_.tool->model, scene_.coupling, scene_.gravity_m_s2,
+                                  options_, slot))
+      std::fprintf(stderr, "hapsim haptic: contact model %ld: lcp rows rejected\n",
+                   static_cast<long>(header.sequence));
     mailbox_->Publish();
   }
   long rejected() const { return rejected_; }
 
  private:
   device::ModelMailbox* mailbox_;
+  const config::Scene& scene_;
+  device::HapticLoopOptions options_;
   long rejected_ = 0;
 };
 
@@ -273,7 +285,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   device::ModelMailbox mailbox;
-  ModelReceiver receiver(&mailbox);
+  ModelReceiver receiver(&mailbox, scene, loop_options);
   lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver);
   std::unique_ptr<device::DeviceBackend> backend;
   if (options.device == "scripted") {

@@ -63,7 +63,7 @@ struct LogContents {
   std::string mode;  // RUN_INFO.mode: the haptic process's
   std::map<long, hapsim_lcm::haptic_state_t> steps;                     // by step
   std::map<long, DeviceState> devices;                                   // by sequence
-  std::map<long, std::unique_ptr<device::ContactModelUpdate>> models;  // by sequence
+  std::map<long, std::unique_ptr<device::ContactModelUpdate>> models;   // by sequence
 };
 
 template <typename Message>
@@ -110,6 +110,8 @@ LogContents ReadLog(const std::string& path) {
       update->sequence = header.sequence;
       update->published_utime = header.utime;
       update->visual_tool = header.visual_tool;
+      update->linearised_tool.x_W_m = header.x_W_m;
+      update->linearised_tool.q_WT = header.q_WT;
       contents.models[header.sequence] = std::move(update);
     }
   }
@@ -141,7 +143,7 @@ void WriteCsv(const std::string& path, const LogContents& log) {
 }
 
 // Re-runs the loop; returns the number of steps compared, or throws at the first difference.
-long Replay(const config::Scene& scene, const LogContents& log) {
+long Replay(const config::Scene& scene, LogContents& log) {
   device::HapticLoopOptions options;
   options.mode = scene.haptic.mode;
   if (const auto logged_mode = config::ParseHapticMode(log.mode)) options.mode = *logged_mode;
@@ -150,6 +152,10 @@ long Replay(const config::Scene& scene, const LogContents& log) {
   options.safety = scene.haptic.safety;
   device::HapticLoop loop(scene.tool->model, scene.coupling, scene.gravity_m_s2,
                           scene.tool->initial_state, options);
+  // As the haptic process's receive thread did: the same inputs give the same solver state.
+  for (auto& [sequence, update] : log.models)
+    device::PrepareLcpUpdate(scene.tool->model, scene.coupling, scene.gravity_m_s2, options,
+                             update.get());
   long expected_step = log.steps.begin()->first, compared = 0;
   std::int64_t model_in_use = -1;
   for (const auto& [step, logged] : log.steps) {
@@ -197,7 +203,7 @@ void RunReplay(const ReplayOptions& options) {
                 options.log_path.c_str(), options.speed, options.lcm_url.c_str());
     return;
   }
-  const LogContents log = ReadLog(options.log_path);
+  LogContents log = ReadLog(options.log_path);
   if (!options.csv_path.empty()) WriteCsv(options.csv_path, log);
   const std::string scene_path = options.scene_path.empty() ? log.scene_path : options.scene_path;
   if (scene_path.empty())

@@ -513,6 +513,29 @@ Eigen::Ref<const Eigen::VectorXd> HapticLcpSolver::last_impulses() const {
   return ws_->x.head(std::max(ws_->n, 0));
 }
 
+bool HapticLcpSolver::Prepare(const ContactRows& rows, const ToolStepSystem& tool) {
+  Workspace& ws = *ws_;
+  const int n = rows.num_rows();
+  if (n == 0 || n > ws.max_rows || rows.J_w.rows() != n || rows.W_body.rows() != n ||
+      rows.W_body.cols() != n || rows.body_rhs.size() != n ||
+      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n) ||
+      !(tool.dt_s > 0.0))
+    return false;
+  ws.S.setZero();
+  ws.S.topLeftCorner<3, 3>() = tool.A_v.inverse();
+  ws.S.bottomRightCorner<3, 3>() = tool.M_inv_W * tool.A_L.inverse();
+  if (!ws.S.allFinite() || !ws.CopyRows(rows)) {
+    ws.n = -1;
+    return false;
+  }
+  const bool frame_set = rows.lambda_frame_N.size() == n;
+  for (int i = 0; i < n; ++i)
+    ws.active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : rows.body_rhs[i] > 0.0;
+  ws.num_factorizations = 0;
+  ws.Rebase();
+  return true;
+}
+
 bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
                             const Eigen::Vector3d& F_hat_N, const Eigen::Vector3d& T_hat_N_m,
                             Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m) {

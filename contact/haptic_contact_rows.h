@@ -112,6 +112,15 @@ class HapticLcpSolver {
   bool Solve(const ContactRows& rows, const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
              const Eigen::Vector3d& T_hat_N_m, Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m);
 
+  // Does the work of the first Solve on new rows ahead of time, off the 1 kHz loop (the visual
+  // frame, or the haptic process's receive thread): copies and checks the rows, guesses the
+  // frame's active set (or the rows that ask for a push) and factorises its base block with S̄
+  // from `tool` (the tool system at linearisation: any symmetric positive definite S̄ is exact;
+  // the first Solve borders the difference to its own). A following Solve on the same rows then
+  // takes the warm path. Returns false, leaving nothing prepared, for rows Solve would reject.
+  // Not concurrent with Solve on the same solver; allocates nothing.
+  bool Prepare(const ContactRows& rows, const ToolStepSystem& tool);
+
   int max_rows() const;
   // Equality solves on an active set in the last Solve (1 when the warm start was right).
   int last_iterations() const { return last_iterations_; }

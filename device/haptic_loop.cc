@@ -24,6 +24,17 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
     throw std::invalid_argument("the reference mode runs in the in-process simulator only");
 }
 
+bool PrepareLcpUpdate(const ToolModel& tool, const CouplingParams& coupling,
+                      const Eigen::Vector3d& gravity_m_s2, const HapticLoopOptions& options,
+                      ContactModelUpdate* update) {
+  if (options.mode != HapticMode::kLcp || update->rows.num_rows() == 0) return true;
+  if (!update->lcp_solver || update->lcp_solver->max_rows() != options.lcp_max_rows)
+    update->lcp_solver = std::make_unique<contact::HapticLcpSolver>(options.lcp_max_rows);
+  return update->lcp_solver->Prepare(
+      update->rows, CalcLinearisationSystem(tool, coupling, gravity_m_s2, options.dt_s,
+                                            update->linearised_tool));
+}
+
 HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s,
                                   const ContactModelUpdate* new_model) noexcept {
   HapticLoopOutput out;
@@ -31,7 +42,8 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
   if (new_model != nullptr) {
     step_.SetContactModel(new_model->model);
     if (options_.mode == HapticMode::kLcp)
-      step_.SetContactRows(new_model->rows.num_rows() > 0 ? &new_model->rows : nullptr);
+      step_.SetContactRows(new_model->rows.num_rows() > 0 ? &new_model->rows : nullptr,
+                           new_model->lcp_solver.get());
     visual_tool_ = new_model->visual_tool;
     model_sequence_ = new_model->sequence;
     model_age_s_ = 0.0;

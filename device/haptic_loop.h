@@ -72,6 +72,14 @@ class HapticLoop {
   long num_steps_ = 0;
 };
 
+// Receive-thread work for an lcp update: gives it a solver (once: max_rows capacity) and prepares
+// it for the update's rows at its linearised tool, so the loop's first step on them is warm. Same
+// inputs, same solver state: `hapsim replay` calls it too. Returns false if the rows were
+// rejected (the loop then falls back to the linear model, as for a failed solve).
+bool PrepareLcpUpdate(const ToolModel& tool, const CouplingParams& coupling,
+                      const Eigen::Vector3d& gravity_m_s2, const HapticLoopOptions& options,
+                      ContactModelUpdate* update);
+
 // Every entry of the device state is finite (quaternion included).
 bool IsFinite(const DeviceState& device);
 

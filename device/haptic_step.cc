@@ -25,8 +25,8 @@ HapticOutput HapticStep::Step(const DeviceState& device) {
   contact::CalcDiscreteTimeWrench(system, tool_state_, &F_hat_N, &T_hat_N_m);
   HapticOutput out;
   if (rows_ != nullptr) {
-    out.lcp_fell_back = !lcp_.Solve(*rows_, system, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
-                                    &out.contact_torque_W_N_m);
+    out.lcp_fell_back = !solver_->Solve(*rows_, system, F_hat_N, T_hat_N_m,
+                                        &out.contact_force_W_N, &out.contact_torque_W_N_m);
   }
   if (rows_ == nullptr || out.lcp_fell_back) {
     contact::EvaluateLinearContactModel(model_, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
@@ -40,6 +40,25 @@ HapticOutput HapticStep::Step(const DeviceState& device) {
   out.device_force_W_N = -wrench.F_W_N;
   out.device_torque_W_N_m = -wrench.T_W_N_m;
   return out;
+}
+
+bool HapticStep::PrepareContactRows(const contact::ContactRows& rows) {
+  return lcp_.Prepare(rows, CalcLinearisationSystem(tool_, coupling_, gravity_m_s2_, dt_s_,
+                                                    tool_state_));
+}
+
+ToolStepSystem CalcLinearisationSystem(const ToolModel& tool,
+                                                const CouplingParams& coupling,
+                                                const Eigen::Vector3d& gravity_m_s2, double dt_s,
+                                                const ToolState& state) {
+  // The coupling's Jacobians at zero coupling error: the device at the tool.
+  DeviceState at_tool;
+  at_tool.x_W_m = state.x_W_m;
+  at_tool.q_WD = state.q_WT;
+  at_tool.v_W_m_s = state.v_W_m_s;
+  at_tool.w_W_rad_s = CalcAngularVelocity(tool, state);
+  const CouplingWrench wrench = CalcCouplingWrench(coupling, at_tool, state, at_tool.w_W_rad_s);
+  return CalcToolStepSystem(tool, state, wrench, gravity_m_s2, dt_s);
 }
 
 DeviceState HapticStep::tool_as_target() const {

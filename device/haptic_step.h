@@ -17,6 +17,7 @@
 #include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
 #include "core/rigid_tool.h"
+#include "core/tool_integrator.h"
 #include "core/virtual_coupling.h"
 
 namespace hapsim::device {
@@ -40,8 +41,17 @@ class HapticStep {
   void SetContactModel(const contact::LinearContactModel& model) { model_ = model; }
   // lcp mode: the rows to solve on from the next step (not copied: they must stay unchanged
   // until replaced); nullptr returns to the linear model. The model set by SetContactModel is
-  // the fallback when a solve fails.
-  void SetContactRows(const contact::ContactRows* rows) { rows_ = rows; }
+  // the fallback when a solve fails. `prepared`, if given, is a solver on which Prepare(rows)
+  // was called off the loop (it is then used, and must outlive its use); else the step's own.
+  void SetContactRows(const contact::ContactRows* rows,
+                      contact::HapticLcpSolver* prepared = nullptr) {
+    rows_ = rows;
+    solver_ = prepared != nullptr ? prepared : &lcp_;
+  }
+  // Prepares the step's own solver for `rows` (HapticLcpSolver::Prepare with the tool system at
+  // the current haptic tool state), so that the first step on them is a warm one: for the
+  // in-process simulator, which calls it at the visual frame. Returns Prepare's result.
+  bool PrepareContactRows(const contact::ContactRows& rows);
   int lcp_max_rows() const { return lcp_.max_rows(); }
   HapticOutput Step(const DeviceState& device);
 
@@ -59,6 +69,13 @@ class HapticStep {
   contact::LinearContactModel model_;  // no contact until the first SetContactModel
   const contact::ContactRows* rows_ = nullptr;
   contact::HapticLcpSolver lcp_;
+  contact::HapticLcpSolver* solver_ = &lcp_;
 };
+
+// The tool's step system at `state` with the coupling's Jacobians at zero coupling error: the
+// system HapticLcpSolver::Prepare is given (any state near the haptic tool's will do).
+ToolStepSystem CalcLinearisationSystem(const ToolModel& tool, const CouplingParams& coupling,
+                                       const Eigen::Vector3d& gravity_m_s2, double dt_s,
+                                       const ToolState& state);
 
 }  // namespace hapsim::device

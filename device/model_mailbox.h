@@ -12,6 +12,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <memory>
 
 #include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
@@ -26,6 +27,10 @@ struct ContactModelUpdate {
   contact::LinearContactModel model;  // the paper's model
   contact::ContactRows rows;          // lcp mode: the frame's rows (num_rows 0 otherwise)
   ToolState visual_tool;              // coupling mode: the visual tool after the frame
+  ToolState linearised_tool;          // the haptic tool the model was linearised at (pose)
+  // lcp mode: a solver prepared for `rows` by the receive thread (PrepareLcpUpdate), used by the
+  // loop while this update is the newest; null otherwise.
+  std::unique_ptr<contact::HapticLcpSolver> lcp_solver;
 };
 
 // The newest value from one writer thread to one reader thread.

@@ -80,7 +80,10 @@ HapticSample MultirateSimulator::StepHapticTool(const DeviceState& device, long 
     const contact::VisualFrameStats stats =
         frame_.Step(device, &body_state_, &visual_tool_, &haptic_.tool_state());
     haptic_.SetContactModel(frame_.linear_model());
-    if (lcp) haptic_.SetContactRows(&frame_.contact_rows());
+    if (lcp) {  // the first step's factorisation is frame work (as off the loop in two processes)
+      haptic_.PrepareContactRows(frame_.contact_rows());
+      haptic_.SetContactRows(&frame_.contact_rows());
+    }
     last_frame_step_ = k;
     if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
   }

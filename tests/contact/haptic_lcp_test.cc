@@ -243,6 +243,25 @@ TEST(HapticLcpSolver, MatchesTheActiveSetReferenceFromAColdStart) {
   }
 }
 
+// Prepare (the first step's work done off the loop, with the tool system of another step: a
+// different S̄) and then Solve: the same answer as the cold reference, and, when the frame's
+// active set is right (here: the reference's own), the Solve itself factorises nothing.
+TEST(HapticLcpSolver, PreparedRowsSolveWarmAndExactly) {
+  for (const int n : {10, 60, 125}) {
+    for (const double press : {0.0, 1.0}) {
+      LcpProblem p = MakeLcpProblem(n, 7 * n + 1, press, press > 0.0 ? 100.0 : 1.0);
+      p.rows.lambda_frame_N = SolveReference(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m).lambda;
+      HapticLcpSolver solver(150);
+      ASSERT_TRUE(solver.Prepare(p.rows, MakeTool(0.5))) << n;
+      ExpectMatchesReference(&solver, p.rows, p.tool, p.F_hat_N, p.T_hat_N_m,
+                             "prepared, n " + std::to_string(n));
+      EXPECT_EQ(solver.last_num_factorizations(), 0) << n;
+    }
+  }
+  HapticLcpSolver small(5);
+  EXPECT_FALSE(small.Prepare(MakeLcpProblem(10, 3, 0.0, 1.0).rows, MakeTool(0.0)));
+}
+
 // Same rows over many haptic steps while F̂ swings (contacts release and re-engage) and the
 // tool's step system drifts: the warm-started answer equals the cold reference at every step.
 TEST(HapticLcpSolver, WarmStartFollowsChangingActiveSetsWithoutBias) {
