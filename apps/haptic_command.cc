@@ -23,6 +23,7 @@
 #include "apps/realtime.h"
 #include "apps/receive_thread.h"
 #include "config/scene.h"
+#include "config/simulation_builder.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "device/device_backend.h"
@@ -261,16 +262,8 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, 
 void RunHaptic(const HapticCommandOptions& options) {
   const config::Scene scene = config::LoadScene(options.scene_path);
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim haptic` needs a tool");
-  device::HapticMode mode = scene.haptic.mode;
-  if (!options.mode.empty()) {
-    const auto parsed = config::ParseHapticMode(options.mode);
-    if (!parsed) throw InputError("", 0, "--mode", "unknown mode '" + options.mode + "'");
-    mode = *parsed;
-  }
-  if (mode == device::HapticMode::kReference)
-    throw InputError("", 0, options.mode.empty() ? "haptic.mode" : "--mode",
-                     "the reference mode runs in `hapsim sim` only (everything at 1 kHz in one "
-                     "process)");
+  const device::HapticMode mode =
+      config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/false);
   device::HapticLoopOptions loop_options;
   loop_options.mode = mode;
   loop_options.dt_s = 1.0 / scene.haptic.rate_hz;

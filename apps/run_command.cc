@@ -256,19 +256,8 @@ int RunVisual(const RunCommandOptions& options) {
   if (!scene.tool || !scene.body)
     throw InputError(scene.file, 0, scene.tool ? "body" : "tool",
                      "`hapsim run` needs a deformable body and a tool");
-  device::HapticMode mode = scene.haptic.mode;
-  if (!options.mode.empty()) {
-    const auto parsed = config::ParseHapticMode(options.mode);
-    if (!parsed || *parsed == device::HapticMode::kReference)
-      throw InputError("", 0, "--mode",
-                       "'" + options.mode + "': the two processes render linear, lcp or coupling");
-    mode = *parsed;
-  }
-  if (mode == device::HapticMode::kReference)
-    throw InputError(scene.file, 0, "haptic.mode",
-                     "reference runs in `hapsim sim` only; give --mode linear, lcp or coupling");
-  if (mode == device::HapticMode::kLcp && scene.contact.law == contact::ContactLaw::kFriction)
-    throw InputError("", 0, "--mode", "lcp solves normal rows only; the contact law is friction");
+  const device::HapticMode mode =
+      config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/false);
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   Listener listener;

@@ -139,17 +139,10 @@ void RunSim(const SimCommandOptions& options) {
     throw InputError(
         scene.file, 0, "body",
         "`hapsim sim` needs a deformable body (rigid-only scenes are not supported yet)");
-  device::HapticMode mode = scene.haptic.mode;
-  if (!options.mode.empty()) {
-    const auto parsed = config::ParseHapticMode(options.mode);
-    if (!parsed)
-      throw InputError("", 0, "--mode",
-                       "unknown mode '" + options.mode + "' (linear, lcp, coupling, reference)");
-    mode = *parsed;
-  }
-  const device::MultirateOptions multirate = config::MakeMultirateOptions(
-      scene, mode, CalcStepsPerFrame(scene, options.visual_hz),
-      "--mode");
+  const device::HapticMode mode =
+      config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/true);
+  const device::MultirateOptions multirate =
+      config::MakeMultirateOptions(scene, mode, CalcStepsPerFrame(scene, options.visual_hz));
   const config::Body body = config::MakeBody(*scene.body, scene.gravity_m_s2);
   device::MultirateSimulator simulator(body.model, scene.body->options, body.external_force_N,
                                        scene.tool->model, scene.tool->initial_state,

@@ -17,11 +17,30 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   return options;
 }
 
-device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::HapticMode mode,
-                                              int steps_per_frame, const std::string& mode_option) {
+device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& option_value,
+                                     const std::string& option, bool allow_reference) {
+  const bool overridden = !option_value.empty();
+  const std::string file = overridden ? "" : scene.file;
+  const std::string key = overridden ? option : "haptic.mode";
+  device::HapticMode mode = scene.haptic.mode;
+  if (overridden) {
+    const auto parsed = ParseHapticMode(option_value);
+    if (!parsed)
+      throw InputError("", 0, option,
+                       "unknown mode '" + option_value + "' (linear, lcp, coupling, reference)");
+    mode = *parsed;
+  }
+  if (mode == device::HapticMode::kReference && !allow_reference)
+    throw InputError(file, 0, key,
+                     "the reference mode runs in `hapsim sim` only; the two processes render "
+                     "linear, lcp or coupling");
   if (mode == device::HapticMode::kLcp && scene.contact.law == contact::ContactLaw::kFriction)
-    throw InputError("", 0, mode_option,
-                     "lcp solves normal rows only; the scene's contact law is friction");
+    throw InputError(file, 0, key, "lcp solves normal rows only; the scene's contact law is friction");
+  return mode;
+}
+
+device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::HapticMode mode,
+                                              int steps_per_frame) {
   device::MultirateOptions options;
   options.mode = mode;
   options.haptic_dt_s = 1.0 / scene.haptic.rate_hz;

@@ -13,11 +13,17 @@ namespace hapsim::config {
 // haptic steps are left to the caller (MultirateSimulator sets them from MultirateOptions).
 contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene);
 
-// The haptic side for `mode` at `steps_per_frame` haptic steps per visual frame. `mode` is the
-// scene's haptic.mode (checked against the contact law when the scene was loaded) or a
-// command-line override: throws InputError naming `mode_option` (e.g. "--mode") if it is lcp and
-// the contact law is friction.
+// The haptic mode of a run: the scene's haptic.mode, or `option_value` when given (a
+// command-line override). Throws InputError naming `option` (or haptic.mode, when the scene's
+// mode is the problem) for an unknown mode, for lcp with the friction law (its 1 kHz rows are
+// normal only), and for the reference mode unless allow_reference (the two-process run renders
+// linear, lcp or coupling; the reference exists in the in-process simulator only).
+device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& option_value,
+                                     const std::string& option, bool allow_reference);
+
+// The haptic side for `mode` (ResolveHapticMode's) at `steps_per_frame` haptic steps per visual
+// frame.
 device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::HapticMode mode,
-                                              int steps_per_frame, const std::string& mode_option);
+                                              int steps_per_frame);
 
 }  // namespace hapsim::config

@@ -30,7 +30,7 @@ struct ModeRun {
 
 ModeRun Simulate(const config::Scene& scene, const config::Body& body, HapticMode mode) {
   const MultirateOptions options =
-      config::MakeMultirateOptions(scene, mode, scene.haptic.steps_per_frame, "mode");
+      config::MakeMultirateOptions(scene, mode, scene.haptic.steps_per_frame);
   MultirateSimulator simulator(body.model, scene.body->options, body.external_force_N,
                                scene.tool->model, scene.tool->initial_state,
                                config::MakeVisualFrameOptions(scene), options);
