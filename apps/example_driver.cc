@@ -31,8 +31,18 @@ class Driver {
     long sequence;
     return hand_.Read(t_s, &age_s, &sequence);
   }
-  // SDK: command the wrench to the motors. A real driver also clamps to its own limits here.
-  void ApplyWrench() { hand_.Write(force_W_N_, torque_W_N_m_); }
+  // SDK: command the wrench to the motors. A real driver also clamps to its own limits here. No
+  // DEVICE_FORCE for kStaleForce_s (the haptic process is gone, and its safety layer with it):
+  // zero.
+  void ApplyWrench() {
+    const bool fresh = 1e-9 * static_cast<double>(hapsim::apps::MonotonicNs() - received_ns_) <=
+                       kStaleForce_s;
+    if (fresh) {
+      hand_.Write(force_W_N_, torque_W_N_m_);
+    } else {
+      hand_.Write(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+    }
+  }
 
   void OnForce(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_force_t* m) {
     std::string error;
@@ -40,10 +50,13 @@ class Driver {
       force_W_N_.setZero();  // never apply a wrench that failed validation
       torque_W_N_m_.setZero();
     }
+    received_ns_ = hapsim::apps::MonotonicNs();
   }
 
  private:
+  static constexpr double kStaleForce_s = 0.003;
   hapsim::device::SimulatedHand hand_;
+  std::int64_t received_ns_ = 0;  // when the last DEVICE_FORCE arrived (0: never: zero force)
   Eigen::Vector3d force_W_N_ = Eigen::Vector3d::Zero(), torque_W_N_m_ = Eigen::Vector3d::Zero();
 };
 

@@ -125,15 +125,16 @@ struct LoopStats {
   std::vector<double> period_error_s;  // |period − Δt| per step
   TimingHistogram period_histogram;    // the same, for the quantiles published every step
   double period_p50_s = 0.0, period_p99_s = 0.0;  // refreshed every 100 steps
-  std::vector<double> compute_s;       // CPU time of the step's work
+  std::vector<double> compute_s;       // wall time of the step's work (before publishing)
   // Per model: from its publication to the start of the step that first used it (same-machine
   // wall clocks), s.
   std::vector<double> model_latency_s;
-  long overruns = 0, zeroed_steps = 0, passivity_alarms = 0;
+  long overruns = 0, zeroed_steps = 0, passivity_alarms = 0, lcp_fallbacks = 0;
   double max_force_sent_N = 0.0;
   // Fade-out when the models stop (the visual process died): the step the last model arrived,
   // the last step with a non-zero force, and the largest force sent with a stale model.
   long last_model_step = -1, last_nonzero_step = -1;
+  long passivity_alarm_step = -1;  // the step the passivity observer first turned active
   double force_after_stale_N = 0.0;
 };
 
@@ -145,20 +146,36 @@ struct DeviceReading {
   bool in_process = true;  // scripted or simulated hand: this process publishes DEVICE_STATE
 };
 
+// The messages the loop publishes every step, kept from step to step with their reason strings
+// reserved, so that publishing allocates nothing (a zeroed step's reason is longer than the
+// 15 characters std::string holds without the heap).
+struct StepMessages {
+  StepMessages() {
+    state.reason.reserve(64);
+    force.reason.reserve(64);
+    buffer.resize(1 << 16);
+  }
+  hapsim_lcm::haptic_state_t state{};
+  hapsim_lcm::device_force_t force{};
+  std::vector<std::uint8_t> buffer;  // encoding scratch
+};
+
 void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
                  const device::HapticLoop& loop, const device::HapticLoopOutput& out,
-                 const LoopStats& stats, double period_s, std::vector<std::uint8_t>* buffer) {
+                 const LoopStats& stats, double period_s, StepMessages* messages_out) {
   const std::int64_t utime = WallMicros();
+  std::vector<std::uint8_t>& buffer = messages_out->buffer;
   const auto publish = [&](const char* channel, const auto& msg) {
     const int size = msg.getEncodedSize();
-    if (static_cast<int>(buffer->size()) < size) return;  // sized at start; never grows here
-    msg.encode(buffer->data(), 0, size);
-    lcm->publish(channel, buffer->data(), size);
+    if (static_cast<int>(buffer.size()) < size) return;  // sized at start; never grows here
+    msg.encode(buffer.data(), 0, size);
+    lcm->publish(channel, buffer.data(), size);
   };
   if (device.in_process)
     publish(messages::kDeviceStateChannel,
             messages::ToMessage(device.state, utime, device.sequence));
-  hapsim_lcm::haptic_state_t state{};
+  const char* reason = out.sent.zeroed ? device::ToString(out.sent.state) : "";
+  hapsim_lcm::haptic_state_t& state = messages_out->state;
   state.utime = utime;
   state.step = step;
   state.device_sequence = device.sequence;
@@ -180,12 +197,19 @@ void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
   state.period_error_max_s = stats.period_histogram.max_s();
   state.overruns = stats.overruns;
   state.zeroed = out.sent.zeroed;
-  if (out.sent.zeroed) state.reason = device::ToString(out.sent.state);
+  state.reason.assign(reason);
   state.passivity_energy_J = out.passivity_energy_J;
   publish(messages::kHapticStateChannel, state);
-  publish(messages::kDeviceForceChannel,
-          messages::ToMessage(out.sent.force_W_N, out.sent.torque_W_N_m, utime, device.sequence,
-                              out.sent.zeroed ? device::ToString(out.sent.state) : ""));
+  hapsim_lcm::device_force_t& force = messages_out->force;
+  force.utime = utime;
+  force.sequence = device.sequence;
+  for (int i = 0; i < 3; ++i) {
+    force.force_W_N[i] = out.sent.force_W_N[i];
+    force.torque_W_N_m[i] = out.sent.torque_W_N_m[i];
+  }
+  force.zeroed = out.sent.zeroed;
+  force.reason.assign(reason);
+  publish(messages::kDeviceForceChannel, force);
 }
 
 // Before its clock starts, the haptic process announces itself (HAPTIC_STATE with step −1, the
@@ -251,6 +275,7 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, 
           {"overruns", stats->overruns},
           {"zeroed_steps", stats->zeroed_steps},
           {"passivity_alarms", stats->passivity_alarms},
+          {"lcp_fallback_steps", stats->lcp_fallbacks},
           {"max_force_sent_N", stats->max_force_sent_N},
           {"model_latency", latency},
           {"models_rejected", receiver->rejected()},
@@ -311,7 +336,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   stats.period_error_s.reserve(num_steps);
   stats.compute_s.reserve(num_steps);
   stats.model_latency_s.reserve(num_steps);
-  std::vector<std::uint8_t> buffer(1 << 16);
+  StepMessages step_messages;
   const std::int64_t dt_ns = std::llround(1e9 * loop_options.dt_s);
   std::int64_t deadline_ns = MonotonicNs() + dt_ns, previous_start_ns = 0;
   long step = 0;
@@ -348,10 +373,14 @@ void RunHaptic(const HapticCommandOptions& options) {
     stats.compute_s.push_back(1e-9 * (MonotonicNs() - start_ns));
     stats.zeroed_steps += out.sent.zeroed;
     stats.passivity_alarms += out.passivity_alarm;
+    stats.lcp_fallbacks += out.lcp_fell_back;
     stats.max_force_sent_N = std::max(stats.max_force_sent_N, out.sent.force_W_N.norm());
-    if (out.passivity_alarm)
-      std::fprintf(stderr, "hapsim haptic: warning: passivity observer active at step %ld\n", step);
-    PublishStep(&lcm, step, device, loop, out, stats, period_s, &buffer);
+    if (out.passivity_alarm) {  // once per run: the observer stays active
+      stats.passivity_alarm_step = step;
+      std::fprintf(stderr, "hapsim haptic: warning: passivity observer active at step %ld\n",
+                   step);
+    }
+    PublishStep(&lcm, step, device, loop, out, stats, period_s, &step_messages);
     if (MonotonicNs() > deadline_ns + dt_ns) ++stats.overruns;
     deadline_ns += dt_ns;
   }
@@ -364,6 +393,11 @@ void RunHaptic(const HapticCommandOptions& options) {
               summary["period_error"]["p99_us"].get<double>(),
               summary["period_error"]["max_us"].get<double>(), stats.overruns,
               summary["model_latency"]["p50_ms"].get<double>(), stats.max_force_sent_N);
+  if (stats.passivity_alarm_step >= 0)
+    std::fprintf(stderr,
+                 "hapsim haptic: warning: the rendering generated energy from step %ld on "
+                 "(passivity observer; HAPTIC_STATE.passivity_energy_J)\n",
+                 stats.passivity_alarm_step);
   if (!summary["fade_after_last_model_s"].is_null())
     std::printf("hapsim haptic: models stopped at step %ld; fade-out after the last model %.1f ms "
                 "(stale threshold %.1f ms)\n",

@@ -1,7 +1,7 @@
 // `hapsim run SCENE`: the visual process of a two-process run (DESIGN.md §1, issue 4).
 //
 // It spawns `hapsim haptic SCENE` (unless --no-spawn) and follows its clock: visual frame k runs
-// once the haptic process has published step k · (haptic steps per frame), with the newest
+// once the haptic process has published step k · (haptic steps per frame) − 1, with the newest
 // device state and haptic tool state it published. Each frame publishes CONTACT_MODEL (the
 // linear model linearised at the haptic tool, plus the rows in lcp mode) and SIM_FRAME (nodes,
 // surface, tool, contacts, stage timings). The run stops when the script is done, at
@@ -11,6 +11,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -25,6 +26,7 @@
 #include <stdexcept>
 
 #include "apps/commands.h"
+#include "apps/log_writer.h"
 #include "apps/realtime.h"
 #include "apps/receive_thread.h"
 #include "config/body_builder.h"
@@ -51,10 +53,10 @@ struct RunCommandOptions {
   std::string haptic_summary_path;  // passed to the spawned haptic process
 };
 
-// The newest DEVICE_STATE and HAPTIC_STATE, and (with --log) every message to the log file.
-// Runs in the receive thread, which handles LCM continuously so that nothing is dropped while a
-// visual frame computes; the frame loop reads a consistent snapshot under the mutex (this
-// process is not the real-time one).
+// The newest DEVICE_STATE and HAPTIC_STATE, and (with --log) every message to the log writer's
+// queue. Runs in the receive thread, which handles LCM continuously so that nothing is dropped
+// while a visual frame computes or the disk stalls; the frame loop reads a consistent snapshot
+// under the mutex (this process is not the real-time one).
 class Listener {
  public:
   struct Snapshot {
@@ -85,25 +87,11 @@ class Listener {
     have_haptic_ = true;
   }
   void OnAny(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!log_) return;
-    lcm::LogEvent event;
-    event.eventnum = num_logged_++;
-    event.timestamp = buffer->recv_utime;
-    event.channel = channel;
-    event.datalen = static_cast<int32_t>(buffer->data_size);
-    event.data = buffer->data;
-    log_->writeEvent(&event);
+    if (log_) log_->Add(buffer, channel);
   }
-  void OpenLog(const std::string& path) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    log_ = std::make_unique<lcm::LogFile>(path, "w");
-    if (!log_->good()) throw std::runtime_error("cannot write the LCM log " + path);
-  }
-  void CloseLog() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    log_.reset();
-  }
+  void OpenLog(const std::string& path) { log_ = std::make_unique<LogWriter>(path); }
+  void CloseLog() { log_.reset(); }
+
   // The newest states, once both a device state and a haptic state have arrived.
   bool Get(Snapshot* snapshot) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -118,8 +106,7 @@ class Listener {
   bool have_device_ = false, have_haptic_ = false;
   DeviceState latest_device_;
   Snapshot snapshot_;
-  std::unique_ptr<lcm::LogFile> log_;
-  long num_logged_ = 0;
+  std::unique_ptr<LogWriter> log_;  // set before the receive thread starts, reset after it ends
 };
 
 pid_t SpawnHaptic(const RunCommandOptions& options) {
@@ -130,14 +117,21 @@ pid_t SpawnHaptic(const RunCommandOptions& options) {
   if (options.duration_s > 0.0) args.insert(args.end(), {"--duration", std::to_string(options.duration_s)});
   if (!options.haptic_summary_path.empty())
     args.insert(args.end(), {"--summary", options.haptic_summary_path});
+  // Everything the child needs is built before fork: between fork and exec only
+  // async-signal-safe calls (other threads may hold the allocator's locks).
+  std::vector<char*> argv;
+  for (std::string& arg : args) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+  static const char kExecFailed[] = "hapsim run: exec of the haptic process failed\n";
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("cannot fork the haptic process");
   if (pid == 0) {
-    std::vector<char*> argv;
-    for (std::string& arg : args) argv.push_back(arg.data());
-    argv.push_back(nullptr);
+    prctl(PR_SET_PDEATHSIG, SIGTERM);  // the haptic process stops if this one dies
+    if (getppid() != parent) _exit(1);  // ... or has already died
+    close_range(3, ~0U, 0);            // not this process's LCM sockets and log
     execv("/proc/self/exe", argv.data());
-    std::perror("hapsim run: exec of the haptic process failed");
+    [[maybe_unused]] const ssize_t ignored = write(2, kExecFailed, sizeof(kExecFailed) - 1);
     _exit(127);
   }
   return pid;
@@ -292,7 +286,7 @@ int RunVisual(const RunCommandOptions& options) {
     }
     if (child_end.empty()) {
       kill(child, SIGKILL);
-      child_end = CheckChild(child, &child_code);
+      waitpid(child, nullptr, 0);  // reap it
       child_end = "did not stop within 5 s and was killed";
       child_code = 1;
     }

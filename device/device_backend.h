@@ -4,7 +4,7 @@
 //   SimulatedHand    a mass–spring–damper hand holding the handle and pulled along the scripted
 //                    trajectory: the wrench acts back on it, so the loop is closed and stability
 //                    can be tested without hardware
-//   (apps/external_device.h: an external driver process over LCM)
+//   (ExternalDevice in apps/haptic_command.cc: an external driver process over LCM)
 // Called from the 1 kHz loop: Read and Write must not block or allocate.
 
 #include <Eigen/Core>

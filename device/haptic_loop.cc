@@ -75,6 +75,7 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
                       device.w_W_rad_s, options_.dt_s);
   out.passivity_energy_J = passivity_.energy_in_J();
   out.passivity_alarm = passivity_.active() && !was_active;
+  out.lcp_fell_back = out.rendered.lcp_fell_back;
   out.model_sequence = model_sequence_;
   out.model_age_s = model_age_s_;
   ++num_steps_;

@@ -39,6 +39,7 @@ struct HapticLoopOutput {
   double model_age_s = std::numeric_limits<double>::infinity();
   double passivity_energy_J = 0.0;
   bool passivity_alarm = false;  // the observer turned active at this step
+  bool lcp_fell_back = false;    // lcp: the solve failed and the linear model was used
 };
 
 class HapticLoop {

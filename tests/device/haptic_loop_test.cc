@@ -282,13 +282,19 @@ struct WideValue {
 TEST(TripleBuffer, TwoThreadsNeverSeeATornOrOlderValue) {
   constexpr std::int64_t kValues = 200000;
   TripleBuffer<WideValue> buffer;
-  std::thread writer([&buffer] {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  std::atomic<std::int64_t> reads_so_far{0};
+  std::thread writer([&] {
     for (std::int64_t c = 1; c <= kValues; ++c) {
       buffer.writer_slot()->fields.fill(c);
       buffer.Publish();
+      // Halfway, wait for the reader to have taken one: on a loaded machine the writer could
+      // otherwise finish before the reader thread first runs, and nothing would overlap.
+      if (c == kValues / 2)
+        while (reads_so_far.load() == 0 && std::chrono::steady_clock::now() < deadline)
+          std::this_thread::yield();
     }
   });
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   std::int64_t last = 0, reads = 0, torn = 0, not_newer = 0;
   while (last < kValues && std::chrono::steady_clock::now() < deadline) {
     const WideValue* value = buffer.TakeNewest();
@@ -298,7 +304,7 @@ TEST(TripleBuffer, TwoThreadsNeverSeeATornOrOlderValue) {
                         [c](std::int64_t f) { return f != c; });
     not_newer += c <= last;  // every non-null take is a later publish
     last = std::max(last, c);
-    ++reads;
+    reads_so_far.store(++reads);
   }
   writer.join();
   EXPECT_EQ(last, kValues);  // the last value published is read (finished before the deadline)
