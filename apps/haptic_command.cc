@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "apps/commands.h"
+#include "apps/haptic_inputs.h"
 #include "apps/realtime.h"
 #include "apps/receive_thread.h"
 #include "config/scene.h"
@@ -54,23 +55,14 @@ class ModelReceiver {
       : mailbox_(mailbox), scene_(scene), options_(options) {}
   void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::contact_model_t* msg) {
     device::ContactModelUpdate* slot = mailbox_->writer_slot();
-    messages::ContactModelHeader header;
     std::string error;
-    if (!messages::FromMessage(*msg, &slot->model, &slot->rows, &header, &error)) {
-      std::fprintf(stderr, "hapsim haptic: dropped a contact model: %s\n", error.c_str());
+    if (!ReadContactModelUpdate(*msg, *scene_.tool, scene_.coupling, scene_.gravity_m_s2,
+                                options_, slot, &error)) {
+      std::fprintf(stderr, "hapsim haptic: dropped contact model %ld: %s\n",
+                   static_cast<long>(msg->sequence), error.c_str());
       ++rejected_;
       return;
     }
-    slot->sequence = header.sequence;
-    slot->published_utime = header.utime;
-    slot->visual_tool = header.visual_tool;
-    slot->linearised_tool = ToolState{};
-    slot->linearised_tool.x_W_m = header.x_W_m;
-    slot->linearised_tool.q_WT = header.q_WT;
-    if (!device::PrepareLcpUpdate(scene_.tool->model, scene_.coupling, scene_.gravity_m_s2,
-                                  options_, slot))
-      std::fprintf(stderr, "hapsim haptic: contact model %ld: lcp rows rejected\n",
-                   static_cast<long>(header.sequence));
     mailbox_->Publish();
   }
   long rejected() const { return rejected_; }
@@ -80,44 +72,6 @@ class ModelReceiver {
   const config::Scene& scene_;
   device::HapticLoopOptions options_;
   long rejected_ = 0;
-};
-
-// DEVICE_STATE from an external driver process (docs/DEVICE.md). The receive thread decodes
-// each message into a triple buffer; the loop reads the newest and its age. A state that fails
-// validation (a bad quaternion) arrives as NaN, so the safety layer answers it with zero force.
-class ExternalDevice : public device::DeviceBackend {
- public:
-  struct Sample {
-    DeviceState state;
-    std::int64_t sequence = -1;
-    std::int64_t received_ns = 0;
-  };
-  void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_state_t* msg) {
-    Sample* slot = buffer_.writer_slot();
-    std::string error;
-    if (!messages::FromMessage(*msg, &slot->state, &error))
-      slot->state.x_W_m.setConstant(std::numeric_limits<double>::quiet_NaN());
-    slot->sequence = msg->sequence;
-    slot->received_ns = MonotonicNs();
-    buffer_.Publish();
-  }
-  DeviceState Read(double, double* age_s, long* sequence) override {
-    if (const Sample* newest = buffer_.TakeNewest()) latest_ = *newest;
-    *sequence = latest_.sequence;
-    if (latest_.sequence < 0) {  // nothing yet: not finite, infinitely old
-      *age_s = std::numeric_limits<double>::infinity();
-      DeviceState none;
-      none.x_W_m.setConstant(std::numeric_limits<double>::quiet_NaN());
-      return none;
-    }
-    *age_s = 1e-9 * static_cast<double>(MonotonicNs() - latest_.received_ns);
-    return latest_.state;
-  }
-  void Write(const Eigen::Vector3d&, const Eigen::Vector3d&) override {}  // DEVICE_FORCE
-
- private:
-  device::TripleBuffer<Sample> buffer_;
-  Sample latest_;
 };
 
 // Loop statistics, filled without allocation (buffers reserved for the whole run).
@@ -289,11 +243,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim haptic` needs a tool");
   const device::HapticMode mode =
       config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/false);
-  device::HapticLoopOptions loop_options;
-  loop_options.mode = mode;
-  loop_options.dt_s = 1.0 / scene.haptic.rate_hz;
-  loop_options.lcp_max_rows = scene.haptic.lcp_max_rows;
-  loop_options.safety = scene.haptic.safety;
+  const device::HapticLoopOptions loop_options = MakeHapticLoopOptions(scene, mode);
   device::HapticLoop loop(scene.tool->model, scene.coupling, scene.gravity_m_s2,
                           scene.tool->initial_state, loop_options);
   const double duration_s =

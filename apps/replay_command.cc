@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "apps/commands.h"
+#include "apps/haptic_inputs.h"
 #include "apps/realtime.h"
 #include "config/scene.h"
 #include "core/atomic_file.h"
@@ -63,7 +64,7 @@ struct LogContents {
   std::string mode;  // RUN_INFO.mode: the haptic process's
   std::map<long, hapsim_lcm::haptic_state_t> steps;                     // by step
   std::map<long, DeviceState> devices;                                   // by sequence
-  std::map<long, std::unique_ptr<device::ContactModelUpdate>> models;   // by sequence
+  std::vector<hapsim_lcm::contact_model_t> model_messages;  // decoded in Replay (needs the scene)
 };
 
 template <typename Message>
@@ -91,28 +92,12 @@ LogContents ReadLog(const std::string& path) {
       contents.mode = info.mode;
     } else if (channel == messages::kDeviceStateChannel) {
       const auto msg = Decode<hapsim_lcm::device_state_t>(*event, path);
-      DeviceState device;
-      std::string error;
-      // As the haptic process's ExternalDevice does: a state that fails validation is NaN.
-      if (!messages::FromMessage(msg, &device, &error))
-        device.x_W_m.setConstant(std::numeric_limits<double>::quiet_NaN());
-      contents.devices[msg.sequence] = device;
+      contents.devices[msg.sequence] = ReadDeviceState(msg);
     } else if (channel == messages::kHapticStateChannel) {
       const auto msg = Decode<hapsim_lcm::haptic_state_t>(*event, path);
       if (msg.step >= 0) contents.steps[msg.step] = msg;  // −1: waiting for the first model
     } else if (channel == messages::kContactModelChannel) {
-      const auto msg = Decode<hapsim_lcm::contact_model_t>(*event, path);
-      auto update = std::make_unique<device::ContactModelUpdate>();
-      messages::ContactModelHeader header;
-      std::string error;
-      if (!messages::FromMessage(msg, &update->model, &update->rows, &header, &error))
-        throw InputError(path, 0, channel, error);
-      update->sequence = header.sequence;
-      update->published_utime = header.utime;
-      update->visual_tool = header.visual_tool;
-      update->linearised_tool.x_W_m = header.x_W_m;
-      update->linearised_tool.q_WT = header.q_WT;
-      contents.models[header.sequence] = std::move(update);
+      contents.model_messages.push_back(Decode<hapsim_lcm::contact_model_t>(*event, path));
     }
   }
   // readNextEvent stops at the end or at the first event it cannot read (a cut or garbled one):
@@ -143,19 +128,22 @@ void WriteCsv(const std::string& path, const LogContents& log) {
 }
 
 // Re-runs the loop; returns the number of steps compared, or throws at the first difference.
-long Replay(const config::Scene& scene, LogContents& log) {
-  device::HapticLoopOptions options;
-  options.mode = scene.haptic.mode;
-  if (const auto logged_mode = config::ParseHapticMode(log.mode)) options.mode = *logged_mode;
-  options.dt_s = 1.0 / scene.haptic.rate_hz;
-  options.lcp_max_rows = scene.haptic.lcp_max_rows;
-  options.safety = scene.haptic.safety;
+long Replay(const config::Scene& scene, const LogContents& log) {
+  device::HapticMode mode = scene.haptic.mode;
+  if (const auto logged_mode = config::ParseHapticMode(log.mode)) mode = *logged_mode;
+  const device::HapticLoopOptions options = MakeHapticLoopOptions(scene, mode);
   device::HapticLoop loop(scene.tool->model, scene.coupling, scene.gravity_m_s2,
                           scene.tool->initial_state, options);
-  // As the haptic process's receive thread did: the same inputs give the same solver state.
-  for (auto& [sequence, update] : log.models)
-    device::PrepareLcpUpdate(scene.tool->model, scene.coupling, scene.gravity_m_s2, options,
-                             update.get());
+  // As the haptic process's receive thread did (apps/haptic_inputs.h): the same inputs.
+  std::map<long, std::unique_ptr<device::ContactModelUpdate>> models;  // by sequence
+  for (const hapsim_lcm::contact_model_t& msg : log.model_messages) {
+    auto update = std::make_unique<device::ContactModelUpdate>();
+    std::string error;
+    if (!ReadContactModelUpdate(msg, *scene.tool, scene.coupling, scene.gravity_m_s2, options,
+                                update.get(), &error))
+      throw std::runtime_error("contact model " + std::to_string(msg.sequence) + ": " + error);
+    models[msg.sequence] = std::move(update);
+  }
   long expected_step = log.steps.begin()->first, compared = 0;
   std::int64_t model_in_use = -1;
   for (const auto& [step, logged] : log.steps) {
@@ -163,20 +151,24 @@ long Replay(const config::Scene& scene, LogContents& log) {
       throw std::runtime_error("the log misses the haptic state of step " +
                                std::to_string(expected_step));
     ++expected_step;
-    const auto device = log.devices.find(logged.device_sequence);
-    if (device == log.devices.end())
+    // A negative sequence: no device state had arrived (an external driver not yet started); the
+    // live loop was given an invalid state then.
+    const auto found_device = log.devices.find(logged.device_sequence);
+    if (logged.device_sequence >= 0 && found_device == log.devices.end())
       throw std::runtime_error("step " + std::to_string(step) + " used device state " +
                                std::to_string(logged.device_sequence) + ", which is not in the log");
+    const DeviceState device =
+        logged.device_sequence >= 0 ? found_device->second : MakeInvalidDeviceState();
     const device::ContactModelUpdate* update = nullptr;
     if (logged.model_sequence != model_in_use) {
-      const auto found = log.models.find(logged.model_sequence);
-      if (found == log.models.end())
+      const auto found = models.find(logged.model_sequence);
+      if (found == models.end())
         throw std::runtime_error("step " + std::to_string(step) + " used contact model " +
                                  std::to_string(logged.model_sequence) + ", which is not in the log");
       update = found->second.get();
       model_in_use = logged.model_sequence;
     }
-    const device::HapticLoopOutput out = loop.Step(device->second, logged.device_age_s, update);
+    const device::HapticLoopOutput out = loop.Step(device, logged.device_age_s, update);
     for (int i = 0; i < 3; ++i) {
       if (out.sent.force_W_N[i] != logged.force_device_W_N[i] ||
           out.sent.torque_W_N_m[i] != logged.torque_device_W_N_m[i]) {
@@ -203,7 +195,7 @@ void RunReplay(const ReplayOptions& options) {
                 options.log_path.c_str(), options.speed, options.lcm_url.c_str());
     return;
   }
-  LogContents log = ReadLog(options.log_path);
+  const LogContents log = ReadLog(options.log_path);
   if (!options.csv_path.empty()) WriteCsv(options.csv_path, log);
   const std::string scene_path = options.scene_path.empty() ? log.scene_path : options.scene_path;
   if (scene_path.empty())
@@ -212,7 +204,7 @@ void RunReplay(const ReplayOptions& options) {
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "the scene has no tool");
   const long compared = Replay(scene, log);
   std::printf("hapsim replay: %ld haptic steps of %s reproduced bit for bit (%zu contact models)\n",
-              compared, options.log_path.c_str(), log.models.size());
+              compared, options.log_path.c_str(), log.model_messages.size());
   if (!options.csv_path.empty()) std::printf("  wrote %s\n", options.csv_path.c_str());
 }
 

@@ -1,0 +1,101 @@
+#pragma once
+// The inputs of the haptic loop as both `hapsim haptic` (live) and `hapsim replay` (from a log)
+// build them: one piece of code, because replay reproduces the live forces bit for bit only if
+// it feeds the loop exactly what the live process did.
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <limits>
+#include <string>
+
+#include "apps/realtime.h"
+#include "config/scene.h"
+#include "device/device_backend.h"
+#include "device/haptic_loop.h"
+#include "device/model_mailbox.h"
+#include "messages/adapters.h"
+
+namespace hapsim::apps {
+
+// The loop's options for `mode` from the scene (haptic rate, lcp capacity, safety limits).
+inline device::HapticLoopOptions MakeHapticLoopOptions(const config::Scene& scene,
+                                                       device::HapticMode mode) {
+  device::HapticLoopOptions options;
+  options.mode = mode;
+  options.dt_s = 1.0 / scene.haptic.rate_hz;
+  options.lcp_max_rows = scene.haptic.lcp_max_rows;
+  options.safety = scene.haptic.safety;
+  return options;
+}
+
+// Decodes a CONTACT_MODEL into an update (model, rows, visual tool, linearisation pose) and, in
+// the lcp mode, prepares its solver (device::PrepareLcpUpdate). Returns false with *error on a
+// message the adapters reject; a rejected lcp preparation is not an error (the loop falls back
+// to the linear model and counts it).
+inline bool ReadContactModelUpdate(const hapsim_lcm::contact_model_t& msg,
+                                   const config::ToolScene& tool, const CouplingParams& coupling,
+                                   const Eigen::Vector3d& gravity_m_s2,
+                                   const device::HapticLoopOptions& options,
+                                   device::ContactModelUpdate* update, std::string* error) {
+  messages::ContactModelHeader header;
+  if (!messages::FromMessage(msg, &update->model, &update->rows, &header, error)) return false;
+  update->sequence = header.sequence;
+  update->published_utime = header.utime;
+  update->visual_tool = header.visual_tool;
+  update->linearised_tool = ToolState{};
+  update->linearised_tool.x_W_m = header.x_W_m;
+  update->linearised_tool.q_WT = header.q_WT;
+  device::PrepareLcpUpdate(tool.model, coupling, gravity_m_s2, options, update);
+  return true;
+}
+
+// A device state that failed validation, or none at all yet: not finite, so the safety layer
+// answers it with zero force.
+inline DeviceState MakeInvalidDeviceState() {
+  DeviceState none;
+  none.x_W_m.setConstant(std::numeric_limits<double>::quiet_NaN());
+  return none;
+}
+
+// A DEVICE_STATE as the loop sees it (MakeInvalidDeviceState when it fails validation).
+inline DeviceState ReadDeviceState(const hapsim_lcm::device_state_t& msg) {
+  DeviceState state;
+  std::string error;
+  return messages::FromMessage(msg, &state, &error) ? state : MakeInvalidDeviceState();
+}
+
+// DEVICE_STATE from an external driver process (docs/DEVICE.md). The receive thread decodes
+// each message into a triple buffer; the loop reads the newest and its age. A state that fails
+// validation (a bad quaternion) arrives as NaN, so the safety layer answers it with zero force.
+class ExternalDevice : public device::DeviceBackend {
+ public:
+  struct Sample {
+    DeviceState state;
+    std::int64_t sequence = -1;
+    std::int64_t received_ns = 0;
+  };
+  void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_state_t* msg) {
+    Sample* slot = buffer_.writer_slot();
+    slot->state = ReadDeviceState(*msg);
+    slot->sequence = msg->sequence;
+    slot->received_ns = MonotonicNs();
+    buffer_.Publish();
+  }
+  DeviceState Read(double, double* age_s, long* sequence) override {
+    if (const Sample* newest = buffer_.TakeNewest()) latest_ = *newest;
+    *sequence = latest_.sequence;
+    if (latest_.sequence < 0) {  // nothing yet: not finite, infinitely old
+      *age_s = std::numeric_limits<double>::infinity();
+      return MakeInvalidDeviceState();
+    }
+    *age_s = 1e-9 * static_cast<double>(MonotonicNs() - latest_.received_ns);
+    return latest_.state;
+  }
+  void Write(const Eigen::Vector3d&, const Eigen::Vector3d&) override {}  // DEVICE_FORCE
+
+ private:
+  device::TripleBuffer<Sample> buffer_;
+  Sample latest_;
+};
+
+}  // namespace hapsim::apps
