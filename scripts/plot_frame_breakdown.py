@@ -10,6 +10,7 @@ Frames that refactorised the FEM preconditioner stand out as the high free-FEM p
 """
 import csv
 import os
+import statistics
 import sys
 
 import matplotlib
@@ -28,10 +29,29 @@ def read_frames(path):
     return [r for r in rows if int(r["contacts"]) > 0]
 
 
+def print_bins(label, frames):
+    """The table of docs/BENCHMARKS.md: stage medians by contact count, and the target's figure."""
+    print(f"{label}: medians, ms")
+    print("| contacts | frames | free FEM | detection | response | linear model | whole frame |")
+    for lo, hi in [(1, 100), (100, 160), (160, 200), (200, 10**9)]:
+        sel = [r for r in frames if lo <= int(r["contacts"]) < hi]
+        if sel:
+            med = lambda key: statistics.median(float(r[key]) for r in sel)  # noqa: E731
+            print(f"| {lo}-{hi - 1 if hi < 10**9 else ''} | {len(sel)} | {med('free_fem_ms'):.2f} | "
+                  f"{med('detection_ms'):.2f} | {med('response_ms'):.2f} | {med('model_ms'):.2f} | "
+                  f"{med('total_ms'):.2f} |")
+    many = [float(r["total_ms"]) for r in frames if int(r["contacts"]) >= 100]
+    if many:
+        print(f"whole frame, median over the {len(many)} frames with >= 100 contacts: "
+              f"{statistics.median(many):.2f} ms")
+
+
 def main(out_png, runs):
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
     first_label, first_path = runs[0]
     frames = read_frames(first_path)
+    for label, path in runs:
+        print_bins(label, read_frames(path))
     contacts = [int(r["contacts"]) for r in frames]
     for key, name in STAGES:
         left.scatter(contacts, [float(r[key]) for r in frames], s=10, label=name)
