@@ -27,6 +27,7 @@
 #include "config/simulation_builder.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/statistics.h"
 #include "device/device_backend.h"
 #include "device/haptic_loop.h"
 #include "device/scripted_trajectory.h"
@@ -100,6 +101,15 @@ struct DeviceReading {
   bool in_process = true;  // scripted or simulated hand: this process publishes DEVICE_STATE
 };
 
+// The haptic tool's state in a HAPTIC_STATE (the visual process linearises the next model at it).
+void FillHapticTool(const ToolState& tool, hapsim_lcm::haptic_state_t* state) {
+  messages::PoseToMessage(tool, state->x_W_m, state->q_WT);
+  for (int i = 0; i < 3; ++i) {
+    state->v_W_m_s[i] = tool.v_W_m_s[i];
+    state->L_W_kg_m2_s[i] = tool.L_W_kg_m2_s[i];
+  }
+}
+
 // The messages the loop publishes every step, kept from step to step with their reason strings
 // reserved, so that publishing allocates nothing (a zeroed step's reason is longer than the
 // 15 characters std::string holds without the heap).
@@ -134,10 +144,8 @@ void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
   state.step = step;
   state.device_sequence = device.sequence;
   state.device_age_s = device.age_s;
-  messages::PoseToMessage(loop.tool_state(), state.x_W_m, state.q_WT);
+  FillHapticTool(loop.tool_state(), &state);
   for (int i = 0; i < 3; ++i) {
-    state.v_W_m_s[i] = loop.tool_state().v_W_m_s[i];
-    state.L_W_kg_m2_s[i] = loop.tool_state().L_W_kg_m2_s[i];
     state.force_device_W_N[i] = out.sent.force_W_N[i];
     state.torque_device_W_N_m[i] = out.sent.torque_W_N_m[i];
     state.force_contact_W_N[i] = out.rendered.contact_force_W_N[i];
@@ -193,11 +201,7 @@ const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, device::Model
     state.device_sequence = -1;
     state.model_sequence = -1;
     state.model_age_s = -1.0;
-    messages::PoseToMessage(loop.tool_state(), state.x_W_m, state.q_WT);
-    for (int i = 0; i < 3; ++i) {
-      state.v_W_m_s[i] = loop.tool_state().v_W_m_s[i];
-      state.L_W_kg_m2_s[i] = loop.tool_state().L_W_kg_m2_s[i];
-    }
+    FillHapticTool(loop.tool_state(), &state);
     lcm->publish(messages::kHapticStateChannel, &state);
     SleepUntil(MonotonicNs() + 10000000);
   }
@@ -213,19 +217,19 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, 
   nlohmann::json fade = nullptr;
   if (models_stopped)
     fade = (stats->last_nonzero_step + 1 - stats->last_model_step) * dt_s;
-  nlohmann::json period = {{"p50_us", 1e6 * Quantile(&stats->period_error_s, 0.5)},
-                           {"p99_us", 1e6 * Quantile(&stats->period_error_s, 0.99)},
-                           {"p999_us", 1e6 * Quantile(&stats->period_error_s, 0.999)},
-                           {"max_us", 1e6 * Quantile(&stats->period_error_s, 1.0)}};
-  nlohmann::json latency = {{"p50_ms", 1e3 * Quantile(&stats->model_latency_s, 0.5)},
-                            {"p99_ms", 1e3 * Quantile(&stats->model_latency_s, 0.99)},
-                            {"max_ms", 1e3 * Quantile(&stats->model_latency_s, 1.0)},
+  nlohmann::json period = {{"p50_us", 1e6 * Quantile(stats->period_error_s, 0.5)},
+                           {"p99_us", 1e6 * Quantile(stats->period_error_s, 0.99)},
+                           {"p999_us", 1e6 * Quantile(stats->period_error_s, 0.999)},
+                           {"max_us", 1e6 * Quantile(stats->period_error_s, 1.0)}};
+  nlohmann::json latency = {{"p50_ms", 1e3 * Quantile(stats->model_latency_s, 0.5)},
+                            {"p99_ms", 1e3 * Quantile(stats->model_latency_s, 0.99)},
+                            {"max_ms", 1e3 * Quantile(stats->model_latency_s, 1.0)},
                             {"count", stats->model_latency_s.size()}};
   return {{"steps", steps},
           {"dt_s", dt_s},
           {"period_error", period},
-          {"compute_p50_us", 1e6 * Quantile(&stats->compute_s, 0.5)},
-          {"compute_max_us", 1e6 * Quantile(&stats->compute_s, 1.0)},
+          {"compute_p50_us", 1e6 * Quantile(stats->compute_s, 0.5)},
+          {"compute_max_us", 1e6 * Quantile(stats->compute_s, 1.0)},
           {"overruns", stats->overruns},
           {"zeroed_steps", stats->zeroed_steps},
           {"passivity_alarms", stats->passivity_alarms},

@@ -58,13 +58,6 @@ void InstallStopHandlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-double Quantile(std::vector<double>* values, double q) {
-  if (values->empty()) return 0.0;
-  const size_t k = std::min(values->size() - 1, static_cast<size_t>(q * (values->size() - 1) + 0.5));
-  std::nth_element(values->begin(), values->begin() + k, values->end());
-  return (*values)[k];
-}
-
 void TimingHistogram::Add(double error_s) {
   const double us = std::max(0.0, 1e6 * error_s);
   ++bins_[us >= kBins - 1 ? kBins - 1 : static_cast<int>(us)];

@@ -26,9 +26,6 @@ std::string RequestRealtime(int priority);
 extern std::atomic<bool> g_stop_requested;
 void InstallStopHandlers();
 
-// Quantile q in [0, 1] of `values` (sorted in place; 0 when empty).
-double Quantile(std::vector<double>* values, double q);
-
 // Running quantiles of a timing error without allocation (for the 1 kHz loop's published
 // statistics): 1 µs bins up to 5 ms, the last bin holding everything beyond.
 class TimingHistogram {

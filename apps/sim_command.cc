@@ -84,7 +84,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
   });
 }
 
-nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode, int steps_per_frame,
+nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
+                           contact::ComplianceMethod compliance, int steps_per_frame,
                            const SimRecord& record) {
   std::vector<double> stage[8];
   double max_penetration_m = 0.0;
@@ -116,7 +117,7 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode, 
           {"num_haptic_steps", record.haptic.size()},
           {"num_frames", record.frames.size()},
           {"contact_law", contact::ToString(scene.contact.law)},
-          {"compliance", mode == "reference" ? "exact" : contact::ToString(scene.contact.compliance)},
+          {"compliance", contact::ToString(compliance)},
           {"frame_stage_median_ms", medians},
           {"max_contacts", max_contacts},
           {"peak_force_N", peak_N},
@@ -174,7 +175,8 @@ void RunSim(const SimCommandOptions& options) {
   WriteHapticCsv(out_dir + "/haptic.csv", record);
   WriteFramesCsv(out_dir + "/frames.csv", record);
   const nlohmann::json summary =
-      MakeSummary(scene, device::ToString(mode), multirate.haptic_steps_per_frame, record);
+      MakeSummary(scene, device::ToString(mode), simulator.visual_options().compliance,
+                  multirate.haptic_steps_per_frame, record);
   WriteFileAtomically(summary_path, [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
   std::printf(
       "  peak force %.3f N, RMS %.3f N, max contacts %d, max penetration %.2f mm, median frame "

@@ -13,8 +13,6 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
                        const Eigen::Vector3d& gravity_m_s2, const ToolState& initial_tool,
                        const HapticLoopOptions& options)
     : options_(options),
-      tool_(tool),
-      coupling_(coupling),
       step_(tool, coupling, gravity_m_s2, options.dt_s, initial_tool,
             options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0),
       visual_tool_(initial_tool),
@@ -53,8 +51,9 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
   // 2. The haptic step, on a finite device state only.
   const bool device_finite = IsFinite(device);
   if (device_finite && options_.mode == HapticMode::kCoupling) {
-    const CouplingWrench wrench = CalcCouplingWrench(coupling_, device, visual_tool_,
-                                                     CalcAngularVelocity(tool_, visual_tool_));
+    const CouplingWrench wrench =
+        CalcCouplingWrench(step_.coupling(), device, visual_tool_,
+                           CalcAngularVelocity(step_.tool_model(), visual_tool_));
     out.rendered.device_force_W_N = -wrench.F_W_N;
     out.rendered.device_torque_W_N_m = -wrench.T_W_N_m;
   } else if (device_finite) {

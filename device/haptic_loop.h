@@ -62,8 +62,6 @@ class HapticLoop {
 
  private:
   HapticLoopOptions options_;
-  ToolModel tool_;
-  CouplingParams coupling_;
   HapticStep step_;
   ToolState visual_tool_;  // coupling mode
   HapticSafety safety_;

@@ -52,22 +52,20 @@ ToolStepSystem CalcLinearisationSystem(const ToolModel& tool,
                                                 const Eigen::Vector3d& gravity_m_s2, double dt_s,
                                                 const ToolState& state) {
   // The coupling's Jacobians at zero coupling error: the device at the tool.
-  DeviceState at_tool;
-  at_tool.x_W_m = state.x_W_m;
-  at_tool.q_WD = state.q_WT;
-  at_tool.v_W_m_s = state.v_W_m_s;
-  at_tool.w_W_rad_s = CalcAngularVelocity(tool, state);
+  const DeviceState at_tool = MakeDeviceAtTool(tool, state);
   const CouplingWrench wrench = CalcCouplingWrench(coupling, at_tool, state, at_tool.w_W_rad_s);
   return CalcToolStepSystem(tool, state, wrench, gravity_m_s2, dt_s);
 }
 
-DeviceState HapticStep::tool_as_target() const {
-  DeviceState target;
-  target.x_W_m = tool_state_.x_W_m;
-  target.v_W_m_s = tool_state_.v_W_m_s;
-  target.q_WD = tool_state_.q_WT;
-  target.w_W_rad_s = CalcAngularVelocity(tool_, tool_state_);
-  return target;
+DeviceState MakeDeviceAtTool(const ToolModel& tool, const ToolState& state) {
+  DeviceState device;
+  device.x_W_m = state.x_W_m;
+  device.v_W_m_s = state.v_W_m_s;
+  device.q_WD = state.q_WT;
+  device.w_W_rad_s = CalcAngularVelocity(tool, state);
+  return device;
 }
+
+DeviceState HapticStep::tool_as_target() const { return MakeDeviceAtTool(tool_, tool_state_); }
 
 }  // namespace hapsim::device

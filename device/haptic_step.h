@@ -59,6 +59,8 @@ class HapticStep {
   // The haptic tool as a coupling target for the visual tool (pose and velocities).
   DeviceState tool_as_target() const;
   double dt_s() const { return dt_s_; }
+  const ToolModel& tool_model() const { return tool_; }
+  const CouplingParams& coupling() const { return coupling_; }
 
  private:
   ToolModel tool_;
@@ -71,6 +73,9 @@ class HapticStep {
   contact::HapticLcpSolver lcp_;
   contact::HapticLcpSolver* solver_ = &lcp_;
 };
+
+// A device state at the tool's pose and velocities (a coupling target with zero error).
+DeviceState MakeDeviceAtTool(const ToolModel& tool, const ToolState& state);
 
 // The tool's step system at `state` with the coupling's Jacobians at zero coupling error: the
 // system HapticLcpSolver::Prepare is given (any state near the haptic tool's will do).

@@ -66,6 +66,8 @@ class MultirateSimulator {
            const std::function<void(const FrameSample&)>& on_frame);
 
   const fem::State& body_state() const { return body_state_; }
+  // The visual frame's options as run (steps, compliance: the reference's is always exact).
+  const contact::VisualFrameOptions& visual_options() const { return visual_options_; }
 
  private:
   HapticSample StepHapticTool(const DeviceState& device, long k);
