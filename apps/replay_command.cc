@@ -11,6 +11,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -127,7 +128,27 @@ void WriteCsv(const std::string& path, const LogContents& log) {
   });
 }
 
-// Re-runs the loop; returns the number of steps compared, or throws at the first difference.
+// The inputs of a step whose HAPTIC_STATE was lost in transport, when they follow from its logged
+// neighbours without doubt: an in-process device (its state's sequence is the step, age 0) and the
+// same contact model before and after the gap (a model switch inside a gap cannot be placed).
+// Its device state must be in the log. Returns false otherwise.
+bool RecreateMissingStep(const LogContents& log, long step, hapsim_lcm::haptic_state_t* state) {
+  const auto after = log.steps.upper_bound(step);
+  if (after == log.steps.begin() || after == log.steps.end()) return false;
+  const auto before = std::prev(log.steps.lower_bound(step));
+  const hapsim_lcm::haptic_state_t& a = before->second;
+  const hapsim_lcm::haptic_state_t& b = after->second;
+  const bool in_process = a.device_sequence == before->first && b.device_sequence == after->first &&
+                          a.device_age_s == 0.0 && b.device_age_s == 0.0;
+  if (!in_process || a.model_sequence != b.model_sequence || !log.devices.count(step)) return false;
+  *state = a;
+  state->step = step;
+  state->device_sequence = step;
+  return true;
+}
+
+// Re-runs the loop; returns the number of steps compared, or throws at the first difference
+// (steps lost from the log are re-run when RecreateMissingStep can, and not compared).
 long Replay(const config::Scene& scene, const LogContents& log) {
   device::HapticMode mode = scene.haptic.mode;
   if (const auto logged_mode = config::ParseHapticMode(log.mode)) mode = *logged_mode;
@@ -144,13 +165,21 @@ long Replay(const config::Scene& scene, const LogContents& log) {
       throw std::runtime_error("contact model " + std::to_string(msg.sequence) + ": " + error);
     models[msg.sequence] = std::move(update);
   }
-  long expected_step = log.steps.begin()->first, compared = 0;
+  long compared = 0;
+  long recreated = 0;
   std::int64_t model_in_use = -1;
-  for (const auto& [step, logged] : log.steps) {
-    if (step != expected_step)
-      throw std::runtime_error("the log misses the haptic state of step " +
-                               std::to_string(expected_step));
-    ++expected_step;
+  const long first_step = log.steps.begin()->first, last_step = log.steps.rbegin()->first;
+  for (long step = first_step; step <= last_step; ++step) {
+    const auto found_step = log.steps.find(step);
+    const bool was_logged = found_step != log.steps.end();
+    hapsim_lcm::haptic_state_t logged;
+    if (was_logged) {
+      logged = found_step->second;
+    } else if (!RecreateMissingStep(log, step, &logged)) {
+      throw std::runtime_error("the log misses the haptic state of step " + std::to_string(step));
+    } else {
+      ++recreated;
+    }
     // A negative sequence: no device state had arrived (an external driver not yet started); the
     // live loop was given an invalid state then.
     const auto found_device = log.devices.find(logged.device_sequence);
@@ -169,6 +198,7 @@ long Replay(const config::Scene& scene, const LogContents& log) {
       model_in_use = logged.model_sequence;
     }
     const device::HapticLoopOutput out = loop.Step(device, logged.device_age_s, update);
+    if (!was_logged) continue;  // nothing to compare with
     for (int i = 0; i < 3; ++i) {
       if (out.sent.force_W_N[i] != logged.force_device_W_N[i] ||
           out.sent.torque_W_N_m[i] != logged.torque_device_W_N_m[i]) {
@@ -184,6 +214,10 @@ long Replay(const config::Scene& scene, const LogContents& log) {
     }
     ++compared;
   }
+  if (recreated > 0)
+    std::printf("hapsim replay: %ld haptic steps missing from the log (lost datagrams) were "
+                "re-created from their neighbours\n",
+                recreated);
   return compared;
 }
 
