@@ -258,7 +258,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   device::ModelMailbox mailbox;
   ModelReceiver receiver(&mailbox, scene, loop_options);
-  lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver);
+  KeepQueued(lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver));
   std::unique_ptr<device::DeviceBackend> backend;
   if (options.device == "scripted") {
     backend = std::make_unique<device::ScriptedDevice>(device::ScriptedTrajectory(scene.trajectory));
@@ -267,13 +267,13 @@ void RunHaptic(const HapticCommandOptions& options) {
                                                       scene.hand, loop_options.dt_s);
   } else {
     auto external = std::make_unique<ExternalDevice>();
-    lcm.subscribe(messages::kDeviceStateChannel, &ExternalDevice::Handle, external.get());
+    KeepQueued(lcm.subscribe(messages::kDeviceStateChannel, &ExternalDevice::Handle, external.get()));
     backend = std::move(external);
   }
   const bool in_process_device = options.device != "external";
   InstallStopHandlers();
   ReceiveThread receive_thread(&lcm);
-  const std::string rt_failure = RequestRealtime(80);
+  const std::string rt_failure = RequestRealtime(kHapticPriority, /*lock_memory=*/true);
   if (!rt_failure.empty())
     std::fprintf(stderr, "hapsim haptic: warning: normal scheduling (%s)\n", rt_failure.c_str());
   std::printf("hapsim haptic: %s, mode %s, %ld steps at %g Hz on %s\n", scene.name.c_str(),

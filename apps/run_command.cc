@@ -252,15 +252,21 @@ int RunVisual(const RunCommandOptions& options) {
                      "`hapsim run` needs a deformable body and a tool");
   const device::HapticMode mode =
       config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/false);
+  // Before any thread starts (LCM's, the log writer, the receive thread), so all of them run
+  // at this priority; the spawned haptic process raises its loop above it. No mlockall: the
+  // frame allocates, and only the haptic step must never page-fault.
+  const std::string rt_failure = RequestRealtime(kVisualPriority, /*lock_memory=*/false);
+  if (!rt_failure.empty())
+    std::fprintf(stderr, "hapsim run: warning: normal scheduling (%s)\n", rt_failure.c_str());
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   Listener listener;
-  lcm.subscribe(messages::kDeviceStateChannel, &Listener::OnDevice, &listener);
-  lcm.subscribe(messages::kHapticStateChannel, &Listener::OnHaptic, &listener);
+  KeepQueued(lcm.subscribe(messages::kDeviceStateChannel, &Listener::OnDevice, &listener));
+  KeepQueued(lcm.subscribe(messages::kHapticStateChannel, &Listener::OnHaptic, &listener));
   const std::string log_tmp = options.log_path + ".tmp";
   if (!options.log_path.empty()) {
     listener.OpenLog(log_tmp);
-    lcm.subscribe(".*", &Listener::OnAny, &listener);
+    KeepQueued(lcm.subscribe(".*", &Listener::OnAny, &listener));
   }
   InstallStopHandlers();
   ReceiveThread receive_thread(&lcm);
