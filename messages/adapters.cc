@@ -95,6 +95,27 @@ bool CheckRowArray(const std::vector<std::vector<double>>& rows, int num_rows, i
   return true;
 }
 
+// A packed lower triangle of an n × n matrix: row i starts at entry PackedRowStart(i), and
+// PackedRowStart(n) is the number of entries.
+std::int64_t PackedRowStart(std::int64_t i) { return i * (i + 1) / 2; }
+
+// contact_model_t.W_body_lower: num_rows (num_rows + 1) / 2 finite entries.
+bool CheckPackedLower(const hapsim_lcm::contact_model_t& msg, std::string* error) {
+  const std::int64_t expected = PackedRowStart(msg.num_rows);  // the start of row n: the size
+  if (msg.num_W_body_lower != expected ||
+      msg.W_body_lower.size() != static_cast<std::size_t>(expected)) {
+    SetError(error, "contact_model_t.W_body_lower: " + std::to_string(msg.W_body_lower.size()) +
+                        " entries, expected " + std::to_string(expected) +
+                        " (num_rows (num_rows + 1) / 2)");
+    return false;
+  }
+  if (!AllFinite(msg.W_body_lower.data(), msg.W_body_lower.size())) {
+    SetError(error, "contact_model_t.W_body_lower: non-finite entry");
+    return false;
+  }
+  return true;
+}
+
 // Everything FromMessage(contact_model_t) rejects except the quaternion, which it reads itself.
 bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   if (!(std::isfinite(msg.dt_visual_s) && msg.dt_visual_s > 0.0)) {
@@ -124,7 +145,7 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
          CheckFinite(&msg.dTc_dT[0][0], 9, "contact_model_t.dTc_dT", error) &&
          CheckRowArray(msg.J_v, n, 3, "contact_model_t.J_v", error) &&
          CheckRowArray(msg.J_w, n, 3, "contact_model_t.J_w", error) &&
-         CheckRowArray(msg.W_body, n, n, "contact_model_t.W_body", error) &&
+         CheckPackedLower(msg, error) &&
          CheckSize(msg.body_rhs.size(), n, "contact_model_t.body_rhs", "entries", error) &&
          CheckFinite(msg.body_rhs.data(), n, "contact_model_t.body_rhs", error) &&
          CheckSize(msg.lambda_frame_N.size(), n, "contact_model_t.lambda_frame_N", "entries",
@@ -204,7 +225,7 @@ bool PoseFromMessage(const double x_W_m[3], const double q_WT[4], ToolState* too
 hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
                                       const contact::ContactRows* rows_or_null,
                                       const ContactModelHeader& header) {
-  hapsim_lcm::contact_model_t msg;
+  hapsim_lcm::contact_model_t msg{};
   msg.utime = header.utime;
   msg.sequence = header.sequence;
   msg.dt_visual_s = header.dt_visual_s;
@@ -226,6 +247,7 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
 
   const int n = rows_or_null == nullptr ? 0 : rows_or_null->num_rows();
   msg.num_rows = n;
+  msg.num_W_body_lower = 0;
   if (n == 0) return msg;
   const contact::ContactRows& rows = *rows_or_null;
   if (rows.J_w.rows() != n || rows.W_body.rows() != n || rows.W_body.cols() != n ||
@@ -234,9 +256,13 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
     throw std::invalid_argument("messages::ToMessage: ContactRows sizes disagree with J_v's " +
                                 std::to_string(n) + " rows");
   }
+  // Only the lower triangle travels: an asymmetric W_body would arrive changed.
+  if (rows.W_body != rows.W_body.transpose())
+    throw std::invalid_argument("messages::ToMessage: ContactRows.W_body is not symmetric");
   msg.J_v.assign(n, std::vector<double>(3));
   msg.J_w.assign(n, std::vector<double>(3));
-  msg.W_body.assign(n, std::vector<double>(n));
+  msg.num_W_body_lower = static_cast<std::int32_t>(PackedRowStart(n));
+  msg.W_body_lower.resize(msg.num_W_body_lower);
   msg.body_rhs.resize(n);
   msg.lambda_frame_N.assign(n, 0.0);
   for (int i = 0; i < n; ++i) {
@@ -244,7 +270,7 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
       msg.J_v[i][c] = rows.J_v(i, c);
       msg.J_w[i][c] = rows.J_w(i, c);
     }
-    for (int c = 0; c < n; ++c) msg.W_body[i][c] = rows.W_body(i, c);
+    for (int c = 0; c <= i; ++c) msg.W_body_lower[PackedRowStart(i) + c] = rows.W_body(i, c);
     msg.body_rhs[i] = rows.body_rhs[i];
     if (rows.lambda_frame_N.size() == n) msg.lambda_frame_N[i] = rows.lambda_frame_N[i];
   }
@@ -292,7 +318,8 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
       rows->J_v(i, c) = msg.J_v[i][c];
       rows->J_w(i, c) = msg.J_w[i][c];
     }
-    for (int c = 0; c < n; ++c) rows->W_body(i, c) = msg.W_body[i][c];
+    for (int c = 0; c <= i; ++c)
+      rows->W_body(i, c) = rows->W_body(c, i) = msg.W_body_lower[PackedRowStart(i) + c];
     rows->body_rhs[i] = msg.body_rhs[i];
     rows->lambda_frame_N[i] = msg.lambda_frame_N[i];
   }

@@ -11,8 +11,8 @@ inline constexpr char kSimFrameChannel[] = "SIM_FRAME";          // sim_frame_t,
 inline constexpr char kRunInfoChannel[] = "RUN_INFO";            // run_info_t, at start
 
 // Default transport: UDP multicast that stays on this machine (ttl=0), with a 4 MB receive
-// buffer: an lcp contact model of ~200 rows is ~330 kB, sent in fragments that must all fit in
-// the socket buffer at once (the kernel default, 208 kB, dropped them).
+// buffer: an lcp contact model of ~220 rows is ~200 kB, sent in fragments that must all fit in
+// the socket buffer at once (the kernel default, 208 kB, dropped the earlier 330 kB models).
 inline constexpr char kDefaultLcmUrl[] = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 
 }  // namespace hapsim::messages

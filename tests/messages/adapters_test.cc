@@ -208,7 +208,8 @@ struct ContactModelFixture {
     rows.J_w = Eigen::MatrixX3d::NullaryExpr(num_rows, 3, [&] { return random(); });
     const Eigen::MatrixXd A =
         Eigen::MatrixXd::NullaryExpr(num_rows, num_rows, [&] { return random(); });
-    rows.W_body = A * A.transpose();
+    const Eigen::MatrixXd AAt = A * A.transpose();
+    rows.W_body = 0.5 * (AAt + AAt.transpose());  // exactly symmetric, as MakeContactRows makes it
     rows.body_rhs = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
     rows.lambda_frame_N =
         Eigen::VectorXd::NullaryExpr(num_rows, [&] { return std::max(0.0, random()); });
@@ -267,6 +268,21 @@ TEST(ContactModelMessage, RoundTripWithRowsIsBitIdentical) {
   ExpectSameRowsAndHeader(in, rows, header);
 }
 
+// Only W_body's lower triangle is sent: the upper one is rebuilt from it, so an asymmetric
+// matrix (which would arrive changed) is refused at the sender.
+TEST(ContactModelMessage, PackedLowerTriangleHasTheExpectedLayout) {
+  const ContactModelFixture in(4);
+  const auto msg = ToMessage(in.model, &in.rows, in.header);
+  ASSERT_EQ(msg.num_W_body_lower, 10);
+  EXPECT_EQ(msg.W_body_lower[0], in.rows.W_body(0, 0));
+  EXPECT_EQ(msg.W_body_lower[4], in.rows.W_body(2, 1));  // row 2 starts at 2·3/2 = 3
+  EXPECT_EQ(msg.W_body_lower[9], in.rows.W_body(3, 3));
+  ContactModelFixture asymmetric(4);
+  asymmetric.rows.W_body(0, 3) += 1e-15;
+  EXPECT_THROW(ToMessage(asymmetric.model, &asymmetric.rows, asymmetric.header),
+               std::invalid_argument);
+}
+
 TEST(ContactModelMessage, RoundTripWithoutRowsEmptiesTheRows) {
   const ContactModelFixture in(0);
   const auto msg = EncodeDecode(ToMessage(in.model, nullptr, in.header));
@@ -291,14 +307,15 @@ TEST(ContactModelMessage, InconsistentOrNonFiniteMessagesAreRejected) {
       {"J_v", [](auto* m) { m->J_v.pop_back(); }},
       {"J_v", [](auto* m) { m->num_rows = 4; }},
       {"J_w", [](auto* m) { m->J_w.pop_back(); }},
-      {"W_body[2]", [](auto* m) { m->W_body[2].pop_back(); }},
+      {"W_body_lower", [](auto* m) { m->W_body_lower.pop_back(); }},
+      {"W_body_lower", [](auto* m) { m->num_W_body_lower = 9; }},
       {"body_rhs", [](auto* m) { m->body_rhs.push_back(0.0); }},
       {"num_rows", [](auto* m) { m->num_rows = -1; }},
       {"num_contacts", [](auto* m) { m->num_contacts = -2; }},
       {"dFc_dT", [](auto* m) { m->dFc_dT[1][2] = kNaN; }},
       {"F_c0_N", [](auto* m) { m->F_c0_N[0] = std::numeric_limits<double>::infinity(); }},
       {"J_w[1]", [](auto* m) { m->J_w[1][2] = kNaN; }},
-      {"W_body[0]", [](auto* m) { m->W_body[0][2] = kNaN; }},
+      {"W_body_lower", [](auto* m) { m->W_body_lower[4] = kNaN; }},
       {"body_rhs", [](auto* m) { m->body_rhs[2] = kNaN; }},
       {"lambda_frame_N", [](auto* m) { m->lambda_frame_N[1] = kNaN; }},
       {"x_W_m", [](auto* m) { m->x_W_m[0] = kNaN; }},
@@ -327,7 +344,7 @@ TEST(ContactModelMessage, RowStorageIsReusedWhenTheSizeIsUnchanged) {
   const ContactModelFixture first(6), second(6);
   const auto msg1 = ToMessage(first.model, &first.rows, first.header);
   auto msg2 = ToMessage(second.model, &second.rows, second.header);
-  msg2.W_body[0][0] += 1.0;  // a different frame's values
+  msg2.W_body_lower[0] += 1.0;  // a different frame's values
   contact::LinearContactModel model;
   contact::ContactRows rows;
   ContactModelHeader header;
@@ -340,7 +357,7 @@ TEST(ContactModelMessage, RowStorageIsReusedWhenTheSizeIsUnchanged) {
   const std::int64_t allocations = counter.count();
   EXPECT_EQ(rows.W_body.data(), W_storage);
   EXPECT_EQ(rows.J_v.data(), J_storage);
-  EXPECT_EQ(rows.W_body(0, 0), msg2.W_body[0][0]);
+  EXPECT_EQ(rows.W_body(0, 0), msg2.W_body_lower[0]);
   if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer)";
   EXPECT_EQ(allocations, 0);
 }
