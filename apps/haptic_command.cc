@@ -64,6 +64,7 @@ class ModelReceiver {
       ++rejected_;
       return;
     }
+    slot->ready_utime = WallMicros();
     mailbox_->Publish();
   }
   long rejected() const { return rejected_; }
@@ -82,8 +83,11 @@ struct LoopStats {
   double period_p50_s = 0.0, period_p99_s = 0.0;  // refreshed every 100 steps
   std::vector<double> compute_s;       // wall time of the step's work (before publishing)
   // Per model: from its publication to the start of the step that first used it (same-machine
-  // wall clocks), s.
+  // wall clocks), s; and the part of it until the receive thread had it ready in the mailbox
+  // (transport, decoding, lcp preparation). The rest is the wait for the next step, which is
+  // uniform over one period for a model published at a random phase of the haptic clock.
   std::vector<double> model_latency_s;
+  std::vector<double> model_ready_s;
   long overruns = 0, zeroed_steps = 0, passivity_alarms = 0, lcp_fallbacks = 0;
   double max_force_sent_N = 0.0;
   // Fade-out when the models stop (the visual process died): the step the last model arrived,
@@ -221,10 +225,12 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, 
                            {"p99_us", 1e6 * Quantile(stats->period_error_s, 0.99)},
                            {"p999_us", 1e6 * Quantile(stats->period_error_s, 0.999)},
                            {"max_us", 1e6 * Quantile(stats->period_error_s, 1.0)}};
-  nlohmann::json latency = {{"p50_ms", 1e3 * Quantile(stats->model_latency_s, 0.5)},
-                            {"p99_ms", 1e3 * Quantile(stats->model_latency_s, 0.99)},
-                            {"max_ms", 1e3 * Quantile(stats->model_latency_s, 1.0)},
-                            {"count", stats->model_latency_s.size()}};
+  const auto quantiles_ms = [](const std::vector<double>& s) {
+    return nlohmann::json{{"p50_ms", 1e3 * Quantile(s, 0.5)},
+                          {"p99_ms", 1e3 * Quantile(s, 0.99)},
+                          {"max_ms", 1e3 * Quantile(s, 1.0)},
+                          {"count", s.size()}};
+  };
   return {{"steps", steps},
           {"dt_s", dt_s},
           {"period_error", period},
@@ -235,7 +241,8 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, 
           {"passivity_alarms", stats->passivity_alarms},
           {"lcp_fallback_steps", stats->lcp_fallbacks},
           {"max_force_sent_N", stats->max_force_sent_N},
-          {"model_latency", latency},
+          {"model_latency", quantiles_ms(stats->model_latency_s)},
+          {"model_ready", quantiles_ms(stats->model_ready_s)},
           {"models_rejected", receiver->rejected()},
           {"model_stale_s", model_stale_s},
           {"fade_after_last_model_s", fade},
@@ -290,6 +297,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   stats.period_error_s.reserve(num_steps);
   stats.compute_s.reserve(num_steps);
   stats.model_latency_s.reserve(num_steps);
+  stats.model_ready_s.reserve(num_steps);
   StepMessages step_messages;
   const std::int64_t dt_ns = std::llround(1e9 * loop_options.dt_s);
   std::int64_t deadline_ns = MonotonicNs() + dt_ns, previous_start_ns = 0;
@@ -317,9 +325,12 @@ void RunHaptic(const HapticCommandOptions& options) {
     backend->Write(out.sent.force_W_N, out.sent.torque_W_N_m);
     if (update != nullptr) {
       stats.last_model_step = step;
-      if (stats.model_latency_s.size() < stats.model_latency_s.capacity())
-        stats.model_latency_s.push_back(1e-6 * static_cast<double>(step_start_utime -
-                                                                    update->published_utime));
+      if (stats.model_latency_s.size() < stats.model_latency_s.capacity()) {
+        stats.model_latency_s.push_back(
+            1e-6 * static_cast<double>(step_start_utime - update->published_utime));
+        stats.model_ready_s.push_back(
+            1e-6 * static_cast<double>(update->ready_utime - update->published_utime));
+      }
     }
     if (out.sent.force_W_N.squaredNorm() > 0.0) stats.last_nonzero_step = step;
     if (out.model_age_s > loop_options.safety.model_stale_s)
@@ -342,11 +353,14 @@ void RunHaptic(const HapticCommandOptions& options) {
   const nlohmann::json summary = Summarize(&stats, &receiver, step, loop_options.dt_s,
                                            loop_options.safety.model_stale_s);
   std::printf("hapsim haptic: %ld steps; period error p50 %.1f us, p99 %.1f us, max %.1f us; "
-              "%ld overruns; model latency (publish to first use) p50 %.2f ms; max force sent %.3f N\n",
+              "%ld overruns; model latency (publish to first use) p50 %.2f ms, p99 %.2f ms "
+              "(publish to ready p99 %.2f ms); max force sent %.3f N\n",
               step, summary["period_error"]["p50_us"].get<double>(),
               summary["period_error"]["p99_us"].get<double>(),
               summary["period_error"]["max_us"].get<double>(), stats.overruns,
-              summary["model_latency"]["p50_ms"].get<double>(), stats.max_force_sent_N);
+              summary["model_latency"]["p50_ms"].get<double>(),
+              summary["model_latency"]["p99_ms"].get<double>(),
+              summary["model_ready"]["p99_ms"].get<double>(), stats.max_force_sent_N);
   if (stats.passivity_alarm_step >= 0)
     std::fprintf(stderr,
                  "hapsim haptic: warning: the rendering generated energy from step %ld on "

@@ -54,7 +54,11 @@ struct RunCommandOptions {
 };
 
 // The newest DEVICE_STATE and HAPTIC_STATE, and (with --log) every message to the log writer's
-// queue. Runs in the receive thread, which handles LCM continuously so that nothing is dropped
+// queue. The two are not paired by HAPTIC_STATE.device_sequence on purpose: they feed different
+// tools. The device drives the visual tool's coupling, where the freshest sample is the best
+// one; the haptic tool's state is only the point the model is linearised at. (The in-process
+// simulator gives frame k the device sample of step 30k, one newer than the one step 30k − 1
+// used, so pairing would not bring the two runs closer either.) Runs in the receive thread, which handles LCM continuously so that nothing is dropped
 // while a visual frame computes or the disk stalls; the frame loop reads a consistent snapshot
 // under the mutex (this process is not the real-time one).
 class Listener {

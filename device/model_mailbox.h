@@ -24,6 +24,7 @@ namespace hapsim::device {
 struct ContactModelUpdate {
   std::int64_t sequence = -1;         // visual frame index (contact_model_t.sequence)
   std::int64_t published_utime = 0;   // when the visual process published it, µs (latency)
+  std::int64_t ready_utime = 0;       // when the receiver had it decoded and prepared, µs
   contact::LinearContactModel model;  // the paper's model
   contact::ContactRows rows;          // lcp mode: the frame's rows (num_rows 0 otherwise)
   ToolState visual_tool;              // coupling mode: the visual tool after the frame
