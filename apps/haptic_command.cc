@@ -280,7 +280,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   const bool in_process_device = options.device != "external";
   InstallStopHandlers();
   ReceiveThread receive_thread(&lcm);
-  const std::string rt_failure = RequestRealtime(kHapticPriority, /*lock_memory=*/true);
+  const std::string rt_failure = RequestRealtime(80);
   if (!rt_failure.empty())
     std::fprintf(stderr, "hapsim haptic: warning: normal scheduling (%s)\n", rt_failure.c_str());
   std::printf("hapsim haptic: %s, mode %s, %ld steps at %g Hz on %s\n", scene.name.c_str(),

@@ -35,13 +35,13 @@ void SleepUntil(std::int64_t deadline_ns) {
   }
 }
 
-std::string RequestRealtime(int priority, bool lock_memory) {
+std::string RequestRealtime(int priority) {
   std::string failed;
   sched_param param{};
   param.sched_priority = priority;
   if (sched_setscheduler(0, SCHED_FIFO, &param) != 0)
     failed += std::string("SCHED_FIFO: ") + std::strerror(errno);
-  if (lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
     failed += (failed.empty() ? "" : "; ") + std::string("mlockall: ") + std::strerror(errno);
   return failed;
 }

@@ -18,14 +18,9 @@ std::int64_t WallMicros();
 // Sleeps until the monotonic time `deadline_ns` (absolute: no drift accumulates).
 void SleepUntil(std::int64_t deadline_ns);
 
-// Asks for SCHED_FIFO at `priority` for the calling thread (threads it creates afterwards
-// inherit it) and, with `lock_memory`, mlockall. Returns "" on success, else what failed (the
+// Asks for SCHED_FIFO at `priority` and mlockall. Returns "" on success, else what failed (the
 // caller warns and carries on with normal scheduling).
-constexpr int kHapticPriority = 80;
-// The visual process: below the haptic loop, above everything else on the machine, so that a
-// competing build or job cannot delay the models (its frames use a third of one core).
-constexpr int kVisualPriority = 20;
-std::string RequestRealtime(int priority, bool lock_memory);
+std::string RequestRealtime(int priority);
 
 // SIGINT and SIGTERM set this flag (installed by InstallStopHandlers); loops poll it.
 extern std::atomic<bool> g_stop_requested;

@@ -256,12 +256,6 @@ int RunVisual(const RunCommandOptions& options) {
                      "`hapsim run` needs a deformable body and a tool");
   const device::HapticMode mode =
       config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/false);
-  // Before any thread starts (LCM's, the log writer, the receive thread), so all of them run
-  // at this priority; the spawned haptic process raises its loop above it. No mlockall: the
-  // frame allocates, and only the haptic step must never page-fault.
-  const std::string rt_failure = RequestRealtime(kVisualPriority, /*lock_memory=*/false);
-  if (!rt_failure.empty())
-    std::fprintf(stderr, "hapsim run: warning: normal scheduling (%s)\n", rt_failure.c_str());
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   Listener listener;
