@@ -181,16 +181,24 @@ void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
 // Before its clock starts, the haptic process announces itself (HAPTIC_STATE with step −1, the
 // initial tool; DEVICE_STATE with sequence −1 for an in-process device) every 10 ms until the
 // first contact model arrives, so that model is in use from step 0 as in the in-process
-// simulator, rather than after the visual process's first (slowest) frame. Returns the model;
-// throws if none came within timeout_s.
+// simulator, rather than after the visual process's first (slowest) frame. The mailbox is looked
+// at every 0.1 ms (at the announcements only, the first model waited up to 10 ms). Returns the
+// model; throws if none came within timeout_s.
 const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, device::ModelMailbox* mailbox,
                                                    const config::Scene& scene,
                                                    const device::HapticLoop& loop,
                                                    bool in_process_device, double timeout_s) {
   const std::int64_t give_up_ns = MonotonicNs() + std::llround(1e9 * timeout_s);
   const DeviceState device = device::ScriptedTrajectory(scene.trajectory).Sample(0.0);
+  constexpr std::int64_t kAnnouncePeriodNs = 10000000, kPollPeriodNs = 100000;
+  std::int64_t next_announcement_ns = MonotonicNs();
   while (!g_stop_requested.load()) {
     if (const device::ContactModelUpdate* model = mailbox->TakeNewest()) return model;
+    if (MonotonicNs() < next_announcement_ns) {
+      SleepUntil(MonotonicNs() + kPollPeriodNs);
+      continue;
+    }
+    next_announcement_ns += kAnnouncePeriodNs;
     if (MonotonicNs() > give_up_ns)
       throw std::runtime_error("no contact model within " + std::to_string(timeout_s) +
                                " s: is `hapsim run` running on the same --lcm-url?");
@@ -207,7 +215,6 @@ const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, device::Model
     state.model_age_s = -1.0;
     FillHapticTool(loop.tool_state(), &state);
     lcm->publish(messages::kHapticStateChannel, &state);
-    SleepUntil(MonotonicNs() + 10000000);
   }
   return nullptr;
 }
@@ -264,6 +271,9 @@ void RunHaptic(const HapticCommandOptions& options) {
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   device::ModelMailbox mailbox;
+  if (mode == device::HapticMode::kLcp)
+    for (device::ContactModelUpdate& slot : mailbox.slots_for_setup())
+      device::EnsureLcpSolver(loop_options, &slot);
   ModelReceiver receiver(&mailbox, scene, loop_options);
   KeepQueued(lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver));
   std::unique_ptr<device::DeviceBackend> backend;

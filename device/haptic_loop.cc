@@ -22,12 +22,16 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
     throw std::invalid_argument("the reference mode runs in the in-process simulator only");
 }
 
+void EnsureLcpSolver(const HapticLoopOptions& options, ContactModelUpdate* update) {
+  if (!update->lcp_solver || update->lcp_solver->max_rows() != options.lcp_max_rows)
+    update->lcp_solver = std::make_unique<contact::HapticLcpSolver>(options.lcp_max_rows);
+}
+
 bool PrepareLcpUpdate(const ToolModel& tool, const CouplingParams& coupling,
                       const Eigen::Vector3d& gravity_m_s2, const HapticLoopOptions& options,
                       ContactModelUpdate* update) {
   if (options.mode != HapticMode::kLcp || update->rows.num_rows() == 0) return true;
-  if (!update->lcp_solver || update->lcp_solver->max_rows() != options.lcp_max_rows)
-    update->lcp_solver = std::make_unique<contact::HapticLcpSolver>(options.lcp_max_rows);
+  EnsureLcpSolver(options, update);
   return update->lcp_solver->Prepare(
       update->rows, CalcLinearisationSystem(tool, coupling, gravity_m_s2, options.dt_s,
                                             update->linearised_tool));

@@ -71,6 +71,12 @@ class HapticLoop {
   long num_steps_ = 0;
 };
 
+// Gives the update an lcp solver of options.lcp_max_rows rows unless it has one (~16
+// lcp_max_rows² bytes). PrepareLcpUpdate calls it; `hapsim haptic` calls it for every mailbox
+// slot before the loop starts, so that no model waits for an allocation (the first three models
+// of an lcp run once waited 3–4 ms each, page faults under mlockall included).
+void EnsureLcpSolver(const HapticLoopOptions& options, ContactModelUpdate* update);
+
 // Receive-thread work for an lcp update: gives it a solver (once: max_rows capacity) and prepares
 // it for the update's rows at its linearised tool, so the loop's first step on them is warm. Same
 // inputs, same solver state: `hapsim replay` calls it too. Returns false if the rows were

@@ -46,6 +46,9 @@ class TripleBuffer {
     const std::uint8_t old = middle_.exchange(writer_ | kFresh, std::memory_order_acq_rel);
     writer_ = old & 3;
   }
+  // Setup only, before the writer and the reader run: every slot, to give each in advance what it
+  // will hold (so that neither thread allocates it later).
+  std::array<T, 3>& slots_for_setup() { return slots_; }
   // Reader: the newest value if one was published since the last call, else nullptr. The slot
   // stays the reader's (unchanged) until its next call that returns non-null.
   const T* TakeNewest() {
