@@ -388,6 +388,24 @@ TEST(HapticLcpSolver, AllocatesNothingAfterConstruction) {
   EXPECT_GT(factorisations, 8);  // the new-rows and border-overflow paths were exercised
 }
 
+// The default capacity (haptic.lcp_max_rows 512) with an active block of several hundred rows:
+// Eigen's blocked LLT allocates GEMM workspace from about 400 rows on (cache-size dependent);
+// the solver's own factorisation must not.
+TEST(HapticLcpSolver, LargeActiveBlocksAllocateNothing) {
+  if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer)";
+  const LcpProblem p = MakeLcpProblem(512, 31, 10.0, 1e4);
+  HapticLcpSolver solver(512);
+  Eigen::Vector3d F_c, T_c;
+  AllocationCounter counter;
+  const bool ok = solver.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c);
+  const std::int64_t allocations = counter.count();
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(allocations, 0);
+  ASSERT_GE(solver.last_num_active(), 300) << "precondition: a large active block";
+  const Reference reference = SolveReference(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m);
+  EXPECT_LT((F_c - reference.F_c_N).norm(), kRelativeTolerance * reference.F_c_N.norm());
+}
+
 TEST(HapticLcpSolver, MoreRowsThanCapacityFailsWithZeroForceAndNoAllocation) {
   const LcpProblem p = MakeLcpProblem(25, 21);
   HapticLcpSolver solver(20);
