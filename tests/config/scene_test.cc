@@ -9,17 +9,22 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
+#include "tests/config/scene_test_support.h"
 
 namespace hapsim::config {
 namespace {
 
 namespace fs = std::filesystem;
+using test::BadCase;
+using test::ExpectError;
+using test::ParseError;
+using test::Replace;
+using test::TempFolder;
 
 // A scene using every key; the trailing comments number the lines, so the bad-input cases below
 // can name the line they break.
@@ -53,26 +58,6 @@ body:                                         #  7
 constexpr char kLabel[] = "test.yaml";
 constexpr char kBoxLine[] =
     "box: {min_m: [-0.05, -0.05, 0], max_m: [0.05, 0.05, 0.05], cells: [12, 12, 5]}";
-
-// `text` with its only occurrence of `find` replaced by `replace`.
-std::string Replace(std::string text, const std::string& find, const std::string& replace) {
-  const std::size_t at = text.find(find);
-  if (at == std::string::npos || text.find(find, at + 1) != std::string::npos) {
-    ADD_FAILURE() << "'" << find << "' does not occur exactly once";
-    return text;
-  }
-  return text.replace(at, find.size(), replace);
-}
-
-// The InputError that parsing `yaml` throws, or nullopt if it parses.
-std::optional<InputError> ParseError(const std::string& yaml, const std::string& base_dir = "") {
-  try {
-    ParseScene(yaml, kLabel, base_dir);
-  } catch (const InputError& error) {
-    return error;
-  }
-  return std::nullopt;
-}
 
 TEST(ParseSceneTest, FullSceneGivesEveryValue) {
   const Scene scene = ParseScene(kFullScene, kLabel, "");
@@ -169,19 +154,6 @@ body:
   EXPECT_TRUE(body.loads.empty());
   EXPECT_TRUE(body.probes.empty());
 }
-
-// One kind of bad input: kFullScene with `find` replaced by `replace` must throw InputError at
-// `line` with `key`, and its message must contain `message_part`.
-struct BadCase {
-  const char* name;
-  const char* find;
-  const char* replace;
-  int line;
-  const char* key;
-  const char* message_part;
-};
-
-std::ostream& operator<<(std::ostream& out, const BadCase& c) { return out << c.name; }
 
 const BadCase kBadCases[] = {
     // YAML syntax, reported at the line yaml-cpp gives.
@@ -290,13 +262,7 @@ class SceneBadInputTest : public testing::TestWithParam<BadCase> {};
 
 TEST_P(SceneBadInputTest, ThrowsAtLineAndKey) {
   const BadCase& c = GetParam();
-  const std::string yaml = Replace(kFullScene, c.find, c.replace);
-  const std::optional<InputError> error = ParseError(yaml);
-  ASSERT_TRUE(error.has_value()) << "parsed without error:\n" << yaml;
-  EXPECT_EQ(error->file(), kLabel);
-  EXPECT_EQ(error->line(), c.line) << error->what();
-  EXPECT_EQ(error->key(), c.key) << error->what();
-  EXPECT_NE(std::string(error->what()).find(c.message_part), std::string::npos) << error->what();
+  ExpectError(Replace(kFullScene, c.find, c.replace), kLabel, c.line, c.key, c.message_part);
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, SceneBadInputTest, testing::ValuesIn(kBadCases),
@@ -306,17 +272,17 @@ INSTANTIATE_TEST_SUITE_P(Cases, SceneBadInputTest, testing::ValuesIn(kBadCases),
 
 TEST(ParseSceneTest, MissingTopLevelKeyIsReportedAtTheDocumentStart) {
   // The document's map starts at its first key, on line 2 once line 1 is emptied.
-  const std::optional<InputError> error = ParseError(Replace(kFullScene, "name: full", ""));
+  const std::optional<InputError> error = ParseError(Replace(kFullScene, "name: full", ""), kLabel);
   ASSERT_TRUE(error.has_value());
   EXPECT_EQ(error->line(), 2);
   EXPECT_EQ(error->key(), "name");
 }
 
 TEST(ParseSceneTest, DocumentMustBeANonEmptyMap) {
-  std::optional<InputError> error = ParseError("# only a comment\n");
+  std::optional<InputError> error = ParseError("# only a comment\n", kLabel);
   ASSERT_TRUE(error.has_value());
   EXPECT_EQ(error->line(), 0);
-  error = ParseError("\n- name: a\n");
+  error = ParseError("\n- name: a\n", kLabel);
   ASSERT_TRUE(error.has_value());
   EXPECT_EQ(error->line(), 2);
   EXPECT_EQ(error->key(), "");
@@ -324,37 +290,18 @@ TEST(ParseSceneTest, DocumentMustBeANonEmptyMap) {
 
 TEST(ParseSceneTest, WhatNamesFileLineAndKey) {
   const std::optional<InputError> error =
-      ParseError(Replace(kFullScene, "poisson_ratio: 0.45", "poisson_ratio: 0.7"));
+      ParseError(Replace(kFullScene, "poisson_ratio: 0.45", "poisson_ratio: 0.7"), kLabel);
   ASSERT_TRUE(error.has_value());
   EXPECT_EQ(
       std::string(error->what()).rfind("test.yaml:12: key 'body.material.poisson_ratio': ", 0), 0u)
       << error->what();
 }
 
-// A folder under the test temp dir holding the given (empty) files; removed on destruction.
-class TempFolder {
- public:
-  explicit TempFolder(const std::string& name)
-      : path_(fs::path(testing::TempDir()) / ("hapsim_scene_test_" + name)) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempFolder() { fs::remove_all(path_); }
-  std::string Write(const std::string& name, const std::string& text = "") const {
-    std::ofstream(path_ / name) << text;
-    return (path_ / name).string();
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
 TEST(ParseSceneTest, MeshFileIsResolvedAgainstBaseDir) {
   const TempFolder folder("mesh_file");
   const std::string mesh_path = folder.Write("liver.msh");
   const std::string yaml = Replace(kFullScene, kBoxLine, "file: liver.msh");
-  const Scene scene = ParseScene(yaml, kLabel, folder.path().string());
+  const Scene scene = ParseScene(yaml, kLabel, folder.path());
   EXPECT_EQ(scene.body->mesh.kind, MeshSource::Kind::kFile);
   EXPECT_EQ(scene.body->mesh.file, mesh_path);
   // An absolute path is taken as is, whatever base_dir says.
@@ -362,7 +309,7 @@ TEST(ParseSceneTest, MeshFileIsResolvedAgainstBaseDir) {
       ParseScene(Replace(kFullScene, kBoxLine, "file: " + mesh_path), kLabel, "");
   EXPECT_EQ(absolute.body->mesh.file, mesh_path);
   // The same name relative to another folder does not exist.
-  const std::optional<InputError> error = ParseError(yaml, "/nonexistent_dir");
+  const std::optional<InputError> error = ParseError(yaml, kLabel, "/nonexistent_dir");
   ASSERT_TRUE(error.has_value());
   EXPECT_EQ(error->line(), 9);
   EXPECT_EQ(error->key(), "body.mesh.file");
@@ -372,12 +319,12 @@ TEST(ParseSceneTest, TetGenMeshNeedsItsEleFile) {
   const TempFolder folder("tetgen");
   folder.Write("organ.node");
   const std::string yaml = Replace(kFullScene, kBoxLine, "file: organ.node");
-  const std::optional<InputError> error = ParseError(yaml, folder.path().string());
+  const std::optional<InputError> error = ParseError(yaml, kLabel, folder.path());
   ASSERT_TRUE(error.has_value());
   EXPECT_EQ(error->line(), 9);
   EXPECT_NE(std::string(error->what()).find("organ.ele"), std::string::npos) << error->what();
   folder.Write("organ.ele");
-  EXPECT_EQ(ParseScene(yaml, kLabel, folder.path().string()).body->mesh.kind,
+  EXPECT_EQ(ParseScene(yaml, kLabel, folder.path()).body->mesh.kind,
             MeshSource::Kind::kFile);
 }
 

@@ -7,19 +7,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <optional>
 #include <string>
 
 #include "config/scene.h"
 #include "core/error.h"
 #include "device/scripted_trajectory.h"
+#include "tests/config/scene_test_support.h"
 
 namespace hapsim::config {
 namespace {
 
-namespace fs = std::filesystem;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -61,32 +59,15 @@ device: {trajectory: [{t_s: 0, position_m: [0, 0, 0]}]}
 constexpr char kLabel[] = "sim.yaml";
 constexpr char kCapsule[] = "capsule: {radius_m: 0.005, length_m: 0.05}";
 
-std::string Replace(std::string text, const std::string& find, const std::string& replace) {
-  const std::size_t at = text.find(find);
-  if (at == std::string::npos || text.find(find, at + 1) != std::string::npos) {
-    ADD_FAILURE() << "'" << find << "' does not occur exactly once";
-    return text;
-  }
-  return text.replace(at, find.size(), replace);
-}
+using test::BadCase;
+using test::ParseError;
+using test::Replace;
+using test::TempFolder;
 
-std::optional<InputError> ParseError(const std::string& yaml, const std::string& base_dir = "") {
-  try {
-    ParseScene(yaml, kLabel, base_dir);
-  } catch (const InputError& error) {
-    return error;
-  }
-  return std::nullopt;
-}
-
-void ExpectError(const std::string& yaml, int line, const std::string& key,
-                 const std::string& message_part) {
-  const std::optional<InputError> error = ParseError(yaml);
-  ASSERT_TRUE(error.has_value()) << "parsed without error:\n" << yaml;
-  EXPECT_EQ(error->file(), kLabel);
-  EXPECT_EQ(error->line(), line) << error->what();
-  EXPECT_EQ(error->key(), key) << error->what();
-  EXPECT_NE(std::string(error->what()).find(message_part), std::string::npos) << error->what();
+// test::ExpectError for a scene parsed as kLabel.
+void ExpectSimSceneError(const std::string& yaml, int line, const std::string& key,
+                         const std::string& message_part) {
+  test::ExpectError(yaml, kLabel, line, key, message_part);
 }
 
 TEST(SimSceneTest, FullSimulationSceneGivesEveryValue) {
@@ -175,17 +156,6 @@ TEST(SimSceneTest, EnumNamesRoundTrip) {
   EXPECT_EQ(ParseHapticMode("Linear"), std::nullopt);
   EXPECT_EQ(ParseContactLaw(""), std::nullopt);
 }
-
-struct BadCase {
-  const char* name;
-  const char* find;
-  const char* replace;
-  int line;
-  const char* key;
-  const char* message_part;
-};
-
-std::ostream& operator<<(std::ostream& out, const BadCase& c) { return out << c.name; }
 
 const BadCase kBadCases[] = {
     // tool
@@ -299,7 +269,7 @@ class SimSceneBadInputTest : public testing::TestWithParam<BadCase> {};
 
 TEST_P(SimSceneBadInputTest, ThrowsAtLineAndKey) {
   const BadCase& c = GetParam();
-  ExpectError(Replace(kSimScene, c.find, c.replace), c.line, c.key, c.message_part);
+  ExpectSimSceneError(Replace(kSimScene, c.find, c.replace), c.line, c.key, c.message_part);
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, SimSceneBadInputTest, testing::ValuesIn(kBadCases),
@@ -321,54 +291,35 @@ std::string WithoutLines(int first, int last) {
 
 TEST(SimSceneTest, ToolNeedsCouplingAndDevice) {
   // A missing top-level key is reported at the document start (line 1), naming the tool's line.
-  ExpectError(WithoutLines(9, 9), 1, "coupling", "missing required key: the tool (line 3)");
-  ExpectError(WithoutLines(19, 24), 1, "device", "missing required key: the tool (line 3)");
-  ExpectError(Replace(WithoutLines(21, 24), "  trajectory:", "  trajectory: []"), 20,
+  ExpectSimSceneError(WithoutLines(9, 9), 1, "coupling", "missing required key: the tool (line 3)");
+  ExpectSimSceneError(WithoutLines(19, 24), 1, "device", "missing required key: the tool (line 3)");
+  ExpectSimSceneError(Replace(WithoutLines(21, 24), "  trajectory:", "  trajectory: []"), 20,
               "device.trajectory", "at least one waypoint");
-  ExpectError(WithoutLines(20, 24) + "  {}\n", 19, "device.trajectory", "missing required key");
+  ExpectSimSceneError(WithoutLines(20, 24) + "  {}\n", 19, "device.trajectory", "missing required key");
 }
 
 TEST(SimSceneTest, SectionsWithoutToolAreErrors) {
   // Without lines 3-8, the coupling line 9 becomes line 3, contact 4, haptic 10, device 13.
   const std::string no_tool = WithoutLines(3, 8);
-  ExpectError(no_tool, 3, "coupling", "applies only to a scene with a tool");
+  ExpectSimSceneError(no_tool, 3, "coupling", "applies only to a scene with a tool");
   const std::string bare = "name: bare\ntime: {dt_s: 0.01, num_steps: 1}\n";
-  ExpectError(bare + "contact: {law: equality}\n", 3, "contact", "applies only");
-  ExpectError(bare + "haptic: {rate_hz: 1000}\n", 3, "haptic", "applies only");
-  ExpectError(bare + "device: {trajectory: [{t_s: 0, position_m: [0, 0, 0]}]}\n", 3, "device",
+  ExpectSimSceneError(bare + "contact: {law: equality}\n", 3, "contact", "applies only");
+  ExpectSimSceneError(bare + "haptic: {rate_hz: 1000}\n", 3, "haptic", "applies only");
+  ExpectSimSceneError(bare + "device: {trajectory: [{t_s: 0, position_m: [0, 0, 0]}]}\n", 3, "device",
               "applies only");
 }
 
 TEST(SimSceneTest, DefaultHapticRateMustFitTheFrame) {
   // 1000 Hz by default: a frame of 1/60 s is 16.67 haptic steps. Reported at time.dt_s.
   const std::string yaml = Replace(kMinimalToolScene, "dt_s: 0.001", "dt_s: 0.016666666666666666");
-  ExpectError(yaml, 2, "time.dt_s", "16.6667 haptic steps per visual frame");
-  ExpectError(yaml, 2, "time.dt_s", "1000 Hz by default");
+  ExpectSimSceneError(yaml, 2, "time.dt_s", "16.6667 haptic steps per visual frame");
+  ExpectSimSceneError(yaml, 2, "time.dt_s", "1000 Hz by default");
   // 600 Hz fits: 600 · 0.016666666666666666 = 10 to round-off.
   const Scene scene = ParseScene(yaml + "haptic: {rate_hz: 600}\n", kLabel, "");
   EXPECT_EQ(scene.haptic.steps_per_frame, 10);
   // A haptic section without rate_hz still reports at time.dt_s.
-  ExpectError(yaml + "haptic: {mode: coupling}\n", 2, "time.dt_s", "1000 Hz by default");
+  ExpectSimSceneError(yaml + "haptic: {mode: coupling}\n", 2, "time.dt_s", "1000 Hz by default");
 }
-
-// A folder under the test temp dir; removed on destruction.
-class TempFolder {
- public:
-  explicit TempFolder(const std::string& name)
-      : path_(fs::path(testing::TempDir()) / ("hapsim_sim_scene_test_" + name)) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempFolder() { fs::remove_all(path_); }
-  std::string Write(const std::string& name, const std::string& text) const {
-    std::ofstream(path_ / name) << text;
-    return (path_ / name).string();
-  }
-  std::string path() const { return path_.string(); }
-
- private:
-  fs::path path_;
-};
 
 // A solid tetrahedron with 1 cm legs along the axes, faces outward.
 constexpr char kTetrahedronObj[] = R"(v 0 0 0
@@ -402,7 +353,7 @@ TEST(SimSceneTest, ErrorsInsideAToolMeshNameTheMeshFile) {
   // The last face left out: the mesh is open.
   const std::string mesh_path = folder.Write("open.obj", Replace(kTetrahedronObj, "f 2 3 4\n", ""));
   const std::string yaml = Replace(kSimScene, kCapsule, "mesh: {file: open.obj}");
-  const std::optional<InputError> error = ParseError(yaml, folder.path());
+  const std::optional<InputError> error = ParseError(yaml, kLabel, folder.path());
   ASSERT_TRUE(error.has_value());
   EXPECT_EQ(error->file(), mesh_path) << error->what();
   EXPECT_GT(error->line(), 0) << error->what();
