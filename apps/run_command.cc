@@ -58,7 +58,9 @@ struct RunCommandOptions {
 // tools. The device drives the visual tool's coupling, where the freshest sample is the best
 // one; the haptic tool's state is only the point the model is linearised at. (The in-process
 // simulator gives frame k the device sample of step 30k, one newer than the one step 30k − 1
-// used, so pairing would not bring the two runs closer either.) Runs in the receive thread, which handles LCM continuously so that nothing is dropped
+// used, so pairing would not bring the two runs closer either.) This process's own CONTACT_MODEL
+// and SIM_FRAME reach the log the same way, back through multicast loopback: one path for every
+// channel, stamped at reception as lcm-logger would, for the cost of copying ~250 kB a frame. Runs in the receive thread, which handles LCM continuously so that nothing is dropped
 // while a visual frame computes or the disk stalls; the frame loop reads a consistent snapshot
 // under the mutex (this process is not the real-time one).
 class Listener {
