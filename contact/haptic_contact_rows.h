@@ -1,38 +1,13 @@
 #pragma once
-// The unilateral contact solve of the haptic step in the `lcp` mode (DESIGN.md §4: "with
-// unilateral contacts the haptic process can instead receive the per-contact rows and solve the
-// small LCP at 1 kHz"). The visual frame hands over the constraint rows frozen at the frame
-// (ContactRows); at every haptic step, with the tool's step system and the discrete-time force
-// and torque F̂, T̂, the haptic process solves
-//
-//   W = J_v A_v⁻¹ J_vᵀ + J_ω M⁻¹ A_L⁻¹ J_ωᵀ + W_body                      (n × n)
-//   v_free = A_v⁻¹ Δt F̂,   ω_free = M⁻¹ A_L⁻¹ Δt T̂                         (free tool velocities)
-//   rhs = body_rhs − J_v v_free − J_ω ω_free          (= b − c_free, c_free = J_v v_free +
-//                                                        J_ω ω_free + J_u u̇)
-//   c = Δt W λ − rhs ≥ 0,   λ ≥ 0,   cᵀλ = 0                               (Signorini LCP)
-//
-// and returns F_c = J_vᵀλ, T_c = J_ωᵀλ. With every contact active this is the equality solve
-// of the linear contact model (linear_contact_model.h), which it reproduces; unlike that model
-// it lets contacts separate (and re-engage) between visual frames.
-//
-// Algorithm (see HapticLcpSolver). The tool part of W has rank ≤ 6 and the body part is frozen
-// for the frame, so W(t) = W̄ + U ΔS(t) Uᵀ with U = [J_v J_ω] (n × 6), S = blockdiag(A_v⁻¹,
-// M⁻¹A_L⁻¹), W̄ = W_body + U S̄ Uᵀ for a symmetric positive definite S̄ fixed when the rows
-// arrive, ΔS = S − S̄. A primal active-set method (Lawson & Hanson's NNLS in its QP form, as
-// SolveContactImpulses' kUnilateral) is run with every equality solve on the active set done by
-// the Schur-complement method of active-set QP solvers (Gill, Murray, Saunders & Wright 1990;
-// Bartlett & Biegler's QPSchur 2006): one dense Cholesky factor of a base block W̄_BB, kept
-// while the rows stay the same, and a small dense border for the rank-6 tool change and the
-// rows that entered or left the active set since. Warm-started from the previous step's active
-// set, a haptic step with unchanged rows and contacts costs O(n²) (the complementarity check)
-// plus O(n·m + m³), m ≤ 6 + 32 border columns, and no factorisation of an n × n matrix.
+// The rows the visual frame hands over for the `lcp` mode (DESIGN.md §4: "with unilateral
+// contacts the haptic process can instead receive the per-contact rows and solve the small LCP
+// at 1 kHz"): per normal contact row, frozen at the frame. HapticLcpSolver
+// (haptic_lcp_solver.h) solves the LCP on them at every haptic step.
 
 #include <Eigen/Core>
-#include <memory>
 #include <vector>
 
 #include "contact/contact_jacobian.h"
-#include "core/tool_integrator.h"
 
 namespace hapsim::contact {
 
@@ -63,85 +38,5 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
 // the active rows.
 ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body_all,
                             const std::vector<int>& rows, const Eigen::VectorXd& body_rhs);
-
-// The LCP above, exactly (to round-off), at 1 kHz and without heap allocation after
-// construction.
-//
-// Caching and warm start. The solver keeps a copy of the last rows it was given and compares
-// each call's rows with it bitwise (memcmp, ~2 µs at n = 125). Unchanged rows (the haptic steps
-// within a visual frame) keep the base factorisation, the border and the previous step's active
-// set. Changed rows (a new frame: other contacts, whose indices say nothing about the old set)
-// are copied, checked and factorised once, starting from the frame's active set
-// (ContactRows::lambda_frame_N > 0) or, without it, from the rows that ask for a push, rhs_i > 0. The guess only decides how much work is done, never the answer: the set is first shrunk
-// until its equality solution is positive, then the active-set iteration runs to
-// complementarity; the LCP has a unique solution whenever W's symmetric part is positive
-// definite, so every guess reaches the same λ.
-//
-// Contracts: W_body symmetric (its lower triangle is read; an asymmetry above 1e-9 of its
-// largest entry is rejected) and positive semidefinite, A_v and A_L invertible, Δt > 0. A set
-// of rows whose W is singular (more independent constraints than the tool's 6 plus the body's
-// rank) has no unique solution; the solver then reports failure rather than guessing.
-//
-// Cost (tests/bench/haptic_lcp_benchmark.cc; 2.6 GHz EPYC, this SSE2 Release build, n = 25 /
-// 50 / 125 rows): a warm step 1.9 / 3.2 / 9.8 µs (no factorisation); the first step of a frame
-// whose rows are its active contacts 7 / 20 / 117 µs (one Cholesky factorisation, 65 µs of it
-// at 125); with ~20% of the rows separating at once 10 / 38 / 234 µs (two). For comparison a
-// single dense LU of W costs 2.3 / 11 / 118 µs and the paper's linear model 7 ns. A solve whose
-// residual exceeds 1e-9 (round-off in a long border; not observed in testing) is redone once
-// from a fresh factorisation.
-//
-// No heap allocation after construction, checked by tests/contact/haptic_lcp_test.cc (up to
-// 150 rows) and verified up to 300 rows; beyond ~200 active rows Eigen's blocked Cholesky takes
-// its GEMM scratch from the heap (its stack limit is 128 kB; the threshold depends on the cache
-// sizes Eigen detects).
-class HapticLcpSolver {
- public:
-  // Preallocates everything for up to max_rows rows (memory ≈ 16 max_rows² bytes). Throws
-  // std::invalid_argument if max_rows < 0.
-  explicit HapticLcpSolver(int max_rows);
-  ~HapticLcpSolver();
-  HapticLcpSolver(HapticLcpSolver&&) noexcept;
-  HapticLcpSolver& operator=(HapticLcpSolver&&) noexcept;
-
-  // Solves the LCP for `rows`, the tool system `tool` of this haptic step (A_v, A_L, M⁻¹, Δt)
-  // and F̂, T̂ (world, N and N m, CalcDiscreteTimeWrench), and writes F_c = J_vᵀλ (N) and
-  // T_c = J_ωᵀλ (N m, about the tool's COM), world. Returns false, with zero force and torque,
-  // if rows.num_rows() > max_rows() or the rows are inconsistent in size, not finite or
-  // W_body not symmetric, or the active-set iteration failed (singular W, or no convergence
-  // within 3n + 10 entering rows); never allocates, never throws.
-  bool Solve(const ContactRows& rows, const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
-             const Eigen::Vector3d& T_hat_N_m, Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m);
-
-  // Does the work of the first Solve on new rows ahead of time, off the 1 kHz loop (the visual
-  // frame, or the haptic process's receive thread): copies and checks the rows, guesses the
-  // frame's active set (or the rows that ask for a push) and factorises its base block with S̄
-  // from `tool` (the tool system at linearisation: any symmetric positive definite S̄ is exact;
-  // the first Solve borders the difference to its own). A following Solve on the same rows then
-  // takes the warm path. Returns false, leaving nothing prepared, for rows Solve would reject.
-  // Not concurrent with Solve on the same solver; allocates nothing.
-  bool Prepare(const ContactRows& rows, const ToolStepSystem& tool);
-
-  int max_rows() const;
-  // Equality solves on an active set in the last Solve (1 when the warm start was right).
-  int last_iterations() const { return last_iterations_; }
-  // max_i |min(λ_i, c_i/(Δt W_ii))| / max_i λ_i (absolute when λ = 0), the measure of
-  // ContactSolveReport::residual; ≲ 1e-12 when converged.
-  double last_residual() const { return last_residual_; }
-  // Rows with λ > 0 after the last Solve.
-  int last_num_active() const { return last_num_active_; }
-  // Dense Cholesky factorisations of a base block in the last Solve: 0 at a warm step with the
-  // same rows, ≥ 1 when the rows changed or the border of changes grew past its capacity.
-  int last_num_factorizations() const { return last_num_factorizations_; }
-  // λ per row after the last successful Solve (size num_rows), N.
-  Eigen::Ref<const Eigen::VectorXd> last_impulses() const;
-
- private:
-  struct Workspace;
-  std::unique_ptr<Workspace> ws_;
-  int last_iterations_ = 0;
-  double last_residual_ = 0.0;
-  int last_num_active_ = 0;
-  int last_num_factorizations_ = 0;
-};
 
 }  // namespace hapsim::contact

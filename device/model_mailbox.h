@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "contact/haptic_contact_rows.h"
+#include "contact/haptic_lcp_solver.h"
 #include "contact/linear_contact_model.h"
 #include "core/rigid_tool.h"
 

@@ -10,7 +10,7 @@
 //   coupling   standard multirate rendering: no haptic tool; the device feels the coupling to the
 //              visual tool, which is coupled to the device and updated only at visual frames.
 //   lcp        as linear, but the haptic tool's contact force comes from a unilateral solve at
-//              1 kHz on the rows of all the frame's contacts (contact/haptic_contact_rows.h).
+//              1 kHz on the rows of all the frame's contacts (contact/haptic_lcp_solver.h).
 //   reference  everything (FEM, detection, constraint solve) at the haptic step, with the exact
 //              body compliance (contact::ComplianceMethod::kExact): the ground truth.
 // Within one haptic period a visual frame is computed first (when one is due), then the haptic

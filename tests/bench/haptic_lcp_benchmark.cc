@@ -25,7 +25,7 @@
 
 #include "contact/contact_jacobian.h"
 #include "contact/contact_solver.h"
-#include "contact/haptic_contact_rows.h"
+#include "contact/haptic_lcp_solver.h"
 #include "contact/linear_contact_model.h"
 
 namespace hapsim::contact {

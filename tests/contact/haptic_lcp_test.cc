@@ -1,4 +1,4 @@
-// The haptic step's unilateral contact solve (contact/haptic_contact_rows.h) against
+// The haptic step's unilateral contact solve (contact/haptic_lcp_solver.h) against
 // independent values:
 //  - SolveContactImpulses(kUnilateral) on the assembled W and rhs (a separate implementation:
 //    dense LU of the active block at every iteration, cold start), from cold and warm starts,
@@ -21,7 +21,7 @@
 
 #include "contact/contact_jacobian.h"
 #include "contact/contact_solver.h"
-#include "contact/haptic_contact_rows.h"
+#include "contact/haptic_lcp_solver.h"
 #include "contact/linear_contact_model.h"
 #include "tests/allocation_counter.h"
 
