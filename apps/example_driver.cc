@@ -4,7 +4,7 @@
 // is closed) and publishes DEVICE_STATE, and it applies the newest DEVICE_FORCE it received.
 // Replace ReadHandle() and ApplyWrench() with the SDK's calls.
 //
-//   hapsim_example_driver SCENE [--lcm-url URL] [--duration S]
+//   hapsim_example_driver SCENE [--lcm-url URL] [--duration S] [--wait-for-loop S]
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -13,6 +13,7 @@
 #include <cstdio>
 
 #include "apps/realtime.h"
+#include "apps/receive_thread.h"
 #include "config/scene.h"
 #include "device/device_backend.h"
 #include "messages/adapters.h"
@@ -44,6 +45,13 @@ class Driver {
     }
   }
 
+  // The haptic loop runs once a HAPTIC_STATE with step ≥ 0 arrives (−1: it waits for a model).
+  void OnHapticState(const lcm::ReceiveBuffer*, const std::string&,
+                     const hapsim_lcm::haptic_state_t* m) {
+    if (m->step >= 0) loop_running_ = true;
+  }
+  bool loop_running() const { return loop_running_; }
+
   void OnForce(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_force_t* m) {
     std::string error;
     if (!hapsim::messages::FromMessage(*m, &force_W_N_, &torque_W_N_m_, &error)) {
@@ -57,6 +65,7 @@ class Driver {
   static constexpr double kStaleForce_s = 0.003;
   hapsim::device::SimulatedHand hand_;
   std::int64_t received_ns_ = 0;  // when the last DEVICE_FORCE arrived (0: never: zero force)
+  bool loop_running_ = false;
   Eigen::Vector3d force_W_N_ = Eigen::Vector3d::Zero(), torque_W_N_m_ = Eigen::Vector3d::Zero();
 };
 
@@ -70,6 +79,11 @@ int main(int argc, char** argv) {
       ->required();
   app.add_option("--lcm-url", url, "LCM provider URL")->capture_default_str();
   app.add_option("--duration", duration_s, "Seconds (default: the scene's script)");
+  double wait_s = 30.0;
+  app.add_option("--wait-for-loop", wait_s,
+                 "Seconds to hold the handle at the script's start waiting for the haptic loop")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     const hapsim::config::Scene scene = hapsim::config::LoadScene(scene_path);
@@ -78,19 +92,41 @@ int main(int argc, char** argv) {
     lcm::LCM lcm(url);
     if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + url);
     Driver driver(scene, dt_s);
-    lcm.subscribe(hapsim::messages::kDeviceForceChannel, &Driver::OnForce, &driver);
+    // LCM refuses the newest message once 30 wait (receive_thread.h): after a stall the driver
+    // would apply old forces. Drained every millisecond below, so the queue stays short.
+    hapsim::apps::KeepQueued(
+        lcm.subscribe(hapsim::messages::kDeviceForceChannel, &Driver::OnForce, &driver));
+    hapsim::apps::KeepQueued(
+        lcm.subscribe(hapsim::messages::kHapticStateChannel, &Driver::OnHapticState, &driver));
     hapsim::apps::InstallStopHandlers();
     const std::int64_t dt_ns = std::llround(1e9 * dt_s);
     std::int64_t deadline_ns = hapsim::apps::MonotonicNs();
-    for (long k = 0; k < steps && !hapsim::apps::g_stop_requested.load(); ++k) {
-      while (lcm.handleTimeout(0) > 0) {}  // apply the newest force first
-      driver.ApplyWrench();
-      const hapsim::DeviceState state = driver.ReadHandle(k * dt_s);
+    const std::int64_t give_up_ns = deadline_ns + std::llround(1e9 * wait_s);
+    long sequence = 0;  // +1 per published sample, waiting ones included (docs/DEVICE.md)
+    const auto publish = [&](const hapsim::DeviceState& state) {
       const hapsim_lcm::device_state_t msg =
-          hapsim::messages::ToMessage(state, hapsim::apps::WallMicros(), k);
+          hapsim::messages::ToMessage(state, hapsim::apps::WallMicros(), sequence++);
       lcm.publish(hapsim::messages::kDeviceStateChannel, &msg);
       deadline_ns += dt_ns;
       hapsim::apps::SleepUntil(deadline_ns);
+    };
+    // The script stands for a hand that moves once the simulation runs: until the haptic loop
+    // has started (the visual process builds its body, then waits for a device state, and the
+    // haptic process for the first model) the handle is held at the script's start, so that the
+    // script's clock and the loop's start together, as with an in-process device. A real device
+    // has no script: its driver just publishes what it reads.
+    const hapsim::DeviceState start = driver.ReadHandle(0.0);
+    while (!driver.loop_running() && !hapsim::apps::g_stop_requested.load()) {
+      if (hapsim::apps::MonotonicNs() > give_up_ns)
+        throw std::runtime_error("no haptic loop on " + url + " within " +
+                                 std::to_string(wait_s) + " s (is `hapsim run` running?)");
+      while (lcm.handleTimeout(0) > 0) {}
+      publish(start);
+    }
+    for (long k = 0; k < steps && !hapsim::apps::g_stop_requested.load(); ++k) {
+      while (lcm.handleTimeout(0) > 0) {}  // apply the newest force first
+      driver.ApplyWrench();
+      publish(driver.ReadHandle(k * dt_s));
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "hapsim_example_driver: error: %s\n", error.what());
