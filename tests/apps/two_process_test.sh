@@ -30,7 +30,7 @@ port=$((20000 + $$ % 20000))
 url="udpm://239.255.76.67:$port?ttl=0&recv_buf_size=4194304"
 # Logs on tmpfs when there is one: a log writer stalled by a busy disk would drop datagrams.
 work=$(mktemp -d -p /dev/shm 2> /dev/null || mktemp -d)
-trap 'rm -rf "$work"' EXIT
+trap 'kill $(jobs -p) 2> /dev/null || true; rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 scene=scenes/block_press.yaml
 
@@ -166,8 +166,10 @@ PY
 # 6. An external driver: the example driver closes the loop with the same simulated hand as
 # `--device hand`, but in its own process, its states and forces over LCM. The loop through LCM
 # delays each force by about one step, and the driver's script starts when it sees the loop run
-# (a step or two after the loop's own start); tolerance 0.05 N RMS over the run, 6% of the
-# 0.85 N peak (measured 0.009 N on an idle machine). A disturbed run is repeated, as in 1.
+# (a step or two after the loop's own start); both runs also carry their own frame timing (the
+# models' ages), so the reference is not exact either. Measured 0.007–0.044 N RMS over six runs;
+# tolerance 0.08 N, ~10% of the 0.85 N peak, well below what a broken protocol gives (a driver
+# whose script ran 0.2 s ahead of the loop: 0.24 N). A disturbed run is repeated, as in 1.
 for attempt in 1 2 3; do
   "$hapsim" run "$scene" --device external --lcm-url "$url" --log "$work/external.lcm" \
     > "$work/external.out" 2>&1 &
@@ -194,7 +196,7 @@ err = math.sqrt(sum((float(e[f"force_{a}_N"]) - float(h[f"force_{a}_N"])) ** 2
 peak = max(abs(float(h["force_z_N"])) for h in hand)
 print(f"external driver vs in-process hand: device force RMS difference {err:.4f} N (peak {peak:.3f} N)")
 assert peak > 0.5, "the hand should have pressed the block"
-assert err < 0.05, err
+assert err < 0.08, err
 PY
   then
     break
