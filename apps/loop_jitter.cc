@@ -11,10 +11,10 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <vector>
 
 #include "apps/realtime.h"
+#include "core/atomic_file.h"
 #include "core/statistics.h"
 
 int main(int argc, char** argv) {
@@ -47,10 +47,11 @@ int main(int argc, char** argv) {
               "max %.0f us\n", steps, summary["p50_us"].get<double>(), summary["p99_us"].get<double>(),
               summary["p999_us"].get<double>(), summary["max_us"].get<double>());
   if (!summary_path.empty()) {
-    const std::string tmp = summary_path + ".tmp";
-    std::ofstream(tmp) << summary.dump(2) << "\n";
-    if (std::rename(tmp.c_str(), summary_path.c_str()) != 0) {
-      std::fprintf(stderr, "hapsim_loop_jitter: error: cannot write %s\n", summary_path.c_str());
+    try {
+      hapsim::WriteFileAtomically(summary_path,
+                                  [&](std::ostream& out) { out << summary.dump(2) << "\n"; });
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "hapsim_loop_jitter: error: %s\n", error.what());
       return 1;
     }
   }

@@ -13,7 +13,7 @@ namespace hapsim::apps {
 // dispatched. A receive thread held off the CPU for 15 ms therefore lost 2 kHz traffic (the log's
 // ".*" sees DEVICE_STATE and HAPTIC_STATE) in user space, with the kernel counting no UDP drop:
 // the lost datagrams of loaded CI runs. 10,000 messages is 5 s of that traffic; every
-// subscription a ReceiveThread dispatches goes through this.
+// subscription a ReceiveThread dispatches goes through this (two_process_test.sh, check 7).
 constexpr int kReceiveQueueCapacity = 10000;
 inline lcm::Subscription* KeepQueued(lcm::Subscription* subscription) {
   subscription->setQueueCapacity(kReceiveQueueCapacity);

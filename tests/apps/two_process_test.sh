@@ -18,6 +18,8 @@
 #  6. the external-driver protocol (docs/DEVICE.md): `hapsim run --device external` with
 #     hapsim_example_driver renders the forces of `hapsim run --device hand`, and its log
 #     replays bit for bit.
+#  7. the visual process stopped (SIGSTOP) for 60 ms mid-run still logs every message: ~120
+#     arrive meanwhile, four times the 30 LCM lets a subscription hold by default (KeepQueued).
 # Usage: two_process_test.sh HAPSIM HAPSIM_EXAMPLE_DRIVER
 set -euo pipefail
 hapsim="$(realpath "$1")"
@@ -204,6 +206,23 @@ PY
   echo "attempt $attempt: the external-driver run lost a datagram or disagreed; running again"
   [ "$attempt" -lt 3 ] || inconclusive="${inconclusive:+$inconclusive; }three external-driver runs disturbed"
 done
+
+# 7. A stalled receive thread keeps every message: SIGSTOP holds the whole visual process for
+# 60 ms while the haptic process publishes 2 kHz of states; the kernel keeps the datagrams
+# (4 MB socket buffer) and, once resumed, LCM must queue all ~120 for the log's subscription. At
+# LCM's default capacity this run's log missed a step; no retry: the kernel cannot lose 40 kB.
+"$hapsim" run "$scene" --lcm-url "$url" --log "$work/stopped.lcm" > "$work/stopped.out" 2>&1 &
+run_pid=$!
+sleep 1.5
+kill -STOP "$run_pid"
+sleep 0.06
+kill -CONT "$run_pid"
+wait "$run_pid" || fail "stopped run: $(cat "$work/stopped.out")"
+"$hapsim" replay "$work/stopped.lcm" > "$work/stopped_replay.out" 2>&1 ||
+  fail "a 60 ms stall of the visual process lost messages: $(cat "$work/stopped_replay.out")"
+grep -q "3000 haptic steps .* reproduced bit for bit" "$work/stopped_replay.out" ||
+  fail "stopped run's replay: $(cat "$work/stopped_replay.out")"
+echo "visual process stopped for 60 ms: its log still holds every step"
 
 if [ -n "$inconclusive" ]; then
   echo "SKIPPED (inconclusive): $inconclusive; every other check passed"
