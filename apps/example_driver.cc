@@ -69,6 +69,44 @@ class Driver {
   Eigen::Vector3d force_W_N_ = Eigen::Vector3d::Zero(), torque_W_N_m_ = Eigen::Vector3d::Zero();
 };
 
+// Publishes DEVICE_STATE once per period on absolute deadlines; `sequence` is +1 per sample.
+class StatePublisher {
+ public:
+  StatePublisher(lcm::LCM* lcm, double dt_s)
+      : lcm_(lcm), dt_ns_(std::llround(1e9 * dt_s)), deadline_ns_(hapsim::apps::MonotonicNs()) {}
+  // Publishes `state`, then sleeps until the next period starts.
+  void PublishAndWait(const hapsim::DeviceState& state) {
+    const hapsim_lcm::device_state_t msg =
+        hapsim::messages::ToMessage(state, hapsim::apps::WallMicros(), sequence_++);
+    lcm_->publish(hapsim::messages::kDeviceStateChannel, &msg);
+    deadline_ns_ += dt_ns_;
+    hapsim::apps::SleepUntil(deadline_ns_);
+  }
+
+ private:
+  lcm::LCM* lcm_;
+  std::int64_t dt_ns_, deadline_ns_;
+  long sequence_ = 0;  // waiting samples included (docs/DEVICE.md)
+};
+
+// The script stands for a hand that moves once the simulation runs: until the haptic loop has
+// started (the visual process builds its body, then waits for a device state, and the haptic
+// process for the first model) the handle is held at the script's start, so that the script's
+// clock and the loop's start together, as with an in-process device. A real device has no
+// script: its driver just publishes what it reads. Throws after wait_s.
+void HoldUntilLoopRuns(lcm::LCM* lcm, Driver* driver, StatePublisher* publisher, double wait_s,
+                       const std::string& url) {
+  const std::int64_t give_up_ns = hapsim::apps::MonotonicNs() + std::llround(1e9 * wait_s);
+  const hapsim::DeviceState start = driver->ReadHandle(0.0);
+  while (!driver->loop_running() && !hapsim::apps::g_stop_requested.load()) {
+    if (hapsim::apps::MonotonicNs() > give_up_ns)
+      throw std::runtime_error("no haptic loop on " + url + " within " + std::to_string(wait_s) +
+                               " s (is `hapsim run` running?)");
+    while (lcm->handleTimeout(0) > 0) {}
+    publisher->PublishAndWait(start);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -99,34 +137,17 @@ int main(int argc, char** argv) {
     hapsim::apps::KeepQueued(
         lcm.subscribe(hapsim::messages::kHapticStateChannel, &Driver::OnHapticState, &driver));
     hapsim::apps::InstallStopHandlers();
-    const std::int64_t dt_ns = std::llround(1e9 * dt_s);
-    std::int64_t deadline_ns = hapsim::apps::MonotonicNs();
-    const std::int64_t give_up_ns = deadline_ns + std::llround(1e9 * wait_s);
-    long sequence = 0;  // +1 per published sample, waiting ones included (docs/DEVICE.md)
-    const auto publish = [&](const hapsim::DeviceState& state) {
-      const hapsim_lcm::device_state_t msg =
-          hapsim::messages::ToMessage(state, hapsim::apps::WallMicros(), sequence++);
-      lcm.publish(hapsim::messages::kDeviceStateChannel, &msg);
-      deadline_ns += dt_ns;
-      hapsim::apps::SleepUntil(deadline_ns);
-    };
-    // The script stands for a hand that moves once the simulation runs: until the haptic loop
-    // has started (the visual process builds its body, then waits for a device state, and the
-    // haptic process for the first model) the handle is held at the script's start, so that the
-    // script's clock and the loop's start together, as with an in-process device. A real device
-    // has no script: its driver just publishes what it reads.
-    const hapsim::DeviceState start = driver.ReadHandle(0.0);
-    while (!driver.loop_running() && !hapsim::apps::g_stop_requested.load()) {
-      if (hapsim::apps::MonotonicNs() > give_up_ns)
-        throw std::runtime_error("no haptic loop on " + url + " within " +
-                                 std::to_string(wait_s) + " s (is `hapsim run` running?)");
-      while (lcm.handleTimeout(0) > 0) {}
-      publish(start);
-    }
+    // A device's loop is as time-critical as the haptic loop: real-time when permitted.
+    const std::string rt_failure = hapsim::apps::RequestRealtime(80);
+    if (!rt_failure.empty())
+      std::fprintf(stderr, "hapsim_example_driver: warning: normal scheduling (%s)\n",
+                   rt_failure.c_str());
+    StatePublisher publisher(&lcm, dt_s);
+    HoldUntilLoopRuns(&lcm, &driver, &publisher, wait_s, url);
     for (long k = 0; k < steps && !hapsim::apps::g_stop_requested.load(); ++k) {
       while (lcm.handleTimeout(0) > 0) {}  // apply the newest force first
       driver.ApplyWrench();
-      publish(driver.ReadHandle(k * dt_s));
+      publisher.PublishAndWait(driver.ReadHandle(k * dt_s));
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "hapsim_example_driver: error: %s\n", error.what());

@@ -169,7 +169,7 @@ PY
 # `--device hand`, but in its own process, its states and forces over LCM. The loop through LCM
 # delays each force by about one step, and the driver's script starts when it sees the loop run
 # (a step or two after the loop's own start); both runs also carry their own frame timing (the
-# models' ages), so the reference is not exact either. Measured 0.007–0.044 N RMS over six runs;
+# models' ages), so the reference is not exact either. Measured 0.007–0.047 N RMS over 18 runs;
 # tolerance 0.08 N, ~10% of the 0.85 N peak, well below what a broken protocol gives (a driver
 # whose script ran 0.2 s ahead of the loop: 0.24 N). A disturbed run is repeated, as in 1.
 for attempt in 1 2 3; do
