@@ -2,15 +2,15 @@
 // (protocol: docs/DEVICE.md). It stands in for a real device's SDK: every millisecond it reads
 // the "device" (here a simulated hand pulled along the scene's scripted trajectory, so the loop
 // is closed) and publishes DEVICE_STATE, and it applies the newest DEVICE_FORCE it received.
-// Replace ReadHandle() and ApplyWrench() with the SDK's calls.
+// Replace ReadHandle() and ApplyWrench() with the SDK's calls. It serves one run: --run-id, or
+// the run of the first haptic process it hears announce itself (docs/DEVICE.md).
 //
-//   hapsim_example_driver SCENE [--lcm-url URL] [--duration S] [--wait-for-loop S]
-
-#include <lcm/lcm-cpp.hpp>
+//   hapsim_example_driver SCENE [--lcm-url URL] [--run-id ID] [--duration S] [--wait-for-loop S]
 
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
+#include <lcm/lcm-cpp.hpp>
 
 #include "apps/realtime.h"
 #include "apps/receive_thread.h"
@@ -18,13 +18,15 @@
 #include "device/device_backend.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
+#include "messages/message_gate.h"
 
 namespace {
 
 class Driver {
  public:
-  Driver(const hapsim::config::Scene& scene, double dt_s)
-      : hand_(hapsim::device::ScriptedTrajectory(scene.trajectory), scene.hand, dt_s) {}
+  Driver(const hapsim::config::Scene& scene, double dt_s, std::int64_t run_id)
+      : hand_(hapsim::device::ScriptedTrajectory(scene.trajectory), scene.hand, dt_s),
+        gate_("hapsim_example_driver", run_id) {}
 
   // SDK: read the handle's pose and velocity (world frame, SI units).
   hapsim::DeviceState ReadHandle(double t_s) {
@@ -36,8 +38,8 @@ class Driver {
   // DEVICE_FORCE for kStaleForce_s (the haptic process is gone, and its safety layer with it):
   // zero.
   void ApplyWrench() {
-    const bool fresh = 1e-9 * static_cast<double>(hapsim::apps::MonotonicNs() - received_ns_) <=
-                       kStaleForce_s;
+    const bool fresh =
+        1e-9 * static_cast<double>(hapsim::apps::MonotonicNs() - received_ns_) <= kStaleForce_s;
     if (fresh) {
       hand_.Write(force_W_N_, torque_W_N_m_);
     } else {
@@ -46,15 +48,28 @@ class Driver {
   }
 
   // The haptic loop runs once a HAPTIC_STATE with step ≥ 0 arrives (−1: it waits for a model).
-  void OnHapticState(const lcm::ReceiveBuffer*, const std::string&,
-                     const hapsim_lcm::haptic_state_t* m) {
-    if (m->step >= 0) loop_running_ = true;
+  // Without --run-id, the first haptic process heard names the run to serve.
+  void OnHapticState(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    hapsim_lcm::haptic_state_t msg;
+    std::string error;
+    if (gate_.run_id() == 0 &&
+        hapsim::messages::Decode(buffer->data, static_cast<int>(buffer->data_size), &msg, &error)) {
+      gate_.AdoptRun(msg.run_id);
+      std::printf("hapsim_example_driver: serving run %s\n",
+                  hapsim::messages::FormatRunId(msg.run_id).c_str());
+      std::fflush(stdout);
+    }
+    if (!gate_.Admit(buffer, channel, &msg)) return;
+    if (msg.step >= 0) loop_running_ = true;
   }
   bool loop_running() const { return loop_running_; }
+  std::int64_t run_id() const { return gate_.run_id(); }  // 0 until known
 
-  void OnForce(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_force_t* m) {
+  void OnForce(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    hapsim_lcm::device_force_t msg;
+    if (!gate_.Admit(buffer, channel, &msg)) return;
     std::string error;
-    if (!hapsim::messages::FromMessage(*m, &force_W_N_, &torque_W_N_m_, &error)) {
+    if (!hapsim::messages::FromMessage(msg, &force_W_N_, &torque_W_N_m_, &error)) {
       force_W_N_.setZero();  // never apply a wrench that failed validation
       torque_W_N_m_.setZero();
     }
@@ -66,6 +81,7 @@ class Driver {
   hapsim::device::SimulatedHand hand_;
   std::int64_t received_ns_ = 0;  // when the last DEVICE_FORCE arrived (0: never: zero force)
   bool loop_running_ = false;
+  hapsim::messages::MessageGate gate_;
   Eigen::Vector3d force_W_N_ = Eigen::Vector3d::Zero(), torque_W_N_m_ = Eigen::Vector3d::Zero();
 };
 
@@ -74,11 +90,15 @@ class StatePublisher {
  public:
   StatePublisher(lcm::LCM* lcm, double dt_s)
       : lcm_(lcm), dt_ns_(std::llround(1e9 * dt_s)), deadline_ns_(hapsim::apps::MonotonicNs()) {}
-  // Publishes `state`, then sleeps until the next period starts.
-  void PublishAndWait(const hapsim::DeviceState& state) {
-    const hapsim_lcm::device_state_t msg =
-        hapsim::messages::ToMessage(state, hapsim::apps::WallMicros(), sequence_++);
-    lcm_->publish(hapsim::messages::kDeviceStateChannel, &msg);
+  // Publishes `state` for run `run_id` (nothing while it is 0, not known yet), then sleeps until
+  // the next period starts.
+  void PublishAndWait(const hapsim::DeviceState& state, std::int64_t run_id) {
+    if (run_id != 0) {
+      hapsim_lcm::device_state_t msg =
+          hapsim::messages::ToMessage(state, hapsim::apps::WallMicros(), sequence_++);
+      msg.run_id = run_id;
+      lcm_->publish(hapsim::messages::kDeviceStateChannel, &msg);
+    }
     deadline_ns_ += dt_ns_;
     hapsim::apps::SleepUntil(deadline_ns_);
   }
@@ -102,8 +122,9 @@ void HoldUntilLoopRuns(lcm::LCM* lcm, Driver* driver, StatePublisher* publisher,
     if (hapsim::apps::MonotonicNs() > give_up_ns)
       throw std::runtime_error("no haptic loop on " + url + " within " + std::to_string(wait_s) +
                                " s (is `hapsim run` running?)");
-    while (lcm->handleTimeout(0) > 0) {}
-    publisher->PublishAndWait(start);
+    while (lcm->handleTimeout(0) > 0) {
+    }
+    publisher->PublishAndWait(start, driver->run_id());
   }
 }
 
@@ -117,6 +138,10 @@ int main(int argc, char** argv) {
       ->required();
   app.add_option("--lcm-url", url, "LCM provider URL")->capture_default_str();
   app.add_option("--duration", duration_s, "Seconds (default: the scene's script)");
+  std::string run_id_text;
+  app.add_option("--run-id", run_id_text,
+                 "The run to serve (as `hapsim run` prints it); default: the first haptic\n"
+                 "process heard on the URL");
   double wait_s = 30.0;
   app.add_option("--wait-for-loop", wait_s,
                  "Seconds to hold the handle at the script's start waiting for the haptic loop")
@@ -126,10 +151,14 @@ int main(int argc, char** argv) {
   try {
     const hapsim::config::Scene scene = hapsim::config::LoadScene(scene_path);
     const double dt_s = 1.0 / scene.haptic.rate_hz;
-    const long steps = std::lround((duration_s > 0.0 ? duration_s : scene.num_steps * scene.dt_s) / dt_s);
+    const long steps =
+        std::lround((duration_s > 0.0 ? duration_s : scene.num_steps * scene.dt_s) / dt_s);
     lcm::LCM lcm(url);
     if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + url);
-    Driver driver(scene, dt_s);
+    std::int64_t run_id = 0;
+    if (!run_id_text.empty() && !hapsim::messages::ParseRunId(run_id_text, &run_id))
+      throw std::runtime_error("--run-id: not 1-16 hex digits (and not 0): " + run_id_text);
+    Driver driver(scene, dt_s, run_id);
     // LCM refuses the newest message once 30 wait (receive_thread.h): after a stall the driver
     // would apply old forces. Drained every millisecond below, so the queue stays short.
     hapsim::apps::KeepQueued(
@@ -145,9 +174,10 @@ int main(int argc, char** argv) {
     StatePublisher publisher(&lcm, dt_s);
     HoldUntilLoopRuns(&lcm, &driver, &publisher, wait_s, url);
     for (long k = 0; k < steps && !hapsim::apps::g_stop_requested.load(); ++k) {
-      while (lcm.handleTimeout(0) > 0) {}  // apply the newest force first
+      while (lcm.handleTimeout(0) > 0) {
+      }  // apply the newest force first
       driver.ApplyWrench();
-      publisher.PublishAndWait(driver.ReadHandle(k * dt_s));
+      publisher.PublishAndWait(driver.ReadHandle(k * dt_s), driver.run_id());
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "hapsim_example_driver: error: %s\n", error.what());

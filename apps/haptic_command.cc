@@ -1,20 +1,20 @@
 // `hapsim haptic SCENE`: the separate 1 kHz haptic process (DESIGN.md §5, issue 4).
 //
 // A fixed-period loop on absolute deadlines (SCHED_FIFO and mlockall when permitted). Each step:
-// read the device (scripted trajectory, simulated hand or external driver: --device), take the newest contact model from the
-// receive thread (ModelMailbox: a swap, no lock), run device::HapticLoop (haptic step, safety,
-// passivity observer), then publish DEVICE_STATE, DEVICE_FORCE and HAPTIC_STATE from buffers
-// encoded in place. A receive thread decodes CONTACT_MODEL messages into the mailbox. At exit
-// (script done, --duration reached, SIGINT/SIGTERM) it prints the loop statistics and, with
+// read the device (scripted trajectory, simulated hand or external driver: --device), take the
+// newest contact model from the receive thread (ModelMailbox: a swap, no lock), run
+// device::HapticLoop (haptic step, safety, passivity observer), then publish DEVICE_STATE,
+// DEVICE_FORCE and HAPTIC_STATE from buffers encoded in place. A receive thread decodes
+// CONTACT_MODEL messages into the mailbox. At exit (script done, --duration reached,
+// SIGINT/SIGTERM) it prints the loop statistics and, with
 // --summary, writes them as JSON.
-
-#include <lcm/lcm-cpp.hpp>
 
 #include <atomic>
 #include <cmath>
+#include <cstdio>
+#include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <memory>
-#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <thread>
 #include <vector>
@@ -33,6 +33,7 @@
 #include "device/scripted_trajectory.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
+#include "messages/message_gate.h"
 
 namespace hapsim::apps {
 namespace {
@@ -45,22 +46,25 @@ struct HapticCommandOptions {
   std::string mode;         // empty: the scene's haptic.mode
   double duration_s = 0.0;  // 0: the scene's script (time.num_steps · time.dt_s)
   std::string summary_path;
+  std::string run_id;  // the run to serve (`hapsim run` passes its own)
 };
 
-// Decodes CONTACT_MODEL into the mailbox.
+// Decodes this run's CONTACT_MODEL messages into the mailbox; a message that is malformed, of
+// another run, or fails validation never reaches it (the loop keeps the model it has).
 class ModelReceiver {
  public:
   // lcp: each update's solver is prepared here, off the loop (PrepareLcpUpdate).
   ModelReceiver(device::ModelMailbox* mailbox, const config::Scene& scene,
-                const device::HapticLoopOptions& options)
-      : mailbox_(mailbox), scene_(scene), options_(options) {}
-  void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::contact_model_t* msg) {
+                const device::HapticLoopOptions& options, messages::MessageGate* gate)
+      : mailbox_(mailbox), scene_(scene), options_(options), gate_(gate) {}
+  void Handle(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    if (!gate_->Admit(buffer, channel, &msg_)) return;
     device::ContactModelUpdate* slot = mailbox_->writer_slot();
     std::string error;
-    if (!ReadContactModelUpdate(*msg, *scene_.tool, scene_.coupling, scene_.gravity_m_s2,
-                                options_, slot, &error)) {
-      std::fprintf(stderr, "hapsim haptic: dropped contact model %ld: %s\n",
-                   static_cast<long>(msg->sequence), error.c_str());
+    if (!ReadContactModelUpdate(msg_, *scene_.tool, scene_.coupling, scene_.gravity_m_s2, options_,
+                                slot, &error)) {
+      gate_->CountRejected(channel,
+                           "contact model " + std::to_string(msg_.sequence) + ": " + error);
       ++rejected_;
       return;
     }
@@ -73,6 +77,8 @@ class ModelReceiver {
   device::ModelMailbox* mailbox_;
   const config::Scene& scene_;
   device::HapticLoopOptions options_;
+  messages::MessageGate* gate_;
+  hapsim_lcm::contact_model_t msg_;  // reused: its vectors keep their storage between models
   long rejected_ = 0;
 };
 
@@ -81,7 +87,7 @@ struct LoopStats {
   std::vector<double> period_error_s;  // |period − Δt| per step
   TimingHistogram period_histogram;    // the same, for the quantiles published every step
   double period_p50_s = 0.0, period_p99_s = 0.0;  // refreshed every 100 steps
-  std::vector<double> compute_s;       // wall time of the step's work (before publishing)
+  std::vector<double> compute_s;  // wall time of the step's work (before publishing)
   // Per model: from its publication to the start of the step that first used it (same-machine
   // wall clocks), s; and the part of it until the receive thread had it ready in the mailbox
   // (transport, decoding, lcp preparation). The rest is the wait for the next step, which is
@@ -118,7 +124,9 @@ void FillHapticTool(const ToolState& tool, hapsim_lcm::haptic_state_t* state) {
 // reserved, so that publishing allocates nothing (a zeroed step's reason is longer than the
 // 15 characters std::string holds without the heap).
 struct StepMessages {
-  StepMessages() {
+  explicit StepMessages(std::int64_t run_id) {
+    state.run_id = run_id;
+    force.run_id = run_id;
     state.reason.reserve(64);
     force.reason.reserve(64);
     buffer.resize(1 << 16);
@@ -128,7 +136,7 @@ struct StepMessages {
   std::vector<std::uint8_t> buffer;  // encoding scratch
 };
 
-void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
+void PublishStep(lcm::LCM* lcm, std::int64_t run_id, long step, const DeviceReading& device,
                  const device::HapticLoop& loop, const device::HapticLoopOutput& out,
                  const LoopStats& stats, double period_s, StepMessages* messages_out) {
   const std::int64_t utime = WallMicros();
@@ -139,9 +147,12 @@ void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
     msg.encode(buffer.data(), 0, size);
     lcm->publish(channel, buffer.data(), size);
   };
-  if (device.in_process)
-    publish(messages::kDeviceStateChannel,
-            messages::ToMessage(device.state, utime, device.sequence));
+  if (device.in_process) {
+    hapsim_lcm::device_state_t device_msg =
+        messages::ToMessage(device.state, utime, device.sequence);
+    device_msg.run_id = run_id;
+    publish(messages::kDeviceStateChannel, device_msg);
+  }
   const char* reason = out.sent.zeroed ? device::ToString(out.sent.state) : "";
   hapsim_lcm::haptic_state_t& state = messages_out->state;
   state.utime = utime;
@@ -184,10 +195,11 @@ void PublishStep(lcm::LCM* lcm, long step, const DeviceReading& device,
 // simulator, rather than after the visual process's first (slowest) frame. The mailbox is looked
 // at every 0.1 ms (at the announcements only, the first model waited up to 10 ms). Returns the
 // model; throws if none came within timeout_s.
-const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, device::ModelMailbox* mailbox,
-                                                   const config::Scene& scene,
-                                                   const device::HapticLoop& loop,
-                                                   bool in_process_device, double timeout_s) {
+const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, std::int64_t run_id,
+                                                    device::ModelMailbox* mailbox,
+                                                    const config::Scene& scene,
+                                                    const device::HapticLoop& loop,
+                                                    bool in_process_device, double timeout_s) {
   const std::int64_t give_up_ns = MonotonicNs() + std::llround(1e9 * timeout_s);
   const DeviceState device = device::ScriptedTrajectory(scene.trajectory).Sample(0.0);
   constexpr std::int64_t kAnnouncePeriodNs = 10000000, kPollPeriodNs = 100000;
@@ -201,14 +213,16 @@ const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, device::Model
     next_announcement_ns += kAnnouncePeriodNs;
     if (MonotonicNs() > give_up_ns)
       throw std::runtime_error("no contact model within " + std::to_string(timeout_s) +
-                               " s: is `hapsim run` running on the same --lcm-url?");
+                               " s: is `hapsim run` running on the same --lcm-url and --run-id?");
     const std::int64_t utime = WallMicros();
     if (in_process_device) {
-      const hapsim_lcm::device_state_t msg = messages::ToMessage(device, utime, -1);
+      hapsim_lcm::device_state_t msg = messages::ToMessage(device, utime, -1);
+      msg.run_id = run_id;
       lcm->publish(messages::kDeviceStateChannel, &msg);
     }
     hapsim_lcm::haptic_state_t state{};
     state.utime = utime;
+    state.run_id = run_id;
     state.step = -1;
     state.device_sequence = -1;
     state.model_sequence = -1;
@@ -219,15 +233,15 @@ const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, device::Model
   return nullptr;
 }
 
-nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, double dt_s,
+nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver,
+                         const messages::MessageGate& gate, long steps, double dt_s,
                          double model_stale_s) {
   // The models stopped before the end (stale for the last model_stale_s or more): how long the
   // force took to reach zero after the last one arrived.
   const bool models_stopped =
       stats->last_model_step >= 0 && (steps - stats->last_model_step) * dt_s > model_stale_s;
   nlohmann::json fade = nullptr;
-  if (models_stopped)
-    fade = (stats->last_nonzero_step + 1 - stats->last_model_step) * dt_s;
+  if (models_stopped) fade = (stats->last_nonzero_step + 1 - stats->last_model_step) * dt_s;
   nlohmann::json period = {{"p50_us", 1e6 * Quantile(stats->period_error_s, 0.5)},
                            {"p99_us", 1e6 * Quantile(stats->period_error_s, 0.99)},
                            {"p999_us", 1e6 * Quantile(stats->period_error_s, 0.999)},
@@ -251,12 +265,22 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver, long steps, 
           {"model_latency", quantiles_ms(stats->model_latency_s)},
           {"model_ready", quantiles_ms(stats->model_ready_s)},
           {"models_rejected", receiver->rejected()},
+          {"messages_rejected", gate.num_rejected()},
+          {"foreign_messages", gate.num_foreign()},
+          {"first_foreign_run_id",
+           gate.num_foreign() > 0 ? nlohmann::json(messages::FormatRunId(gate.first_foreign_run()))
+                                  : nlohmann::json(nullptr)},
+          {"run_id", messages::FormatRunId(gate.run_id())},
           {"model_stale_s", model_stale_s},
           {"fade_after_last_model_s", fade},
           {"force_after_stale_N", stats->force_after_stale_N}};
 }
 
 void RunHaptic(const HapticCommandOptions& options) {
+  std::int64_t run_id = 0;
+  if (!messages::ParseRunId(options.run_id, &run_id))
+    throw InputError("--run-id", 0, "",
+                     "not 1-16 hex digits (and not 0): '" + options.run_id + "'");
   const config::Scene scene = config::LoadScene(options.scene_path);
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim haptic` needs a tool");
   const device::HapticMode mode =
@@ -274,17 +298,20 @@ void RunHaptic(const HapticCommandOptions& options) {
   if (mode == device::HapticMode::kLcp)
     for (device::ContactModelUpdate& slot : mailbox.slots_for_setup())
       device::EnsureLcpSolver(loop_options, &slot);
-  ModelReceiver receiver(&mailbox, scene, loop_options);
+  messages::MessageGate gate("hapsim haptic", run_id);
+  ModelReceiver receiver(&mailbox, scene, loop_options, &gate);
   KeepQueued(lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver));
   std::unique_ptr<device::DeviceBackend> backend;
   if (options.device == "scripted") {
-    backend = std::make_unique<device::ScriptedDevice>(device::ScriptedTrajectory(scene.trajectory));
+    backend =
+        std::make_unique<device::ScriptedDevice>(device::ScriptedTrajectory(scene.trajectory));
   } else if (options.device == "hand") {
     backend = std::make_unique<device::SimulatedHand>(device::ScriptedTrajectory(scene.trajectory),
                                                       scene.hand, loop_options.dt_s);
   } else {
-    auto external = std::make_unique<ExternalDevice>();
-    KeepQueued(lcm.subscribe(messages::kDeviceStateChannel, &ExternalDevice::Handle, external.get()));
+    auto external = std::make_unique<ExternalDevice>(&gate);
+    KeepQueued(
+        lcm.subscribe(messages::kDeviceStateChannel, &ExternalDevice::Handle, external.get()));
     backend = std::move(external);
   }
   const bool in_process_device = options.device != "external";
@@ -293,13 +320,14 @@ void RunHaptic(const HapticCommandOptions& options) {
   const std::string rt_failure = RequestRealtime(80);
   if (!rt_failure.empty())
     std::fprintf(stderr, "hapsim haptic: warning: normal scheduling (%s)\n", rt_failure.c_str());
-  std::printf("hapsim haptic: %s, mode %s, %ld steps at %g Hz on %s\n", scene.name.c_str(),
-              device::ToString(mode), num_steps, scene.haptic.rate_hz, options.lcm_url.c_str());
+  std::printf("hapsim haptic: %s, mode %s, %ld steps at %g Hz on %s, run id %s\n",
+              scene.name.c_str(), device::ToString(mode), num_steps, scene.haptic.rate_hz,
+              options.lcm_url.c_str(), messages::FormatRunId(run_id).c_str());
   std::fflush(stdout);
 
   const device::ContactModelUpdate* first_model =
       options.wait_for_model_s > 0.0
-          ? WaitForFirstModel(&lcm, &mailbox, scene, loop, in_process_device,
+          ? WaitForFirstModel(&lcm, run_id, &mailbox, scene, loop, in_process_device,
                               options.wait_for_model_s)
           : nullptr;
 
@@ -308,7 +336,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   stats.compute_s.reserve(num_steps);
   stats.model_latency_s.reserve(num_steps);
   stats.model_ready_s.reserve(num_steps);
-  StepMessages step_messages;
+  StepMessages step_messages(run_id);
   const std::int64_t dt_ns = std::llround(1e9 * loop_options.dt_s);
   std::int64_t deadline_ns = MonotonicNs() + dt_ns, previous_start_ns = 0;
   long step = 0;
@@ -352,35 +380,43 @@ void RunHaptic(const HapticCommandOptions& options) {
     stats.max_force_sent_N = std::max(stats.max_force_sent_N, out.sent.force_W_N.norm());
     if (out.passivity_alarm) {  // once per run: the observer stays active
       stats.passivity_alarm_step = step;
-      std::fprintf(stderr, "hapsim haptic: warning: passivity observer active at step %ld\n",
-                   step);
+      std::fprintf(stderr, "hapsim haptic: warning: passivity observer active at step %ld\n", step);
     }
-    PublishStep(&lcm, step, device, loop, out, stats, period_s, &step_messages);
+    PublishStep(&lcm, run_id, step, device, loop, out, stats, period_s, &step_messages);
     if (MonotonicNs() > deadline_ns + dt_ns) ++stats.overruns;
     deadline_ns += dt_ns;
   }
   receive_thread.Stop();
-  const nlohmann::json summary = Summarize(&stats, &receiver, step, loop_options.dt_s,
+  const nlohmann::json summary = Summarize(&stats, &receiver, gate, step, loop_options.dt_s,
                                            loop_options.safety.model_stale_s);
-  std::printf("hapsim haptic: %ld steps; period error p50 %.1f us, p99 %.1f us, max %.1f us; "
-              "%ld overruns; model latency (publish to first use) p50 %.2f ms, p99 %.2f ms "
-              "(publish to ready p99 %.2f ms); max force sent %.3f N\n",
-              step, summary["period_error"]["p50_us"].get<double>(),
-              summary["period_error"]["p99_us"].get<double>(),
-              summary["period_error"]["max_us"].get<double>(), stats.overruns,
-              summary["model_latency"]["p50_ms"].get<double>(),
-              summary["model_latency"]["p99_ms"].get<double>(),
-              summary["model_ready"]["p99_ms"].get<double>(), stats.max_force_sent_N);
+  std::printf(
+      "hapsim haptic: %ld steps; period error p50 %.1f us, p99 %.1f us, max %.1f us; "
+      "%ld overruns; model latency (publish to first use) p50 %.2f ms, p99 %.2f ms "
+      "(publish to ready p99 %.2f ms); max force sent %.3f N\n",
+      step, summary["period_error"]["p50_us"].get<double>(),
+      summary["period_error"]["p99_us"].get<double>(),
+      summary["period_error"]["max_us"].get<double>(), stats.overruns,
+      summary["model_latency"]["p50_ms"].get<double>(),
+      summary["model_latency"]["p99_ms"].get<double>(),
+      summary["model_ready"]["p99_ms"].get<double>(), stats.max_force_sent_N);
+  if (gate.num_foreign() > 0)
+    std::printf(
+        "hapsim haptic: ignored %ld messages of other runs on this LCM URL (first: run %s)\n",
+        gate.num_foreign(), messages::FormatRunId(gate.first_foreign_run()).c_str());
+  if (gate.num_rejected() > 0)
+    std::printf("hapsim haptic: rejected %ld malformed or invalid messages (no force changed)\n",
+                gate.num_rejected());
   if (stats.passivity_alarm_step >= 0)
     std::fprintf(stderr,
                  "hapsim haptic: warning: the rendering generated energy from step %ld on "
                  "(passivity observer; HAPTIC_STATE.passivity_energy_J)\n",
                  stats.passivity_alarm_step);
   if (!summary["fade_after_last_model_s"].is_null())
-    std::printf("hapsim haptic: models stopped at step %ld; fade-out after the last model %.1f ms "
-                "(stale threshold %.1f ms)\n",
-                stats.last_model_step, 1e3 * summary["fade_after_last_model_s"].get<double>(),
-                1e3 * loop_options.safety.model_stale_s);
+    std::printf(
+        "hapsim haptic: models stopped at step %ld; fade-out after the last model %.1f ms "
+        "(stale threshold %.1f ms)\n",
+        stats.last_model_step, 1e3 * summary["fade_after_last_model_s"].get<double>(),
+        1e3 * loop_options.safety.model_stale_s);
   if (!options.summary_path.empty())
     WriteFileAtomically(options.summary_path,
                         [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
@@ -399,20 +435,28 @@ void AddHapticCommand(CLI::App* app) {
       ->required();
   haptic->add_option("--lcm-url", options->lcm_url, "LCM provider URL")->capture_default_str();
   haptic->add_option("--mode", options->mode, "linear or lcp (default: the scene's haptic.mode)");
-  haptic->add_option("--device", options->device,
-                     "scripted (the scene's trajectory), hand (a simulated hand pulled along it,\n"
-                     "closing the loop; the scene's device.hand), or external (a driver process\n"
-                     "publishing DEVICE_STATE, see docs/DEVICE.md)")
+  haptic
+      ->add_option("--device", options->device,
+                   "scripted (the scene's trajectory), hand (a simulated hand pulled along it,\n"
+                   "closing the loop; the scene's device.hand), or external (a driver process\n"
+                   "publishing DEVICE_STATE, see docs/DEVICE.md)")
       ->check(CLI::IsMember({"scripted", "hand", "external"}))
       ->capture_default_str();
-  haptic->add_option("--wait-for-model", options->wait_for_model_s,
-                     "Seconds to wait for the first contact model before the clock starts\n"
-                     "(0: start at once and render zero force until a model arrives)")
+  haptic
+      ->add_option("--wait-for-model", options->wait_for_model_s,
+                   "Seconds to wait for the first contact model before the clock starts\n"
+                   "(0: start at once and render zero force until a model arrives)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  haptic->add_option("--duration", options->duration_s,
-                     "Seconds to run (default: the scene's time.num_steps * time.dt_s)")
+  haptic
+      ->add_option("--duration", options->duration_s,
+                   "Seconds to run (default: the scene's time.num_steps * time.dt_s)")
       ->check(CLI::PositiveNumber);
+  haptic
+      ->add_option("--run-id", options->run_id,
+                   "The run to serve, as `hapsim run` prints it (it passes its own when it\n"
+                   "spawns this process); messages of any other run are ignored and counted")
+      ->required();
   haptic->add_option("--summary", options->summary_path, "Write the loop statistics as JSON");
   haptic->callback([options] { RunHaptic(*options); });
 }

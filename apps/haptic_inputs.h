@@ -3,8 +3,8 @@
 // build them: one piece of code, because replay reproduces the live forces bit for bit only if
 // it feeds the loop exactly what the live process did.
 
+#include <cmath>
 #include <lcm/lcm-cpp.hpp>
-
 #include <limits>
 #include <string>
 
@@ -14,6 +14,7 @@
 #include "device/haptic_loop.h"
 #include "device/model_mailbox.h"
 #include "messages/adapters.h"
+#include "messages/message_gate.h"
 
 namespace hapsim::apps {
 
@@ -39,6 +40,12 @@ inline bool ReadContactModelUpdate(const hapsim_lcm::contact_model_t& msg,
                                    device::ContactModelUpdate* update, std::string* error) {
   messages::ContactModelHeader header;
   if (!messages::FromMessage(msg, &update->model, &update->rows, &header, error)) return false;
+  // Built for another haptic step, its tool matrices would be wrong for this loop.
+  if (std::abs(header.dt_haptic_s - options.dt_s) > 1e-9 * options.dt_s) {
+    *error = "contact_model_t.dt_haptic_s: " + std::to_string(header.dt_haptic_s) +
+             " s, but this loop steps " + std::to_string(options.dt_s) + " s";
+    return false;
+  }
   update->sequence = header.sequence;
   update->published_utime = header.utime;
   update->visual_tool = header.visual_tool;
@@ -65,19 +72,23 @@ inline DeviceState ReadDeviceState(const hapsim_lcm::device_state_t& msg) {
 }
 
 // DEVICE_STATE from an external driver process (docs/DEVICE.md). The receive thread decodes
-// each message into a triple buffer; the loop reads the newest and its age. A state that fails
-// validation (a bad quaternion) arrives as NaN, so the safety layer answers it with zero force.
+// each message of this run (the gate drops malformed ones and other runs') into a triple buffer;
+// the loop reads the newest and its age. A state that fails validation (a bad quaternion) arrives
+// as NaN, so the safety layer answers it with zero force.
 class ExternalDevice : public device::DeviceBackend {
  public:
+  explicit ExternalDevice(messages::MessageGate* gate) : gate_(gate) {}
   struct Sample {
     DeviceState state;
     std::int64_t sequence = -1;
     std::int64_t received_ns = 0;
   };
-  void Handle(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_state_t* msg) {
+  void Handle(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    hapsim_lcm::device_state_t msg;
+    if (!gate_->Admit(buffer, channel, &msg)) return;
     Sample* slot = buffer_.writer_slot();
-    slot->state = ReadDeviceState(*msg);
-    slot->sequence = msg->sequence;
+    slot->state = ReadDeviceState(msg);
+    slot->sequence = msg.sequence;
     slot->received_ns = MonotonicNs();
     buffer_.Publish();
   }
@@ -94,6 +105,7 @@ class ExternalDevice : public device::DeviceBackend {
   void Write(const Eigen::Vector3d&, const Eigen::Vector3d&) override {}  // DEVICE_FORCE
 
  private:
+  messages::MessageGate* gate_;
   device::TripleBuffer<Sample> buffer_;
   Sample latest_;
 };

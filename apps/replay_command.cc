@@ -3,29 +3,34 @@
 // the first step that differs (issue 4). The inputs of each step are in the log: the device state
 // (DEVICE_STATE, sequence = step), the contact model in use (HAPTIC_STATE.model_sequence: a new
 // model is applied at the first step that names it; its CONTACT_MODEL message by sequence) and
-// the scene (RUN_INFO.scene_path, or --scene). --csv exports the logged haptic steps;
-// --republish [--speed X] plays the log to LCM for viewers instead. A truncated or corrupt log is
-// an error naming the byte where reading stopped.
-
-#include <lcm/lcm-cpp.hpp>
+// the scene (RUN_INFO's own text, its input files checked against their hashes; or --scene).
+// A log holds one run (`hapsim run --log`) or several (lcm-logger beside two runs): replay takes
+// the messages of one run, the only one or --run-id. --csv exports the logged haptic steps;
+// --republish [--speed X] plays the log to LCM for viewers instead. A truncated or corrupt log,
+// or a message in it that does not decode, is an error naming the byte or the event.
 
 #include <cstdio>
 #include <filesystem>
 #include <iterator>
+#include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "apps/commands.h"
 #include "apps/haptic_inputs.h"
 #include "apps/realtime.h"
+#include "apps/run_info.h"
 #include "config/scene.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "device/haptic_loop.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
+#include "messages/lcm_log_reader.h"
+#include "messages/message_gate.h"
 
 namespace hapsim::apps {
 namespace {
@@ -37,78 +42,109 @@ struct ReplayOptions {
   bool republish = false;  // play the log to LCM instead of re-running the loop
   double speed = 1.0;
   std::string lcm_url = messages::kDefaultLcmUrl;
+  std::string run_id;  // empty: the log's only run
 };
 
 // Publishes every event of the log on its channel, at its logged time scaled by 1/speed (for
 // viewers such as lcm-spy). Returns the number of events played.
 long Republish(const ReplayOptions& options) {
-  lcm::LogFile log(options.log_path, "r");
-  if (!log.good()) throw InputError(options.log_path, 0, "", "cannot open as an LCM log");
+  messages::LcmLogReader log(options.log_path);
+  messages::LcmLogEvent event;
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   InstallStopHandlers();
   long played = 0;
   std::int64_t first_utime = -1, start_ns = MonotonicNs();
-  while (const lcm::LogEvent* event = log.readNextEvent()) {
+  while (log.Next(&event)) {
     if (g_stop_requested.load()) break;
-    if (first_utime < 0) first_utime = event->timestamp;
-    SleepUntil(start_ns +
-               std::llround(1e3 * static_cast<double>(event->timestamp - first_utime) / options.speed));
-    lcm.publish(event->channel, event->data, static_cast<unsigned>(event->datalen));
+    if (first_utime < 0) first_utime = event.timestamp_us;
+    SleepUntil(start_ns + std::llround(1e3 * static_cast<double>(event.timestamp_us - first_utime) /
+                                       options.speed));
+    lcm.publish(event.channel, event.data.data(), static_cast<unsigned>(event.data.size()));
     ++played;
   }
   return played;
 }
 
 struct LogContents {
-  std::string scene_path;
-  std::string mode;  // RUN_INFO.mode: the haptic process's
-  std::map<long, hapsim_lcm::haptic_state_t> steps;                     // by step
-  std::map<long, DeviceState> devices;                                   // by sequence
+  std::int64_t run_id = 0;
+  std::optional<hapsim_lcm::run_info_t> info;        // the run's RUN_INFO (the last of its copies)
+  std::string mode;                                  // RUN_INFO.mode: the haptic process's
+  std::map<long, hapsim_lcm::haptic_state_t> steps;  // by step
+  std::map<long, DeviceState> devices;               // by sequence
   std::vector<hapsim_lcm::contact_model_t> model_messages;  // decoded in Replay (needs the scene)
 };
 
 template <typename Message>
-Message Decode(const lcm::LogEvent& event, const std::string& log_path) {
+Message DecodeEvent(const messages::LcmLogEvent& event, const std::string& log_path) {
   Message msg;
-  if (msg.decode(event.data, 0, event.datalen) != event.datalen)
+  std::string error;
+  if (!messages::Decode(event.data.data(), static_cast<int>(event.data.size()), &msg, &error))
     throw InputError(log_path, 0, event.channel,
-                     "event " + std::to_string(event.eventnum) + " does not decode");
+                     "event " + std::to_string(event.event_number) + " at byte " +
+                         std::to_string(event.offset) + " does not decode: " + error);
   return msg;
 }
 
-LogContents ReadLog(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw InputError(path, 0, "", "no such log file");
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw InputError(path, 0, "", "cannot open as an LCM log");
+// The run to replay: `requested` (--run-id) or, when empty, the log's only run. `runs` counts the
+// hapsim messages of each run id in the log.
+std::int64_t ChooseRun(const std::map<std::int64_t, long>& runs, const std::string& requested,
+                       const std::string& path) {
+  std::string listing;
+  for (const auto& [id, count] : runs)
+    listing += (listing.empty() ? "" : ", ") + messages::FormatRunId(id) + " (" +
+               std::to_string(count) + " messages)";
+  if (!requested.empty()) {
+    std::int64_t id = 0;
+    if (!messages::ParseRunId(requested, &id))
+      throw InputError("--run-id", 0, "", "not 1-16 hex digits (and not 0): '" + requested + "'");
+    if (!runs.count(id))
+      throw InputError(path, 0, "--run-id",
+                       "no run " + messages::FormatRunId(id) + " in the log; it holds " + listing);
+    return id;
+  }
+  if (runs.empty()) throw InputError(path, 0, "", "no hapsim messages in the log");
+  if (runs.size() > 1)
+    throw InputError(path, 0, "",
+                     "the log holds " + std::to_string(runs.size()) + " runs: " + listing +
+                         "; choose one with --run-id");
+  return runs.begin()->first;
+}
+
+// Reads the log twice: once for the runs it holds (a message's run id is at a fixed place, so
+// nothing is decoded), then the chosen run's messages. Other runs' messages are left alone.
+LogContents ReadLog(const std::string& path, const std::string& requested_run) {
+  std::map<std::int64_t, long> runs;
+  messages::LcmLogEvent event;
+  {
+    messages::LcmLogReader log(path);  // throws at a truncated or corrupt event, naming its byte
+    std::int64_t run_id = 0;
+    while (log.Next(&event))
+      if (messages::PeekRunId(event.data.data(), static_cast<int>(event.data.size()), &run_id))
+        ++runs[run_id];
+  }
   LogContents contents;
-  long events = 0, end_of_last_event = 0;
-  while (const lcm::LogEvent* event = log.readNextEvent()) {
-    ++events;
-    end_of_last_event = std::ftell(log.getFilePtr());
-    const std::string& channel = event->channel;
+  contents.run_id = ChooseRun(runs, requested_run, path);
+  messages::LcmLogReader log(path);
+  while (log.Next(&event)) {
+    std::int64_t run_id = 0;
+    if (!messages::PeekRunId(event.data.data(), static_cast<int>(event.data.size()), &run_id) ||
+        run_id != contents.run_id)
+      continue;
+    const std::string& channel = event.channel;
     if (channel == messages::kRunInfoChannel) {
-      const auto info = Decode<hapsim_lcm::run_info_t>(*event, path);
-      contents.scene_path = info.scene_path;
-      contents.mode = info.mode;
+      contents.info = DecodeEvent<hapsim_lcm::run_info_t>(event, path);
+      contents.mode = contents.info->mode;
     } else if (channel == messages::kDeviceStateChannel) {
-      const auto msg = Decode<hapsim_lcm::device_state_t>(*event, path);
+      const auto msg = DecodeEvent<hapsim_lcm::device_state_t>(event, path);
       contents.devices[msg.sequence] = ReadDeviceState(msg);
     } else if (channel == messages::kHapticStateChannel) {
-      const auto msg = Decode<hapsim_lcm::haptic_state_t>(*event, path);
+      const auto msg = DecodeEvent<hapsim_lcm::haptic_state_t>(event, path);
       if (msg.step >= 0) contents.steps[msg.step] = msg;  // −1: waiting for the first model
     } else if (channel == messages::kContactModelChannel) {
-      contents.model_messages.push_back(Decode<hapsim_lcm::contact_model_t>(*event, path));
+      contents.model_messages.push_back(DecodeEvent<hapsim_lcm::contact_model_t>(event, path));
     }
   }
-  // readNextEvent stops at the end or at the first event it cannot read (a cut or garbled one):
-  // the last complete event must end where the file does.
-  const long size = static_cast<long>(std::filesystem::file_size(path));
-  if (end_of_last_event != size)
-    throw InputError(path, 0, "", "truncated or corrupt LCM log: the last complete event ends at byte " +
-                                      std::to_string(end_of_last_event) + " of " +
-                                      std::to_string(size) + " (after " + std::to_string(events) +
-                                      " events)");
   if (contents.steps.empty()) throw InputError(path, 0, "", "no haptic steps in the log");
   return contents;
 }
@@ -121,9 +157,9 @@ void WriteCsv(const std::string& path, const LogContents& log) {
     for (const auto& [step, s] : log.steps) {
       out << step << ',' << s.force_device_W_N[0] << ',' << s.force_device_W_N[1] << ','
           << s.force_device_W_N[2] << ',' << s.torque_device_W_N_m[0] << ','
-          << s.torque_device_W_N_m[1] << ',' << s.torque_device_W_N_m[2] << ',' << s.x_W_m[0]
-          << ',' << s.x_W_m[1] << ',' << s.x_W_m[2] << ',' << s.model_sequence << ','
-          << s.model_age_s << ',' << s.zeroed << ',' << s.passivity_energy_J << '\n';
+          << s.torque_device_W_N_m[1] << ',' << s.torque_device_W_N_m[2] << ',' << s.x_W_m[0] << ','
+          << s.x_W_m[1] << ',' << s.x_W_m[2] << ',' << s.model_sequence << ',' << s.model_age_s
+          << ',' << s.zeroed << ',' << s.passivity_energy_J << '\n';
     }
   });
 }
@@ -185,7 +221,8 @@ long Replay(const config::Scene& scene, const LogContents& log) {
     const auto found_device = log.devices.find(logged.device_sequence);
     if (logged.device_sequence >= 0 && found_device == log.devices.end())
       throw std::runtime_error("step " + std::to_string(step) + " used device state " +
-                               std::to_string(logged.device_sequence) + ", which is not in the log");
+                               std::to_string(logged.device_sequence) +
+                               ", which is not in the log");
     const DeviceState device =
         logged.device_sequence >= 0 ? found_device->second : MakeInvalidDeviceState();
     const device::ContactModelUpdate* update = nullptr;
@@ -193,7 +230,8 @@ long Replay(const config::Scene& scene, const LogContents& log) {
       const auto found = models.find(logged.model_sequence);
       if (found == models.end())
         throw std::runtime_error("step " + std::to_string(step) + " used contact model " +
-                                 std::to_string(logged.model_sequence) + ", which is not in the log");
+                                 std::to_string(logged.model_sequence) +
+                                 ", which is not in the log");
       update = found->second.get();
       model_in_use = logged.model_sequence;
     }
@@ -215,30 +253,47 @@ long Replay(const config::Scene& scene, const LogContents& log) {
     ++compared;
   }
   if (recreated > 0)
-    std::printf("hapsim replay: %ld haptic steps missing from the log (lost datagrams) were "
-                "re-created from their neighbours\n",
-                recreated);
+    std::printf(
+        "hapsim replay: %ld haptic steps missing from the log (lost datagrams) were "
+        "re-created from their neighbours\n",
+        recreated);
   return compared;
+}
+
+// The scene to replay with: --scene, else the log's own (LoadLoggedScene checks its input files).
+config::Scene ReplayScene(const ReplayOptions& options, const LogContents& log) {
+  if (!options.scene_path.empty()) return config::LoadScene(options.scene_path);
+  if (!log.info)
+    throw InputError(options.log_path, 0, "RUN_INFO",
+                     "no RUN_INFO of the run in the log; give --scene");
+  if (log.info->scene_yaml.empty())
+    throw InputError(options.log_path, 0, "RUN_INFO",
+                     "the run's RUN_INFO carries no scene text (an older log); give --scene");
+  return LoadLoggedScene(*log.info, options.log_path);
 }
 
 void RunReplay(const ReplayOptions& options) {
   if (options.republish) {
-    ReadLog(options.log_path);  // a truncated or corrupt log is an error before anything is sent
+    // A truncated or corrupt log is an error before anything is sent.
+    messages::LcmLogEvent event;
+    for (messages::LcmLogReader log(options.log_path); log.Next(&event);) {
+    }
     const long played = Republish(options);
     std::printf("hapsim replay: published %ld events of %s at %gx on %s\n", played,
                 options.log_path.c_str(), options.speed, options.lcm_url.c_str());
     return;
   }
-  const LogContents log = ReadLog(options.log_path);
+  const LogContents log = ReadLog(options.log_path, options.run_id);
   if (!options.csv_path.empty()) WriteCsv(options.csv_path, log);
-  const std::string scene_path = options.scene_path.empty() ? log.scene_path : options.scene_path;
-  if (scene_path.empty())
-    throw InputError(options.log_path, 0, "RUN_INFO", "no scene in the log; give --scene");
-  const config::Scene scene = config::LoadScene(scene_path);
+  const config::Scene scene = ReplayScene(options, log);
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "the scene has no tool");
   const long compared = Replay(scene, log);
-  std::printf("hapsim replay: %ld haptic steps of %s reproduced bit for bit (%zu contact models)\n",
-              compared, options.log_path.c_str(), log.model_messages.size());
+  std::printf(
+      "hapsim replay: %ld haptic steps of %s reproduced bit for bit (%zu contact models; "
+      "run %s, scene %s)\n",
+      compared, options.log_path.c_str(), log.model_messages.size(),
+      messages::FormatRunId(log.run_id).c_str(),
+      options.scene_path.empty() ? "from the log" : options.scene_path.c_str());
   if (!options.csv_path.empty()) std::printf("  wrote %s\n", options.csv_path.c_str());
 }
 
@@ -252,7 +307,11 @@ void AddReplayCommand(CLI::App* app) {
       "models) and checks that every logged device force is reproduced bit for bit.");
   replay->add_option("log", options->log_path, "LCM event log (hapsim run --log, lcm-logger)")
       ->required();
-  replay->add_option("--scene", options->scene_path, "Scene file (default: the log's RUN_INFO)");
+  replay->add_option("--scene", options->scene_path,
+                     "Scene file (default: the scene text the log carries, after checking that\n"
+                     "the mesh and tool files it reads are unchanged)");
+  replay->add_option("--run-id", options->run_id,
+                     "The run to replay when the log holds several (lcm-logger beside two runs)");
   replay->add_option("--csv", options->csv_path, "Export the logged haptic steps as CSV");
   replay->add_flag("--republish", options->republish,
                    "Play the log to LCM (every channel, logged timing) for viewers, instead of\n"

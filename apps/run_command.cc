@@ -9,7 +9,6 @@
 // dies (a clear message and a non-zero exit). --log writes every channel to a standard LCM
 // event log (a temporary name, renamed when the run ends).
 
-#include <lcm/lcm-cpp.hpp>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -18,17 +17,19 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <mutex>
-#include <thread>
 #include <cstdio>
 #include <filesystem>
+#include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "apps/commands.h"
 #include "apps/log_writer.h"
 #include "apps/realtime.h"
 #include "apps/receive_thread.h"
+#include "apps/run_info.h"
 #include "config/body_builder.h"
 #include "config/scene.h"
 #include "config/simulation_builder.h"
@@ -37,6 +38,7 @@
 #include "fem/tet_mesh.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
+#include "messages/message_gate.h"
 
 namespace hapsim::apps {
 namespace {
@@ -44,13 +46,14 @@ namespace {
 struct RunCommandOptions {
   std::string scene_path;
   std::string lcm_url = messages::kDefaultLcmUrl;
-  std::string mode;  // empty: the scene's haptic.mode
+  std::string mode;                 // empty: the scene's haptic.mode
   std::string device = "scripted";  // the haptic process's --device
   bool no_spawn = false;
   bool free_running = false;  // frames back to back instead of following the haptic clock
-  double duration_s = 0.0;  // 0: the scene's script
+  double duration_s = 0.0;    // 0: the scene's script
   std::string log_path;
   std::string haptic_summary_path;  // passed to the spawned haptic process
+  std::string run_id;               // empty: a random one
 };
 
 // The newest DEVICE_STATE and HAPTIC_STATE, and (with --log) every message to the log writer's
@@ -60,43 +63,59 @@ struct RunCommandOptions {
 // simulator gives frame k the device sample of step 30k, one newer than the one step 30k − 1
 // used, so pairing would not bring the two runs closer either.) This process's own CONTACT_MODEL
 // and SIM_FRAME reach the log the same way, back through multicast loopback: one path for every
-// channel, stamped at reception as lcm-logger would, for the cost of copying ~250 kB a frame. Runs in the receive thread, which handles LCM continuously so that nothing is dropped
-// while a visual frame computes or the disk stalls; the frame loop reads a consistent snapshot
-// under the mutex (this process is not the real-time one).
+// channel, stamped at reception as lcm-logger would, for the cost of copying ~250 kB a frame. Runs
+// in the receive thread, which handles LCM continuously so that nothing is dropped while a visual
+// frame computes or the disk stalls; the frame loop reads a consistent snapshot under the mutex
+// (this process is not the real-time one).
 class Listener {
  public:
+  explicit Listener(std::int64_t run_id) : gate_("hapsim run", run_id) {}
+
   struct Snapshot {
     DeviceState device;
     ToolState haptic_tool;
     long haptic_step = -1;  // −1: the haptic process waits for the first model
   };
 
-  void OnDevice(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::device_state_t* m) {
+  void OnDevice(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    hapsim_lcm::device_state_t msg;
+    if (!gate_.Admit(buffer, channel, &msg)) return;
     DeviceState device;
     std::string error;
-    if (!messages::FromMessage(*m, &device, &error) || !device.x_W_m.allFinite()) return;
+    if (!messages::FromMessage(msg, &device, &error)) {
+      gate_.CountRejected(channel, error);
+      return;
+    }
+    if (!device.x_W_m.allFinite()) return;  // legal on the wire; the visual tool keeps the last
     std::lock_guard<std::mutex> lock(mutex_);
     latest_device_ = device;
     have_device_ = true;
   }
-  void OnHaptic(const lcm::ReceiveBuffer*, const std::string&, const hapsim_lcm::haptic_state_t* m) {
+  void OnHaptic(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    hapsim_lcm::haptic_state_t msg;
+    if (!gate_.Admit(buffer, channel, &msg)) return;
     ToolState tool;
     std::string error;
-    if (!messages::PoseFromMessage(m->x_W_m, m->q_WT, &tool, &error)) return;
-    for (int i = 0; i < 3; ++i) {
-      tool.v_W_m_s[i] = m->v_W_m_s[i];
-      tool.L_W_kg_m2_s[i] = m->L_W_kg_m2_s[i];
+    if (!messages::HapticToolFromMessage(msg, &tool, &error)) {
+      gate_.CountRejected(channel, error);
+      return;
     }
     std::lock_guard<std::mutex> lock(mutex_);
     snapshot_.haptic_tool = tool;
-    snapshot_.haptic_step = m->step;
+    snapshot_.haptic_step = msg.step;
     have_haptic_ = true;
   }
+  // The log holds this run only: other runs' messages, and messages of types that are not
+  // hapsim's, stay out (the typed handlers above count the other runs' traffic).
   void OnAny(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    if (log_) log_->Add(buffer, channel);
+    std::int64_t run_id = 0;
+    if (log_ && messages::PeekRunId(buffer->data, static_cast<int>(buffer->data_size), &run_id) &&
+        run_id == gate_.run_id())
+      log_->Add(buffer, channel);
   }
   void OpenLog(const std::string& path) { log_ = std::make_unique<LogWriter>(path); }
   void CloseLog() { log_.reset(); }
+  const messages::MessageGate& gate() const { return gate_; }
 
   // The newest states, once both a device state and a haptic state have arrived.
   bool Get(Snapshot* snapshot) {
@@ -113,14 +132,16 @@ class Listener {
   DeviceState latest_device_;
   Snapshot snapshot_;
   std::unique_ptr<LogWriter> log_;  // set before the receive thread starts, reset after it ends
+  messages::MessageGate gate_;
 };
 
 pid_t SpawnHaptic(const RunCommandOptions& options) {
-  std::vector<std::string> args = {"hapsim", "haptic", options.scene_path, "--lcm-url",
-                                   options.lcm_url};
+  std::vector<std::string> args = {"hapsim",        "haptic",   options.scene_path, "--lcm-url",
+                                   options.lcm_url, "--run-id", options.run_id};
   if (!options.mode.empty()) args.insert(args.end(), {"--mode", options.mode});
   args.insert(args.end(), {"--device", options.device});
-  if (options.duration_s > 0.0) args.insert(args.end(), {"--duration", std::to_string(options.duration_s)});
+  if (options.duration_s > 0.0)
+    args.insert(args.end(), {"--duration", std::to_string(options.duration_s)});
   if (!options.haptic_summary_path.empty())
     args.insert(args.end(), {"--summary", options.haptic_summary_path});
   // Everything the child needs is built before fork: between fork and exec only
@@ -133,9 +154,9 @@ pid_t SpawnHaptic(const RunCommandOptions& options) {
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("cannot fork the haptic process");
   if (pid == 0) {
-    prctl(PR_SET_PDEATHSIG, SIGTERM);  // the haptic process stops if this one dies
+    prctl(PR_SET_PDEATHSIG, SIGTERM);   // the haptic process stops if this one dies
     if (getppid() != parent) _exit(1);  // ... or has already died
-    close_range(3, ~0U, 0);            // not this process's LCM sockets and log
+    close_range(3, ~0U, 0);             // not this process's LCM sockets and log
     execv("/proc/self/exe", argv.data());
     [[maybe_unused]] const ssize_t ignored = write(2, kExecFailed, sizeof(kExecFailed) - 1);
     _exit(127);
@@ -157,9 +178,11 @@ std::string CheckChild(pid_t pid, int* exit_code) {
 
 hapsim_lcm::sim_frame_t MakeSimFrame(const fem::State& body, const Matrix3Xi& surface,
                                      const ToolState& tool, const contact::VisualFrame& frame,
-                                     const contact::VisualFrameStats& stats, long k, double t_s) {
+                                     const contact::VisualFrameStats& stats, long k, double t_s,
+                                     std::int64_t run_id) {
   hapsim_lcm::sim_frame_t msg{};
   msg.utime = WallMicros();
+  msg.run_id = run_id;
   msg.sequence = k;
   msg.t_s = t_s;
   msg.num_nodes = static_cast<int32_t>(body.x_m.size() / 3);
@@ -199,8 +222,8 @@ hapsim_lcm::sim_frame_t MakeSimFrame(const fem::State& body, const Matrix3Xi& su
 // The haptic process is spawned (unless --no-spawn) only once the body and the frame are built,
 // so that its clock starts when the first model can follow within one frame's computation.
 long RunFrames(const config::Scene& scene, device::HapticMode mode,
-               const RunCommandOptions& options, lcm::LCM* lcm, Listener* listener, pid_t* child,
-               int* child_code, std::string* child_end) {
+               const RunCommandOptions& options, const hapsim_lcm::run_info_t& info, lcm::LCM* lcm,
+               Listener* listener, pid_t* child, int* child_code, std::string* child_end) {
   const config::Body body = config::MakeBody(*scene.body, scene.gravity_m_s2);
   contact::VisualFrameOptions visual = config::MakeVisualFrameOptions(scene);
   visual.dt_s = scene.dt_s;
@@ -214,9 +237,12 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
   ToolState visual_tool = scene.tool->initial_state;
   const Matrix3Xi surface = fem::ExtractBoundarySurface(body.model.mesh);
   *child = options.no_spawn ? -1 : SpawnHaptic(options);
-  const double duration_s = options.duration_s > 0.0 ? options.duration_s : scene.num_steps * scene.dt_s;
+  const double duration_s =
+      options.duration_s > 0.0 ? options.duration_s : scene.num_steps * scene.dt_s;
   const long num_frames = std::lround(duration_s / scene.dt_s);
   const int steps_per_frame = scene.haptic.steps_per_frame;
+  // RUN_INFO again about every second, for subscribers and loggers that started late.
+  const long frames_per_run_info = std::max(1L, std::lround(1.0 / scene.dt_s));
   long k = 0;
   for (; k < num_frames && !g_stop_requested.load(); ++k) {
     // Wait for the haptic clock to reach the frame: frame k needs the state after step
@@ -230,6 +256,7 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
       if (!child_end->empty()) return k;
     }
     if (g_stop_requested.load()) break;
+    if (k > 0 && k % frames_per_run_info == 0) lcm->publish(messages::kRunInfoChannel, &info);
     const contact::VisualFrameStats stats =
         frame.Step(now.device, &body_state, &visual_tool, haptic_tool ? &now.haptic_tool : nullptr);
     messages::ContactModelHeader header;
@@ -241,17 +268,26 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
     header.x_W_m = now.haptic_tool.x_W_m;
     header.q_WT = now.haptic_tool.q_WT;
     header.visual_tool = visual_tool;
-    const hapsim_lcm::contact_model_t model_msg = messages::ToMessage(
+    hapsim_lcm::contact_model_t model_msg = messages::ToMessage(
         frame.linear_model(), visual.export_contact_rows ? &frame.contact_rows() : nullptr, header);
+    model_msg.run_id = info.run_id;
     lcm->publish(messages::kContactModelChannel, &model_msg);
-    const hapsim_lcm::sim_frame_t sim_frame =
-        MakeSimFrame(body_state, surface, visual_tool, frame, stats, k, k * scene.dt_s);
+    const hapsim_lcm::sim_frame_t sim_frame = MakeSimFrame(body_state, surface, visual_tool, frame,
+                                                           stats, k, k * scene.dt_s, info.run_id);
     lcm->publish(messages::kSimFrameChannel, &sim_frame);
   }
   return k;
 }
 
-int RunVisual(const RunCommandOptions& options) {
+int RunVisual(RunCommandOptions options) {
+  std::int64_t run_id = 0;
+  if (options.run_id.empty()) {
+    run_id = messages::MakeRunId();
+    options.run_id = messages::FormatRunId(run_id);
+  } else if (!messages::ParseRunId(options.run_id, &run_id)) {
+    throw InputError("--run-id", 0, "",
+                     "not 1-16 hex digits (and not 0): '" + options.run_id + "'");
+  }
   const config::Scene scene = config::LoadScene(options.scene_path);
   if (!scene.tool || !scene.body)
     throw InputError(scene.file, 0, scene.tool ? "body" : "tool",
@@ -260,7 +296,8 @@ int RunVisual(const RunCommandOptions& options) {
       config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/false);
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
-  Listener listener;
+  const hapsim_lcm::run_info_t info = MakeRunInfo(scene, device::ToString(mode), run_id);
+  Listener listener(run_id);
   KeepQueued(lcm.subscribe(messages::kDeviceStateChannel, &Listener::OnDevice, &listener));
   KeepQueued(lcm.subscribe(messages::kHapticStateChannel, &Listener::OnHaptic, &listener));
   const std::string log_tmp = options.log_path + ".tmp";
@@ -270,19 +307,17 @@ int RunVisual(const RunCommandOptions& options) {
   }
   InstallStopHandlers();
   ReceiveThread receive_thread(&lcm);
-  hapsim_lcm::run_info_t info{};
-  info.utime = WallMicros();
-  info.scene_path = scene.file;
-  info.mode = device::ToString(mode);
-  info.visual_rate_hz = 1.0 / scene.dt_s;
-  info.haptic_rate_hz = scene.haptic.rate_hz;
-  info.hapsim_version = HAPSIM_VERSION;
+  std::printf("hapsim run: run id %s on %s%s\n", options.run_id.c_str(), options.lcm_url.c_str(),
+              options.no_spawn
+                  ? (" (start the haptic process with --run-id " + options.run_id + ")").c_str()
+                  : "");
+  std::fflush(stdout);
   lcm.publish(messages::kRunInfoChannel, &info);
   pid_t child = -1;
   int child_code = 0;
   std::string child_end;
   const long frames =
-      RunFrames(scene, mode, options, &lcm, &listener, &child, &child_code, &child_end);
+      RunFrames(scene, mode, options, info, &lcm, &listener, &child, &child_code, &child_end);
   // Shutdown: the haptic process ends its script by itself; on a stop request it gets SIGTERM.
   if (child > 0 && child_end.empty()) {
     if (g_stop_requested.load()) kill(child, SIGTERM);
@@ -305,6 +340,12 @@ int RunVisual(const RunCommandOptions& options) {
   }
   std::printf("hapsim run: %ld visual frames; haptic process %s\n", frames,
               child > 0 ? child_end.c_str() : "not spawned");
+  const messages::MessageGate& gate = listener.gate();
+  if (gate.num_foreign() > 0)
+    std::printf("  ignored %ld messages of other runs on this LCM URL (first: run %s)\n",
+                gate.num_foreign(), messages::FormatRunId(gate.first_foreign_run()).c_str());
+  if (gate.num_rejected() > 0)
+    std::printf("  rejected %ld malformed or invalid messages\n", gate.num_rejected());
   if (!options.log_path.empty()) std::printf("  wrote %s\n", options.log_path.c_str());
   if (child > 0 && child_code != 0) {
     std::fprintf(stderr, "hapsim run: error: the haptic process %s\n", child_end.c_str());
@@ -340,6 +381,10 @@ void AddRunCommand(CLI::App* app) {
                   "Seconds of simulated time (default: the scene's script)")
       ->check(CLI::PositiveNumber);
   run->add_option("--log", options->log_path, "Write every channel to this LCM event log");
+  run->add_option("--run-id", options->run_id,
+                  "This run's identity, 1-16 hex digits (default: random). Every message carries\n"
+                  "it and each process ignores other runs' messages, so runs can share a URL;\n"
+                  "with --no-spawn, start `hapsim haptic --run-id` with the same id");
   run->add_option("--haptic-summary", options->haptic_summary_path,
                   "Have the haptic process write its loop statistics to this JSON file");
   run->callback([options] {

@@ -153,6 +153,32 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
          CheckFinite(msg.lambda_frame_N.data(), n, "contact_model_t.lambda_frame_N", error);
 }
 
+// The ranges of the lcp rows that decoding alone cannot catch: J_v,i = −n_iᵀ is a unit normal;
+// W_body is positive semidefinite, so its diagonal is ≥ 0 (symmetry holds by construction: only
+// the lower triangle travels); the frame's impulses are ≥ 0 (unilateral contacts push).
+bool CheckContactRowRanges(const hapsim_lcm::contact_model_t& msg, std::string* error) {
+  constexpr double kUnitTolerance = 1e-6;
+  for (int i = 0; i < msg.num_rows; ++i) {
+    const double norm = std::sqrt(msg.J_v[i][0] * msg.J_v[i][0] + msg.J_v[i][1] * msg.J_v[i][1] +
+                                  msg.J_v[i][2] * msg.J_v[i][2]);
+    if (std::abs(norm - 1.0) > kUnitTolerance) {
+      SetError(error, "contact_model_t.J_v[" + std::to_string(i) + "]: norm " +
+                          std::to_string(norm) + ", expected a unit normal");
+      return false;
+    }
+    if (msg.W_body_lower[PackedRowStart(i) + i] < 0.0) {
+      SetError(error, "contact_model_t.W_body_lower: negative diagonal entry in row " +
+                          std::to_string(i) + " (W_body must be positive semidefinite)");
+      return false;
+    }
+    if (msg.lambda_frame_N[i] < 0.0) {
+      SetError(error, "contact_model_t.lambda_frame_N[" + std::to_string(i) + "]: negative");
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 hapsim_lcm::device_state_t ToMessage(const DeviceState& device, std::int64_t utime,
@@ -222,6 +248,20 @@ bool PoseFromMessage(const double x_W_m[3], const double q_WT[4], ToolState* too
   return true;
 }
 
+bool HapticToolFromMessage(const hapsim_lcm::haptic_state_t& msg, ToolState* tool,
+                           std::string* error) {
+  ToolState read;
+  if (!PoseFromMessage(msg.x_W_m, msg.q_WT, &read, error) ||
+      !CheckFinite(msg.v_W_m_s, 3, "haptic_state_t.v_W_m_s", error) ||
+      !CheckFinite(msg.L_W_kg_m2_s, 3, "haptic_state_t.L_W_kg_m2_s", error)) {
+    return false;
+  }
+  read.v_W_m_s = ArrayToVector(msg.v_W_m_s);
+  read.L_W_kg_m2_s = ArrayToVector(msg.L_W_kg_m2_s);
+  *tool = read;
+  return true;
+}
+
 hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
                                       const contact::ContactRows* rows_or_null,
                                       const ContactModelHeader& header) {
@@ -280,7 +320,7 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
 bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactModel* model,
                  contact::ContactRows* rows, ContactModelHeader* header, std::string* error) {
   Eigen::Quaterniond q_WT, visual_q_WT;
-  if (!CheckContactModel(msg, error) ||
+  if (!CheckContactModel(msg, error) || !CheckContactRowRanges(msg, error) ||
       !ReadUnitQuaternion(msg.q_WT, "contact_model_t.q_WT", &q_WT, error) ||
       !ReadUnitQuaternion(msg.visual_q_WT, "contact_model_t.visual_q_WT", &visual_q_WT, error)) {
     return false;

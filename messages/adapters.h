@@ -85,6 +85,13 @@ void PoseToMessage(const ToolState& tool, double x_W_m[3], double q_WT[4]);
 bool PoseFromMessage(const double x_W_m[3], const double q_WT[4], ToolState* tool,
                      std::string* error);
 
+// ---- haptic_state_t (HAPTIC_STATE) ----
+
+// The haptic tool after the step (pose, velocity, angular momentum). Rejects non-finite entries
+// and a bad quaternion (PoseFromMessage), naming the field; *tool untouched then.
+bool HapticToolFromMessage(const hapsim_lcm::haptic_state_t& msg, ToolState* tool,
+                           std::string* error);
+
 // ---- contact_model_t (CONTACT_MODEL) ----
 
 // The fields of contact_model_t that are not the model itself (see contact_model_t.lcm).
@@ -96,7 +103,7 @@ struct ContactModelHeader {
   double t_frame_s = 0.0;                           // simulated time at the end of the frame
   Eigen::Vector3d x_W_m = Eigen::Vector3d::Zero();  // tool COM at linearisation
   Eigen::Quaterniond q_WT = Eigen::Quaterniond::Identity();  // tool orientation there
-  ToolState visual_tool;  // after the frame (coupling mode)
+  ToolState visual_tool;                                     // after the frame (coupling mode)
 };
 
 // rows_or_null: the lcp mode's rows, or null for num_rows = 0. Allocates (visual process).
@@ -106,7 +113,8 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
 
 // Rejects, with the field's name in *error: any non-finite value; dt_visual_s or dt_haptic_s
 // ≤ 0; num_contacts or num_rows < 0; J_v, J_w, W_body or body_rhs whose sizes disagree with
-// num_rows; a bad q_WT. (W_body's symmetry is left to HapticLcpSolver, which checks it.)
+// num_rows; a J_v row that is not a unit normal, a negative diagonal of W_body or a negative
+// lambda_frame_N; a bad q_WT. (W_body is symmetric by construction: its lower triangle travels.)
 //
 // rows may be null: the rows are then validated but not copied. Into a non-null rows the copy
 // reuses its storage: Eigen's resize allocates only when num_rows changes. Still, this is meant

@@ -20,6 +20,13 @@
 #     replays bit for bit.
 #  7. the visual process stopped (SIGSTOP) for 60 ms mid-run still logs every message: ~120
 #     arrive meanwhile, four times the 30 LCM lets a subscription hold by default (KeepQueued).
+#  8. run isolation (issue 9): two runs at once on one URL each agree with the in-process run as
+#     check 1 does, each log holds its own run only and replays bit for bit from another folder,
+#     and each process reports the other run's traffic;
+#  9. self-contained logs: replay from another folder uses the log's own scene text (an edit of
+#     the scene file after the run changes nothing, while --scene with the edited file does), and
+#     a changed or missing tool mesh file is an error naming it; a log whose first event claims
+#     2^31 - 1 bytes (replay once segfaulted) is an error naming the byte.
 # Usage: two_process_test.sh HAPSIM HAPSIM_EXAMPLE_DRIVER
 set -euo pipefail
 hapsim="$(realpath "$1")"
@@ -35,25 +42,12 @@ work=$(mktemp -d -p /dev/shm 2> /dev/null || mktemp -d)
 trap 'kill $(jobs -p) 2> /dev/null || true; rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 scene=scenes/block_press.yaml
+mkdir "$work/elsewhere"  # replays run from here: a folder without the scene
 
-# 1. A whole run, logged. A host that stalls the machine can still make the kernel drop a
-# datagram (the log then misses a step, which replay reports) or delay the models beyond what
-# the tolerance below allows: either way the run is repeated, up to three times, and said so. A replay that differs
-# from a complete log fails at once; three failed attempts fail the test.
-"$hapsim" sim "$scene" --mode linear --out "$work/sim" > /dev/null
-good=0
-for attempt in 1 2 3; do
-  "$hapsim" run "$scene" --lcm-url "$url" --log "$work/run.lcm" \
-    --haptic-summary "$work/haptic.json" > "$work/run.out" 2>&1 || fail "run: $(cat "$work/run.out")"
-  [ -s "$work/run.lcm" ] || fail "no log written"
-  if ! "$hapsim" replay "$work/run.lcm" --csv "$work/logged.csv" > "$work/replay.out" 2>&1; then
-    grep -qE "the log misses|is not in the log" "$work/replay.out" ||
-      fail "replay: $(cat "$work/replay.out"); run: $(grep -v "^  wrote" "$work/run.out")"
-    echo "attempt $attempt: a datagram was lost ($(cat "$work/replay.out")); running again"
-    continue
-  fi
-  grep -q "reproduced bit for bit" "$work/replay.out" || fail "replay: $(cat "$work/replay.out")"
-  if ! /usr/bin/python3 - "$work/haptic.json" "$work/logged.csv" "$work/sim/haptic.csv" <<'PY'
+# The device forces of a logged run (CSV of `hapsim replay --csv`) against the in-process
+# simulator's: one step per millisecond, RMS within the tolerance below and the peak within 5%.
+agrees_with_in_process() {
+  /usr/bin/python3 - "$1" "$2" "$work/sim/haptic.csv" <<'PY'
 import csv, json, math, sys
 summary = json.load(open(sys.argv[1]))
 logged = list(csv.DictReader(open(sys.argv[2])))
@@ -77,7 +71,26 @@ print(f"device force RMS difference from the in-process run: {err:.4f} N; peaks 
 assert err < 0.1, err
 assert abs(peak(logged) - peak(inproc)) < 0.05 * peak(inproc)
 PY
-  then
+}
+
+# 1. A whole run, logged. A host that stalls the machine can still make the kernel drop a
+# datagram (the log then misses a step, which replay reports) or delay the models beyond what
+# the tolerance below allows: either way the run is repeated, up to three times, and said so. A replay that differs
+# from a complete log fails at once; three failed attempts fail the test.
+"$hapsim" sim "$scene" --mode linear --out "$work/sim" > /dev/null
+good=0
+for attempt in 1 2 3; do
+  "$hapsim" run "$scene" --lcm-url "$url" --log "$work/run.lcm" \
+    --haptic-summary "$work/haptic.json" > "$work/run.out" 2>&1 || fail "run: $(cat "$work/run.out")"
+  [ -s "$work/run.lcm" ] || fail "no log written"
+  if ! "$hapsim" replay "$work/run.lcm" --csv "$work/logged.csv" > "$work/replay.out" 2>&1; then
+    grep -qE "the log misses|is not in the log" "$work/replay.out" ||
+      fail "replay: $(cat "$work/replay.out"); run: $(grep -v "^  wrote" "$work/run.out")"
+    echo "attempt $attempt: a datagram was lost ($(cat "$work/replay.out")); running again"
+    continue
+  fi
+  grep -q "reproduced bit for bit" "$work/replay.out" || fail "replay: $(cat "$work/replay.out")"
+  if ! agrees_with_in_process "$work/haptic.json" "$work/logged.csv"; then
     echo "attempt $attempt: forces outside the tolerance (a run the host disturbed?); running again"
     continue
   fi
@@ -115,10 +128,11 @@ grep -q "haptic process was killed by signal" "$work/kill_haptic.out" ||
   fail "message: $(cat "$work/kill_haptic.out")"
 
 # 4. Kill the visual process mid-run: the haptic force fades to zero within model_stale_s.
-"$hapsim" haptic "$scene" --lcm-url "$url" --duration 3 --summary "$work/fade.json" \
+# Started by hand (as on a device's own machine), so both are given the same run id.
+"$hapsim" haptic "$scene" --lcm-url "$url" --run-id 4a --duration 3 --summary "$work/fade.json" \
   > "$work/fade_haptic.out" 2>&1 &
 haptic_pid=$!
-"$hapsim" run "$scene" --lcm-url "$url" --no-spawn > /dev/null 2>&1 &
+"$hapsim" run "$scene" --lcm-url "$url" --run-id 4a --no-spawn > /dev/null 2>&1 &
 visual_pid=$!
 sleep 1.6
 kill -KILL "$visual_pid"
@@ -223,6 +237,123 @@ wait "$run_pid" || fail "stopped run: $(cat "$work/stopped.out")"
 grep -q "3000 haptic steps .* reproduced bit for bit" "$work/stopped_replay.out" ||
   fail "stopped run's replay: $(cat "$work/stopped_replay.out")"
 echo "visual process stopped for 60 ms: its log still holds every step"
+
+# 8. Two runs at once on one URL, the second started 0.3 s after the first (before run ids, each
+# haptic process took the other's models and device states: a 4.9 N peak against 3.1 N, and logs
+# holding both runs). Four processes share the two cores here, so a disturbed attempt is
+# repeated as in 1.
+for attempt in 1 2 3; do
+  "$hapsim" run "$scene" --lcm-url "$url" --log "$work/a.lcm" --haptic-summary "$work/a.json" \
+    > "$work/a.out" 2>&1 &
+  a_pid=$!
+  sleep 0.3
+  "$hapsim" run "$scene" --lcm-url "$url" --log "$work/b.lcm" --haptic-summary "$work/b.json" \
+    > "$work/b.out" 2>&1 || fail "second of two runs: $(cat "$work/b.out")"
+  wait "$a_pid" || fail "first of two runs: $(cat "$work/a.out")"
+  agreed=1
+  for name in a b; do
+    # Each process saw the other run and said so, once, and counted it.
+    grep -q "hapsim run: warning: ignoring messages of another run" "$work/$name.out" ||
+      fail "run $name did not report the other run: $(cat "$work/$name.out")"
+    grep -q "hapsim haptic: ignored [0-9]* messages of other runs" "$work/$name.out" ||
+      fail "haptic process $name did not report the other run: $(cat "$work/$name.out")"
+    [ "$(grep -c "warning: ignoring messages of another run" "$work/$name.out")" -eq 2 ] ||
+      fail "run $name warned more than once per process: $(cat "$work/$name.out")"
+    # Its log replays bit for bit from a folder without the scene, holding its own run only.
+    if ! (cd "$work/elsewhere" && "$hapsim" replay "../$name.lcm" --csv "../$name.csv") \
+      > "$work/${name}_replay.out" 2>&1; then
+      grep -qE "the log misses|is not in the log" "$work/${name}_replay.out" ||
+        fail "replay of run $name: $(cat "$work/${name}_replay.out")"
+      agreed=0
+      continue
+    fi
+    grep -q "3000 haptic steps .* reproduced bit for bit .*scene from the log" \
+      "$work/${name}_replay.out" || fail "replay of run $name: $(cat "$work/${name}_replay.out")"
+    /usr/bin/python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); assert s["foreign_messages"] > 0 and s["messages_rejected"] == 0, s' \
+      "$work/$name.json" || fail "haptic summary $name: $(cat "$work/$name.json")"
+    agrees_with_in_process "$work/$name.json" "$work/$name.csv" | sed "s/^/run $name: /" || agreed=0
+  done
+  [ "$agreed" -eq 1 ] && break
+  echo "attempt $attempt: two runs at once lost a datagram or disagreed; running again"
+  [ "$attempt" -lt 3 ] || inconclusive="${inconclusive:+$inconclusive; }three pairs of runs disturbed"
+done
+echo "two runs at once on one URL: each kept to its own run"
+
+# 9. Self-contained logs. A tool read from a mesh file (a 4 cm cube in place of the cylinder, ASCII
+# STL) in a scene outside the repository; 1.2 s of the script, which presses it 3 mm in.
+mkdir "$work/scene9"
+/usr/bin/python3 - "$work/scene9/cube.stl" <<'PY'
+import itertools, sys
+h = 0.02
+faces = []  # two counter-clockwise triangles per face, seen from outside
+for axis in range(3):
+    for sign in (-1, 1):
+        u, v = [a for a in range(3) if a != axis]
+        corners = []
+        for du, dv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+            p = [0.0] * 3
+            p[axis], p[u], p[v] = sign * h, du * h, dv * h
+            corners.append(p)
+        n = [0.0] * 3
+        n[axis] = sign
+        # (u, v, axis) is right-handed for axis 0 and 2 and left-handed for axis 1
+        if (sign > 0) != (axis == 1):
+            order = [0, 1, 2, 0, 2, 3]
+        else:
+            order = [0, 2, 1, 0, 3, 2]
+        faces += [(n, [corners[i] for i in order[:3]]), (n, [corners[i] for i in order[3:]])]
+with open(sys.argv[1], "w") as out:
+    out.write("solid cube\n")
+    for n, tri in faces:
+        out.write("facet normal %g %g %g\n outer loop\n" % tuple(n))
+        for p in tri:
+            out.write("  vertex %.6f %.6f %.6f\n" % tuple(p))
+        out.write(" endloop\nendfacet\n")
+    out.write("endsolid cube\n")
+PY
+sed 's/^    cylinder: .*$/    mesh: {file: cube.stl}/' "$scene" > "$work/scene9/cube_press.yaml"
+grep -q "file: cube.stl" "$work/scene9/cube_press.yaml" || fail "could not make the mesh-tool scene"
+"$hapsim" run "$work/scene9/cube_press.yaml" --lcm-url "$url" --duration 1.2 --log "$work/cube.lcm" \
+  > "$work/cube.out" 2>&1 || fail "mesh-tool run: $(cat "$work/cube.out")"
+replay_cube() { (cd "$work/elsewhere" && "$hapsim" replay ../cube.lcm "$@") > "$work/cube_replay.out" 2>&1; }
+replay_cube || fail "replay of the mesh-tool run: $(cat "$work/cube_replay.out")"
+grep -q "1200 haptic steps .* reproduced bit for bit .*scene from the log" "$work/cube_replay.out" ||
+  fail "replay of the mesh-tool run: $(cat "$work/cube_replay.out")"
+# The scene file edited after the run (a stiffer coupling): replay still reproduces the run from
+# the log's own text; the edited file given with --scene does not (so the edit is one that counts).
+sed -i 's/k_lin_N_m: 1000/k_lin_N_m: 3000/' "$work/scene9/cube_press.yaml"
+replay_cube || fail "replay after the scene was edited: $(cat "$work/cube_replay.out")"
+set +e
+replay_cube --scene "$work/scene9/cube_press.yaml"
+status=$?
+set -e
+[ "$status" -ne 0 ] && grep -q "differs" "$work/cube_replay.out" ||
+  fail "replay with the edited scene should differ: $(cat "$work/cube_replay.out")"
+# The tool mesh changed (one more facet line's worth of text), then missing: exit 2, naming it.
+echo "solid extra" >> "$work/scene9/cube.stl"
+set +e
+replay_cube
+status=$?
+set -e
+[ "$status" -eq 2 ] && grep -q "cube.stl.*changed since the run" "$work/cube_replay.out" ||
+  fail "a changed tool mesh should be an error naming it (exit $status): $(cat "$work/cube_replay.out")"
+rm "$work/scene9/cube.stl"
+set +e
+replay_cube
+status=$?
+set -e
+[ "$status" -eq 2 ] && grep -q "cube.stl.*missing" "$work/cube_replay.out" ||
+  fail "a missing tool mesh should be an error naming it (exit $status): $(cat "$work/cube_replay.out")"
+# A log whose first event claims 2^31 - 1 bytes of data: an error naming the byte, not a crash.
+/usr/bin/python3 -c 'import struct,sys; open(sys.argv[1],"wb").write(struct.pack(">IqqII", 0xEDA1DA01, 0, 0, 12, 2**31 - 1) + b"DEVICE_STATE" + bytes(16))' \
+  "$work/huge.lcm"
+set +e
+"$hapsim" replay "$work/huge.lcm" > "$work/huge.out" 2>&1
+status=$?
+set -e
+[ "$status" -eq 2 ] && grep -q "huge.lcm.*truncated or corrupt.*event at byte 0" "$work/huge.out" ||
+  fail "a log claiming 2^31 - 1 bytes (exit $status): $(cat "$work/huge.out")"
+echo "self-contained logs: replay from another folder, after a scene edit; changed and missing files named"
 
 if [ -n "$inconclusive" ]; then
   echo "SKIPPED (inconclusive): $inconclusive; every other check passed"

@@ -16,6 +16,7 @@
 #include <random>
 #include <vector>
 
+#include "messages/wire_decode.h"
 #include "tests/allocation_counter.h"
 
 namespace hapsim::messages {
@@ -38,7 +39,10 @@ template <typename A, typename B>
 void ExpectBitIdentical(const A& a, const B& b, const char* what) {
   ASSERT_EQ(a.rows(), b.rows()) << what;
   ASSERT_EQ(a.cols(), b.cols()) << what;
-  EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof(double) * a.size()), 0) << what;
+  // An empty matrix's data() is null, which memcmp must not be given even for 0 bytes.
+  if (a.size() > 0) {
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof(double) * a.size()), 0) << what;
+  }
 }
 
 void ExpectBitIdentical(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b,
@@ -204,7 +208,9 @@ struct ContactModelFixture {
     model.dTc_dF = random.Matrix();
     model.dTc_dT = random.Matrix();
     model.num_contacts = num_rows + 1;
+    // J_v,i = −n_iᵀ: unit rows, as every sender makes them (FromMessage checks).
     rows.J_v = Eigen::MatrixX3d::NullaryExpr(num_rows, 3, [&] { return random(); });
+    rows.J_v.rowwise().normalize();
     rows.J_w = Eigen::MatrixX3d::NullaryExpr(num_rows, 3, [&] { return random(); });
     const Eigen::MatrixXd A =
         Eigen::MatrixXd::NullaryExpr(num_rows, num_rows, [&] { return random(); });
@@ -213,8 +219,8 @@ struct ContactModelFixture {
     rows.body_rhs = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
     rows.lambda_frame_N =
         Eigen::VectorXd::NullaryExpr(num_rows, [&] { return std::max(0.0, random()); });
-    header = {1717000000000001, 99, 1.0 / 60.0, 1e-3, 1.65, random.Vector(), random.Rotation(),
-              ToolState{}};
+    header = {1717000000000001,  99,         1.0 / 60.0, 1e-3, 1.65, random.Vector(),
+              random.Rotation(), ToolState{}};
     header.visual_tool.x_W_m = random.Vector();
     header.visual_tool.q_WT = random.Rotation();
     header.visual_tool.v_W_m_s = random.Vector();
@@ -322,6 +328,11 @@ TEST(ContactModelMessage, InconsistentOrNonFiniteMessagesAreRejected) {
       {"q_WT", [](auto* m) { m->q_WT[0] *= 0.5; }},
       {"dt_haptic_s", [](auto* m) { m->dt_haptic_s = 0.0; }},
       {"dt_visual_s", [](auto* m) { m->dt_visual_s = kNaN; }},
+      // Ranges (issue 9): a normal that is not unit, a W_body that cannot be positive
+      // semidefinite, an impulse that pulls.
+      {"J_v[2]", [](auto* m) { m->J_v[2][0] += 0.01; }},
+      {"W_body_lower", [](auto* m) { m->W_body_lower[2] = -1e-9; }},  // diagonal of row 1
+      {"lambda_frame_N[0]", [](auto* m) { m->lambda_frame_N[0] = -0.5; }},
   };
   for (const Case& c : cases) {
     hapsim_lcm::contact_model_t msg = good;
@@ -362,15 +373,16 @@ TEST(ContactModelMessage, RowStorageIsReusedWhenTheSizeIsUnchanged) {
   EXPECT_EQ(allocations, 0);
 }
 
+// Receives as the haptic process does: raw bytes through the bounded decoder (wire_decode.h).
 struct ContactModelReceiver {
   int count = 0;
   std::string channel;
   hapsim_lcm::contact_model_t msg;
-  void Handle(const lcm::ReceiveBuffer*, const std::string& chan,
-              const hapsim_lcm::contact_model_t* received) {
+  std::string error;
+  void Handle(const lcm::ReceiveBuffer* buffer, const std::string& chan) {
+    if (!Decode(buffer->data, static_cast<int>(buffer->data_size), &msg, &error)) return;
     ++count;
     channel = chan;
-    msg = *received;
   }
 };
 
@@ -383,7 +395,7 @@ TEST(ContactModelMessage, CrossesInProcessLcmIntact) {
   const auto sent = ToMessage(in.model, &in.rows, in.header);
   ASSERT_EQ(lcm.publish("CONTACT_MODEL", &sent), 0);
   ASSERT_GT(lcm.handleTimeout(1000), 0);
-  ASSERT_EQ(receiver.count, 1);
+  ASSERT_EQ(receiver.count, 1) << receiver.error;
   EXPECT_EQ(receiver.channel, "CONTACT_MODEL");
   contact::LinearContactModel model;
   contact::ContactRows rows;
