@@ -73,17 +73,23 @@ struct LogContents {
   std::map<long, hapsim_lcm::haptic_state_t> steps;  // by step
   std::map<long, DeviceState> devices;               // by sequence
   std::vector<hapsim_lcm::contact_model_t> model_messages;  // decoded in Replay (needs the scene)
+  long skipped = 0;  // messages of the run that do not decode or validate (the live side's too)
 };
 
+// Decodes a logged message of the run. One that does not decode was rejected by the live process
+// too (a hostile or broken publisher using the run's id), so it is skipped and counted, with the
+// first one named, rather than ending the replay.
 template <typename Message>
-Message DecodeEvent(const messages::LcmLogEvent& event, const std::string& log_path) {
-  Message msg;
+bool DecodeEvent(const messages::LcmLogEvent& event, const std::string& log_path, Message* msg,
+                 LogContents* contents) {
   std::string error;
-  if (!messages::Decode(event.data.data(), static_cast<int>(event.data.size()), &msg, &error))
-    throw InputError(log_path, 0, event.channel,
-                     "event " + std::to_string(event.event_number) + " at byte " +
-                         std::to_string(event.offset) + " does not decode: " + error);
-  return msg;
+  if (messages::Decode(event.data.data(), static_cast<int>(event.data.size()), msg, &error))
+    return true;
+  if (contents->skipped++ == 0)
+    std::fprintf(stderr, "hapsim replay: warning: %s: skipping event %ld at byte %ld on %s: %s\n",
+                 log_path.c_str(), static_cast<long>(event.event_number),
+                 static_cast<long>(event.offset), event.channel.c_str(), error.c_str());
+  return false;
 }
 
 // The run to replay: `requested` (--run-id) or, when empty, the log's only run. `runs` counts the
@@ -133,16 +139,23 @@ LogContents ReadLog(const std::string& path, const std::string& requested_run) {
       continue;
     const std::string& channel = event.channel;
     if (channel == messages::kRunInfoChannel) {
-      contents.info = DecodeEvent<hapsim_lcm::run_info_t>(event, path);
-      contents.mode = contents.info->mode;
+      hapsim_lcm::run_info_t info;
+      if (!DecodeEvent(event, path, &info, &contents)) continue;
+      contents.mode = info.mode;
+      contents.info = std::move(info);
     } else if (channel == messages::kDeviceStateChannel) {
-      const auto msg = DecodeEvent<hapsim_lcm::device_state_t>(event, path);
-      contents.devices[msg.sequence] = ReadDeviceState(msg);
+      hapsim_lcm::device_state_t msg;
+      if (DecodeEvent(event, path, &msg, &contents))
+        contents.devices[msg.sequence] = ReadDeviceState(msg);
     } else if (channel == messages::kHapticStateChannel) {
-      const auto msg = DecodeEvent<hapsim_lcm::haptic_state_t>(event, path);
-      if (msg.step >= 0) contents.steps[msg.step] = msg;  // −1: waiting for the first model
+      hapsim_lcm::haptic_state_t msg;
+      // step −1: the haptic process waiting for the first model
+      if (DecodeEvent(event, path, &msg, &contents) && msg.step >= 0)
+        contents.steps[msg.step] = msg;
     } else if (channel == messages::kContactModelChannel) {
-      contents.model_messages.push_back(DecodeEvent<hapsim_lcm::contact_model_t>(event, path));
+      hapsim_lcm::contact_model_t msg;
+      if (DecodeEvent(event, path, &msg, &contents))
+        contents.model_messages.push_back(std::move(msg));
     }
   }
   if (contents.steps.empty()) throw InputError(path, 0, "", "no haptic steps in the log");
@@ -185,7 +198,8 @@ bool RecreateMissingStep(const LogContents& log, long step, hapsim_lcm::haptic_s
 
 // Re-runs the loop; returns the number of steps compared, or throws at the first difference
 // (steps lost from the log are re-run when RecreateMissingStep can, and not compared).
-long Replay(const config::Scene& scene, const LogContents& log) {
+long Replay(const config::Scene& scene, LogContents* log_contents) {
+  const LogContents& log = *log_contents;
   device::HapticMode mode = scene.haptic.mode;
   if (const auto logged_mode = config::ParseHapticMode(log.mode)) mode = *logged_mode;
   const device::HapticLoopOptions options = MakeHapticLoopOptions(scene, mode);
@@ -196,9 +210,15 @@ long Replay(const config::Scene& scene, const LogContents& log) {
   for (const hapsim_lcm::contact_model_t& msg : log.model_messages) {
     auto update = std::make_unique<device::ContactModelUpdate>();
     std::string error;
+    // One the live process rejected (ModelReceiver) is skipped likewise; a step that names it
+    // fails below.
     if (!ReadContactModelUpdate(msg, *scene.tool, scene.coupling, scene.gravity_m_s2, options,
-                                update.get(), &error))
-      throw std::runtime_error("contact model " + std::to_string(msg.sequence) + ": " + error);
+                                update.get(), &error)) {
+      if (log_contents->skipped++ == 0)
+        std::fprintf(stderr, "hapsim replay: warning: skipping contact model %ld: %s\n",
+                     static_cast<long>(msg.sequence), error.c_str());
+      continue;
+    }
     models[msg.sequence] = std::move(update);
   }
   long compared = 0;
@@ -283,11 +303,16 @@ void RunReplay(const ReplayOptions& options) {
                 options.log_path.c_str(), options.speed, options.lcm_url.c_str());
     return;
   }
-  const LogContents log = ReadLog(options.log_path, options.run_id);
+  LogContents log = ReadLog(options.log_path, options.run_id);
   if (!options.csv_path.empty()) WriteCsv(options.csv_path, log);
   const config::Scene scene = ReplayScene(options, log);
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "the scene has no tool");
-  const long compared = Replay(scene, log);
+  const long compared = Replay(scene, &log);
+  if (log.skipped > 0)
+    std::printf(
+        "hapsim replay: skipped %ld messages of the run that do not decode or validate "
+        "(the live processes rejected them too)\n",
+        log.skipped);
   std::printf(
       "hapsim replay: %ld haptic steps of %s reproduced bit for bit (%zu contact models; "
       "run %s, scene %s)\n",

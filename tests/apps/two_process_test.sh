@@ -26,7 +26,8 @@
 #  9. self-contained logs: replay from another folder uses the log's own scene text (an edit of
 #     the scene file after the run changes nothing, while --scene with the edited file does), and
 #     a changed or missing tool mesh file is an error naming it; a log whose first event claims
-#     2^31 - 1 bytes (replay once segfaulted) is an error naming the byte.
+#     2^31 - 1 bytes (replay once segfaulted) is an error naming the byte;
+# 10. a hostile publisher on the run's URL and run id changes no force (see the check).
 # Usage: two_process_test.sh HAPSIM HAPSIM_EXAMPLE_DRIVER
 set -euo pipefail
 hapsim="$(realpath "$1")"
@@ -354,6 +355,82 @@ set -e
 [ "$status" -eq 2 ] && grep -q "huge.lcm.*truncated or corrupt.*event at byte 0" "$work/huge.out" ||
   fail "a log claiming 2^31 - 1 bytes (exit $status): $(cat "$work/huge.out")"
 echo "self-contained logs: replay from another folder, after a scene edit; changed and missing files named"
+
+# 10. A hostile publisher on the run's own URL and run id: junk, a contact model claiming
+# num_rows = -1 (lcm-gen's decode throws on it), one with a NaN offset, and a valid one of another
+# run, 40 of each, sent mid-press as raw LCM datagrams. None may change a force: the run still
+# agrees with the in-process one, every rejection is counted in the haptic summary, and the log
+# (which keeps the run's malformed messages) replays bit for bit, skipping them as the live side did.
+/usr/bin/python3 - "$work/run.lcm" "$work/hostile.bin" <<'PY'
+import struct, sys
+data = open(sys.argv[1], "rb").read()
+pos = 0
+while pos < len(data):  # the first CONTACT_MODEL of check 1's log (linear mode: num_rows = 0)
+    _, _, _, clen, dlen = struct.unpack(">IqqII", data[pos:pos + 28])
+    channel = data[pos + 28:pos + 28 + clen].decode()
+    payload = data[pos + 28 + clen:pos + 28 + clen + dlen]
+    pos += 28 + clen + dlen
+    if channel == "CONTACT_MODEL":
+        break
+run_id = struct.pack(">q", 0x1234abcd)
+model = bytearray(payload)
+model[16:24] = run_id
+negative_rows = bytearray(model)
+negative_rows[-8:-4] = struct.pack(">i", -1)  # num_rows, then num_W_body_lower, end the message
+nan_offset = bytearray(model)
+nan_offset[220:228] = struct.pack(">d", float("nan"))  # F_c0_N[0]
+other_run = bytearray(payload)
+other_run[16:24] = struct.pack(">q", 0x77)
+junk = bytes(range(256)) * 2
+messages = [("CONTACT_MODEL", junk), ("DEVICE_STATE", junk), ("CONTACT_MODEL", negative_rows),
+            ("CONTACT_MODEL", nan_offset), ("CONTACT_MODEL", other_run)]
+with open(sys.argv[2], "wb") as out:
+    for channel, body in messages:
+        out.write(struct.pack(">H", len(channel)) + channel.encode() + struct.pack(">I", len(body)) + body)
+PY
+# The sender starts first and sleeps: Python's own start-up, on a core the visual process needs,
+# delayed frames by two periods in a first version of this check.
+/usr/bin/python3 - "$work/hostile.bin" "$port" > "$work/sender.out" 2>&1 <<'PY' &
+import socket, struct, sys, time
+time.sleep(1.5)  # into the press
+raw = open(sys.argv[1], "rb").read()
+messages, pos = [], 0
+while pos < len(raw):
+    (clen,) = struct.unpack(">H", raw[pos:pos + 2]); channel = raw[pos + 2:pos + 2 + clen]
+    (blen,) = struct.unpack(">I", raw[pos + 2 + clen:pos + 6 + clen])
+    messages.append((channel, raw[pos + 6 + clen:pos + 6 + clen + blen])); pos += 6 + clen + blen
+sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, 0)  # this machine only
+sequence = 0
+for _ in range(40):
+    for channel, body in messages:  # LCM's small-message datagram: "LC02", sequence, channel\0, data
+        sock.sendto(struct.pack(">II", 0x4C433032, 1000000 + sequence) + channel + b"\0" + body,
+                    ("239.255.76.67", int(sys.argv[2])))
+        sequence += 1
+    time.sleep(0.01)
+PY
+sender_pid=$!
+"$hapsim" run "$scene" --run-id 1234abcd --lcm-url "$url" --log "$work/hostile.lcm" \
+  --haptic-summary "$work/hostile.json" > "$work/hostile.out" 2>&1 ||
+  fail "run under a hostile publisher: $(cat "$work/hostile.out")"
+wait "$sender_pid" || fail "hostile sender: $(cat "$work/sender.out")"
+(cd "$work/elsewhere" && "$hapsim" replay ../hostile.lcm --csv ../hostile.csv) > "$work/hostile_replay.out" 2>&1 ||
+  fail "replay of the run under a hostile publisher: $(cat "$work/hostile_replay.out")"
+grep -q "reproduced bit for bit" "$work/hostile_replay.out" || fail "$(cat "$work/hostile_replay.out")"
+grep -q "skipped [0-9]* messages of the run" "$work/hostile_replay.out" || fail "$(cat "$work/hostile_replay.out")"
+/usr/bin/python3 - "$work/hostile.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+print(f"hostile publisher: {s['messages_rejected']} messages rejected, {s['foreign_messages']} of "
+      f"another run ignored, largest force sent {s['max_force_sent_N']:.3f} N")
+# 40 junk CONTACT_MODEL and 40 with num_rows = -1 fail decoding, 40 fail validation (junk
+# DEVICE_STATE reaches no subscriber of the haptic process with a scripted device).
+assert s["messages_rejected"] >= 120, s["messages_rejected"]
+assert s["models_rejected"] >= 40, s["models_rejected"]
+assert s["foreign_messages"] >= 40, s["foreign_messages"]
+PY
+agrees_with_in_process "$work/hostile.json" "$work/hostile.csv" | sed "s/^/under a hostile publisher: /" ||
+  inconclusive="${inconclusive:+$inconclusive; }the run under a hostile publisher disagreed (host?)"
 
 if [ -n "$inconclusive" ]; then
   echo "SKIPPED (inconclusive): $inconclusive; every other check passed"
