@@ -1,9 +1,16 @@
 #include "contact/surface_bvh.h"
 
 #include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/AABB.h>
 #include <fcl/math/bv/OBBRSS.h>
 #include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/detail/gjk_solver_libccd.h>
+#include <fcl/narrowphase/detail/traversal/collision/mesh_shape_collision_traversal_node.h>
+#include <fcl/narrowphase/detail/traversal/collision_node.h>
 
 #include <algorithm>
 #include <stdexcept>
@@ -30,6 +37,49 @@ void RefitModel(const std::vector<int>& surface_nodes, const Eigen::VectorXd& x_
   HAPSIM_INVARIANT(model->beginReplaceModel() == fcl::BVH_OK);
   for (int node : surface_nodes) model->replaceVertex(x_m.segment<3>(3 * node));
   HAPSIM_INVARIANT(model->endReplaceModel(/*refit=*/true, /*bottomup=*/true) == fcl::BVH_OK);
+}
+
+// fcl::collide(BVHModel<AABB>, shape) copies the whole model on every call (FCL 0.7's
+// BVHShapeCollider: `new BVHModel<BV>(*obj1)`), because the traversal's initialize() takes the
+// model by non-const reference to transform its vertices in place when tf1 is not the identity.
+// Ours is in world coordinates (tf1 = identity, so initialize leaves it untouched), and the copy
+// was both a cost (the whole surface tree per query) and, under ASan, an alloc-dealloc mismatch
+// (allocated in libfcl, freed by the header's delete[]). This runs the same traversal node on the
+// model itself. Only the tool primitives below exist; anything else takes fcl::collide.
+template <typename Shape>
+void CollideAabbWithShape(fcl::BVHModel<fcl::AABBd>* model, const Shape& shape,
+                          const fcl::Transform3d& X_WS, const fcl::CollisionRequestd& request,
+                          fcl::CollisionResultd* result) {
+  using Solver = fcl::detail::GJKSolver_libccd<double>;  // the request's default gjk_solver_type
+  Solver solver;
+  fcl::detail::MeshShapeCollisionTraversalNode<fcl::AABBd, Shape, Solver> node;
+  fcl::Transform3d X_WW = fcl::Transform3d::Identity();
+  HAPSIM_INVARIANT(
+      fcl::detail::initialize(node, *model, X_WW, shape, X_WS, &solver, request, *result));
+  fcl::detail::collide(&node);
+}
+
+// True when it handled the shape's type.
+bool CollideAabbWithoutCopy(fcl::BVHModel<fcl::AABBd>* model,
+                            const fcl::CollisionGeometry<double>& shape,
+                            const fcl::Transform3d& X_WS, const fcl::CollisionRequestd& request,
+                            fcl::CollisionResultd* result) {
+  switch (shape.getNodeType()) {
+    case fcl::GEOM_SPHERE:
+      CollideAabbWithShape(model, static_cast<const fcl::Sphered&>(shape), X_WS, request, result);
+      return true;
+    case fcl::GEOM_CAPSULE:
+      CollideAabbWithShape(model, static_cast<const fcl::Capsuled&>(shape), X_WS, request, result);
+      return true;
+    case fcl::GEOM_CYLINDER:
+      CollideAabbWithShape(model, static_cast<const fcl::Cylinderd&>(shape), X_WS, request, result);
+      return true;
+    case fcl::GEOM_BOX:
+      CollideAabbWithShape(model, static_cast<const fcl::Boxd&>(shape), X_WS, request, result);
+      return true;
+    default:
+      return false;
+  }
 }
 
 }  // namespace
@@ -91,10 +141,15 @@ void SurfaceBvh::FindIntersectingTriangles(const fcl::CollisionGeometry<double>&
                                            std::vector<int>* triangles) {
   triangles->clear();
   impl_->result.clear();
-  const fcl::CollisionGeometryd* body =
-      impl_->aabb ? static_cast<const fcl::CollisionGeometryd*>(impl_->aabb.get())
-                  : static_cast<const fcl::CollisionGeometryd*>(impl_->obbrss.get());
-  fcl::collide(body, fcl::Transform3d::Identity(), &shape, X_WS, impl_->request, impl_->result);
+  const bool done =
+      impl_->aabb != nullptr &&
+      CollideAabbWithoutCopy(impl_->aabb.get(), shape, X_WS, impl_->request, &impl_->result);
+  if (!done) {  // OBBRSS (FCL does not copy oriented trees) or another shape
+    const fcl::CollisionGeometryd* body =
+        impl_->aabb ? static_cast<const fcl::CollisionGeometryd*>(impl_->aabb.get())
+                    : static_cast<const fcl::CollisionGeometryd*>(impl_->obbrss.get());
+    fcl::collide(body, fcl::Transform3d::Identity(), &shape, X_WS, impl_->request, impl_->result);
+  }
   for (size_t i = 0; i < impl_->result.numContacts(); ++i)
     triangles->push_back(static_cast<int>(impl_->result.getContact(i).b1));
   std::sort(triangles->begin(), triangles->end());
