@@ -5,6 +5,9 @@
 
 #include "config/scene.h"
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -58,6 +61,35 @@ std::string ReadMeshFile(const YamlMap& mesh, const std::string& base_dir) {
   return path.string();
 }
 
+// A lattice's size checked before anything is allocated: 100000^3 cells once ended in
+// `std::bad_alloc` with no key named. The estimate is a lower bound of what hapsim holds per tet
+// (rest shape matrices, the 12x12 element stiffness, rotations: ~1.5 kB) and per node (state
+// vectors and a sparse system row of ~27 neighbouring 3x3 blocks with its factor: ~4 kB), so only
+// a scene that certainly cannot fit is refused. Node indices are ints: beyond 2^31 it is refused
+// as well.
+void CheckLatticeFitsMemory(const YamlMap& map, const std::string& key,
+                            const Eigen::Vector3d& cells) {
+  constexpr double kBytesPerTet = 1500.0, kBytesPerNode = 4000.0;
+  const double nodes = (cells.x() + 1.0) * (cells.y() + 1.0) * (cells.z() + 1.0);
+  const double tets = 5.0 * cells.x() * cells.y() * cells.z();  // five tets per lattice cell
+  const double physical_bytes =
+      static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double needed_bytes = kBytesPerTet * tets + kBytesPerNode * nodes;
+  const auto format = [](const char* pattern, double value) {
+    char text[48];
+    std::snprintf(text, sizeof(text), pattern, value);
+    return std::string(text);
+  };
+  const auto gib = [&](double bytes) { return format("%.3g GiB", bytes / (1u << 30)); };
+  if (nodes > 2147483647.0 || tets > 2147483647.0 || needed_bytes > physical_bytes)
+    map.FailKey(key, "a lattice of " + std::to_string(static_cast<long long>(cells.x())) + " x " +
+                         std::to_string(static_cast<long long>(cells.y())) + " x " +
+                         std::to_string(static_cast<long long>(cells.z())) + " cells (" +
+                         gib(needed_bytes) + " at least, " + format("%.3g", tets) +
+                         " tets) does not fit in this machine's " + gib(physical_bytes) +
+                         " of memory");
+}
+
 MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
   map.CheckKeys({"box", "ellipsoid", "file"});
   const int num_sources = map.Has("box") + map.Has("ellipsoid") + map.Has("file");
@@ -71,12 +103,16 @@ MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
     mesh.kind = MeshSource::Kind::kBox;
     mesh.box = ReadBox(*box, /*allow_flat=*/false);
     mesh.cells = box->GetVector3i("cells", AtLeast(1));
+    CheckLatticeFitsMemory(*box, "cells", mesh.cells.cast<double>());
   } else if (const std::optional<YamlMap> ellipsoid = map.FindMap("ellipsoid")) {
     ellipsoid->CheckKeys({"center_m", "radii_m", "cell_size_m"});
     mesh.kind = MeshSource::Kind::kEllipsoid;
     mesh.center_m = ellipsoid->GetVector3("center_m");
     mesh.radii_m = ellipsoid->GetVector3("radii_m", Above(0.0));
     mesh.cell_size_m = ellipsoid->GetDouble("cell_size_m", Above(0.0));
+    // The cut lattice spans the bounding box of the ellipsoid.
+    CheckLatticeFitsMemory(*ellipsoid, "cell_size_m",
+                           (2.0 * mesh.radii_m / mesh.cell_size_m).array().ceil().matrix());
   } else {
     mesh.kind = MeshSource::Kind::kFile;
     mesh.file = ReadMeshFile(map, base_dir);

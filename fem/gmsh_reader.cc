@@ -36,6 +36,8 @@ struct GmshContent {
   int nodes_line = 0;     // line of $Nodes, 0 if none
   int elements_line = 0;  // line of $Elements, 0 if none
   int num_other_elements = 0;
+  // The sections a file holds at most once, with the line each was seen on.
+  std::vector<std::pair<std::string, int>> single_sections;
 };
 
 // Names the Gmsh volume element types other than the 4-node tet, nullptr for other types.
@@ -53,6 +55,26 @@ const char* OtherVolumeElementName(long long type) {
   for (const TypeName& entry : kVolumeTypes)
     if (entry.type == type) return entry.name;
   return nullptr;
+}
+
+// Gmsh's point, line, triangle and quadrangle types (first to fifth order): elements a volume
+// mesh file also holds (boundaries, physical groups), which this reader skips. Any other type
+// that is not a volume is not a Gmsh element type at all (e.g. 0) and is an error.
+bool IsLowerDimensionalType(long long type) {
+  static constexpr int kTypes[] = {15,                              // point
+                                   1,  8,  26, 27, 28,              // lines
+                                   2,  9,  20, 21, 22, 23, 24, 25,  // triangles
+                                   3,  10, 16, 36, 37};             // quadrangles
+  for (const int known : kTypes)
+    if (known == type) return true;
+  return false;
+}
+
+[[noreturn]] void FailUnknownType(const MeshTextReader& reader, const Section& section,
+                                  long long type) {
+  reader.Fail(section.key(), "element type " + std::to_string(type) +
+                                 " is not a Gmsh element type this reader knows (4: tetrahedron; "
+                                 "points, lines, triangles and quadrangles are skipped)");
 }
 
 [[noreturn]] void FailUnsupportedVolume(const MeshTextReader& reader, const Section& section,
@@ -201,6 +223,7 @@ void ReadElementsV2(MeshTextReader* reader, const Section& section, GmshContent*
     const int num_tags = ParseCount(*reader, section, tokens[2], "the number of tags");
     if (type != kGmshTet4) {
       if (OtherVolumeElementName(type)) FailUnsupportedVolume(*reader, section, type);
+      if (!IsLowerDimensionalType(type)) FailUnknownType(*reader, section, type);
       ++content->num_other_elements;
       continue;
     }
@@ -264,6 +287,7 @@ void ReadElementBlockV41(MeshTextReader* reader, const Section& section, int cou
   const int block_line = reader->line_number();
   if (type != kGmshTet4 && (dim == 3 || OtherVolumeElementName(type)))
     FailUnsupportedVolume(*reader, section, type);
+  if (type != kGmshTet4 && !IsLowerDimensionalType(type)) FailUnknownType(*reader, section, type);
   if (n > count - *total)
     reader->Fail(section.key(), "this block brings the element total to " +
                                     std::to_string(*total + n) + ", more than the " +
@@ -341,6 +365,19 @@ void ReadSection(MeshTextReader* reader, MshVersion version, const Section& sect
   } else if (section.name.rfind("End", 0) == 0) {
     reader->Fail(section.key(), "'$" + section.name + "' without a matching opening line");
   } else {
+    // Gmsh writes these once per file; a second one is a corrupt or concatenated file.
+    // ($NodeData, $ElementData and $Comments may repeat.)
+    static const char* const kOnce[] = {"PhysicalNames", "Entities",      "PartitionedEntities",
+                                        "Periodic",      "GhostElements", "Parametrizations"};
+    for (const char* once : kOnce) {
+      if (section.name != once) continue;
+      for (const auto& [name, line] : content->single_sections)
+        if (name == section.name)
+          reader->Fail(section.key(), "a second $" + section.name +
+                                          " section (the first is on line " + std::to_string(line) +
+                                          ")");
+      content->single_sections.emplace_back(section.name, section.line);
+    }
     SkipSection(reader, section);
   }
 }

@@ -145,6 +145,14 @@ TetMesh MakeCheckedTetMesh(const std::vector<RawNode>& nodes, const std::string&
                            const std::string& tet_file, const std::string& tet_key) {
   HAPSIM_INVARIANT(!tets.empty());
   const std::unordered_map<long long, int> index_of_tag = IndexNodeTags(nodes, node_file, node_key);
+  std::unordered_map<long long, int> line_of_tet_tag;  // a repeated tag: a corrupt file
+  for (const RawTet& tet : tets) {
+    const auto [it, added] = line_of_tet_tag.emplace(tet.tag, tet.line);
+    if (!added)
+      throw InputError(tet_file, tet.line, tet_key,
+                       "duplicate element tag " + std::to_string(tet.tag) + " (first on line " +
+                           std::to_string(it->second) + ")");
+  }
   std::vector<std::array<int, 4>> tet_nodes(tets.size());  // positions in `nodes`
   std::vector<bool> used(nodes.size(), false);
   for (size_t t = 0; t < tets.size(); ++t) {

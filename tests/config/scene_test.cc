@@ -166,6 +166,10 @@ const BadCase kBadCases[] = {
     {"UnknownProbeKey", "position_m: [0.05", "positon_m: [0.05", 25, "body.probes[1].positon_m",
      "name, position_m"},
     {"UnknownBoxKey", "cells:", "cell:", 9, "body.mesh.box.cell", "min_m, max_m, cells"},
+    // Issue 9: a lattice that cannot fit in memory is refused before any allocation (it was
+    // `std::bad_alloc` with no key).
+    {"LatticeBeyondMemory", "cells: [12, 12, 5]", "cells: [100000, 100000, 100000]", 9,
+     "body.mesh.box.cells", "does not fit in this machine's"},
     {"DuplicateKey", "rayleigh_beta_s: 0.01", "rayleigh_alpha_1_s: 0.2", 15,
      "body.material.rayleigh_alpha_1_s", "line 14"},
     // Missing required keys, at the line of the key holding the map.
@@ -253,6 +257,9 @@ const BadCase kBadCases[] = {
     {"ZeroEllipsoidRadius", kBoxLine,
      "ellipsoid: {center_m: [0, 0, 0], radii_m: [0.06, 0, 0.03], cell_size_m: 0.006}", 9,
      "body.mesh.ellipsoid.radii_m", "element 2 must be > 0"},
+    {"EllipsoidBeyondMemory", kBoxLine,
+     "ellipsoid: {center_m: [0, 0, 0], radii_m: [1, 1, 1], cell_size_m: 1e-5}", 9,
+     "body.mesh.ellipsoid.cell_size_m", "does not fit in this machine's"},
     {"ZeroCellSize", kBoxLine,
      "ellipsoid: {center_m: [0, 0, 0], radii_m: [0.06, 0.04, 0.03], cell_size_m: 0}", 9,
      "body.mesh.ellipsoid.cell_size_m", "must be > 0"},
@@ -324,8 +331,7 @@ TEST(ParseSceneTest, TetGenMeshNeedsItsEleFile) {
   EXPECT_EQ(error->line(), 9);
   EXPECT_NE(std::string(error->what()).find("organ.ele"), std::string::npos) << error->what();
   folder.Write("organ.ele");
-  EXPECT_EQ(ParseScene(yaml, kLabel, folder.path()).body->mesh.kind,
-            MeshSource::Kind::kFile);
+  EXPECT_EQ(ParseScene(yaml, kLabel, folder.path()).body->mesh.kind, MeshSource::Kind::kFile);
 }
 
 TEST(LoadSceneTest, ResolvesMeshFilesAgainstTheSceneFolder) {

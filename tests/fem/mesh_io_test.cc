@@ -357,6 +357,20 @@ TEST_F(MeshIoTest, MalformedGmshReportsTheLine) {
        "$PhysicalNames", "missing $EndPhysicalNames"},
       {"inverted tet", mixed, LineOf(base, "4 4 2 7"), "$Elements", "tetrahedron 4 is inverted"},
       {"degenerate tet", flat, LineOf(base, "4 4 2 7"), "$Elements", "degenerate"},
+      // Issue 9: accepted silently before, or a count far beyond the file.
+      {"element type 0", R(base, "2 15 2 0 1 3", "2 0 2 0 1 3"), LineOf(base, "2 15 2 0 1 3"),
+       "$Elements", "element type 0 is not a Gmsh element type"},
+      {"4.1 element type 0", R(v41, "0 1 15 1", "0 1 0 1"), LineOf(v41, "0 1 15 1"), "$Elements",
+       "element type 0"},
+      {"duplicated $Entities", R(v41, "$EndEntities\n", "$EndEntities\n$Entities\n$EndEntities\n"),
+       LineOf(v41, "$EndEntities") + 1, "$Entities",
+       "a second $Entities section (the first is on line"},
+      {"duplicate element tag", R(base, "4 4 2 7 1 3 8 7 12", "3 4 2 7 1 3 8 7 12"),
+       LineOf(base, "4 4 2 7"), "$Elements", "duplicate element tag 3"},
+      {"count 2^31 - 1", R(base, "$Nodes\n5", "$Nodes\n2147483647"), LineOf(base, "$EndNodes"),
+       "$Nodes", "fewer entries"},
+      {"count 2^31", R(base, "$Nodes\n5", "$Nodes\n2147483648"), LineOf(base, "$Nodes") + 1,
+       "$Nodes", "node count"},
   };
   for (size_t i = 0; i < cases.size(); ++i)
     ExpectInputError(Write("bad" + std::to_string(i) + ".msh", cases[i].text), cases[i]);
@@ -388,6 +402,11 @@ TEST_F(MeshIoTest, MalformedTetgenReportsTheLine) {
         Replace(node, "5  3  2  1", "6  3  2  1"), ele, "m.node");
   check({"extra point", "", LineOf(node, "5   0 0 -1"), "point count", "more points"},
         Replace(node, "5  3  2  1", "4  3  2  1"), ele, "m.node");
+  check({"count 2^31 - 1", "", NumLines(node), "point count", "end of file"},
+        Replace(node, "5  3  2  1", "2147483647  3  2  1"), ele, "m.node");
+  check({"duplicate tet number", "", LineOf(ele, "2   1 2 3 5"), "tetrahedron",
+         "duplicate element tag 1"},
+        node, Replace(ele, "2   1 2 3 5", "1   1 2 3 5"), "m.ele");
   check({"2d", "", LineOf(node, "5  3  2  1"), "dimension", "must be 3"},
         Replace(node, "5  3  2  1", "5  2  2  1"), ele, "m.node");
   check({"bad node ref", "", LineOf(ele, "2   1 2 3 5"), "tetrahedron", "node 6"}, node,
