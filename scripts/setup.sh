@@ -12,13 +12,15 @@ cd "$(dirname "$0")/.."
 # (collision detection: bounding-volume hierarchy over the body surface, triangle-vs-tool tests),
 # LCM (message types, UDP multicast transport between the visual and the haptic process, event
 # logs; liblcm-bin has lcm-gen, lcm-logger and lcm-logplayer), libssl-dev (OpenSSL's SHA-256 of
-# the files a run reads, recorded in its log).
+# the files a run reads, recorded in its log), clang and libclang-rt-14-dev (libFuzzer and the
+# sanitizer runtimes for scripts/fuzz.sh).
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas0-serial
   libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libfcl-dev
   liblcm-dev liblcm-bin libssl-dev
   nlohmann-json3-dev python3 python3-matplotlib
+  clang libclang-rt-14-dev
 )
 
 missing=()
