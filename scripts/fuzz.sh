@@ -73,7 +73,6 @@ build_s=$(($(date +%s) - start))
 echo "fuzz.sh: built in ${build_s} s; fuzzing each target for ${seconds} s"
 
 # ---- fuzz ----
-rm -rf "$log_dir"
 mkdir -p "$log_dir"
 # The readers take paths, so the targets write each input to a file: in memory (/dev/shm) that
 # costs microseconds, on this disk it cost 3 ms and cut the executions tenfold.
@@ -92,6 +91,9 @@ status=0
 findings_report=""
 for t in $targets; do
   dir=$log_dir/$t
+  rm -rf "$dir"
+  dict=()
+  [[ -f tests/fuzz/dict/$t.dict ]] && dict=(-dict="tests/fuzz/dict/$t.dict")
   mkdir -p "$dir/corpus" "$dir/artifacts" "$scratch/$t"
   for seeds in tests/fuzz/corpus/$t tests/fuzz/regressions/$t; do
     [[ -d $seeds ]] && find "$seeds" -maxdepth 1 -type f -exec cp {} "$dir/corpus/" \;
@@ -101,7 +103,7 @@ for t in $targets; do
   HAPSIM_FUZZ_TMPDIR=$scratch/$t timeout -k 10 $((seconds * 2 + 120)) \
     "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -print_final_stats=1 \
     -timeout=$TIMEOUT_S -rss_limit_mb=$RSS_LIMIT_MB -malloc_limit_mb=$MALLOC_LIMIT_MB \
-    -artifact_prefix="$dir/artifacts/" "$dir/corpus" > "$dir/fuzz.log" 2>&1
+    -artifact_prefix="$dir/artifacts/" "${dict[@]}" "$dir/corpus" > "$dir/fuzz.log" 2>&1
   rc=$?
   execs=$(final_stat number_of_executed_units "$dir/fuzz.log")
   rate=$(final_stat average_exec_per_sec "$dir/fuzz.log")
