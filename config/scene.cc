@@ -82,9 +82,9 @@ void CheckLatticeFitsMemory(const YamlMap& map, const std::string& key,
   };
   const auto gib = [&](double bytes) { return format("%.3g GiB", bytes / (1u << 30)); };
   if (nodes > 2147483647.0 || tets > 2147483647.0 || needed_bytes > physical_bytes)
-    map.FailKey(key, "a lattice of " + std::to_string(static_cast<long long>(cells.x())) + " x " +
-                         std::to_string(static_cast<long long>(cells.y())) + " x " +
-                         std::to_string(static_cast<long long>(cells.z())) + " cells (" +
+    // Cell counts printed as %g: an ellipsoid's can exceed any integer type (5e30 m radii).
+    map.FailKey(key, "a lattice of " + format("%.6g", cells.x()) + " x " +
+                         format("%.6g", cells.y()) + " x " + format("%.6g", cells.z()) + " cells (" +
                          gib(needed_bytes) + " at least, " + format("%.3g", tets) +
                          " tets) does not fit in this machine's " + gib(physical_bytes) +
                          " of memory");

@@ -38,11 +38,19 @@ std::vector<std::string> SplitWhitespace(const std::string& line) {
   return {std::istream_iterator<std::string>(stream), std::istream_iterator<std::string>()};
 }
 
+// A tool's volume and inertia integrals grow as the third and fifth power of its size: a vertex
+// at 1e308 m made them infinite (found by fuzzing). A kilometre is far beyond any tool, and beyond
+// a millimetres-for-metres slip in a file's units.
+constexpr double kMaxCoordinate_m = 1e3;
+
 double ParseCoordinate(const std::string& token, const std::string& path, int line) {
   char* end = nullptr;
   const double value = std::strtod(token.c_str(), &end);
   if (end == token.c_str() || *end != '\0' || !std::isfinite(value)) {
     throw InputError(path, line, "", "'" + token + "' is not a finite number");
+  }
+  if (std::abs(value) > kMaxCoordinate_m) {
+    throw InputError(path, line, "", "coordinate " + token + " is beyond 1000 m (units are metres)");
   }
   return value;
 }
@@ -175,6 +183,10 @@ MeshBuilder ReadStlBinary(const std::string& bytes, uint32_t num_triangles,
       const Eigen::Vector3d point(ReadFloat(p), ReadFloat(p + 4), ReadFloat(p + 8));
       if (!point.allFinite()) {
         throw InputError(path, 0, "triangle " + std::to_string(t), "non-finite vertex coordinate");
+      }
+      if (point.cwiseAbs().maxCoeff() > kMaxCoordinate_m) {
+        throw InputError(path, 0, "triangle " + std::to_string(t),
+                         "a vertex coordinate is beyond 1000 m (units are metres)");
       }
       corners[k] = AddMergedVertex(point, &index, &mesh);
     }

@@ -16,7 +16,7 @@ namespace hapsim {
 //    ASCII (`solid … facet … outer loop … vertex ×3 … endloop … endfacet … endsolid`). Facet
 //    normals are ignored (orientation comes from the vertex order); vertices with exactly equal
 //    coordinates are merged. Binary STL is read as little-endian IEEE floats.
-// Coordinates are metres as written in the file (no unit conversion).
+// Coordinates are metres as written in the file (no unit conversion), each at most 1000 m in magnitude.
 // The mesh must be closed and consistently oriented (every edge used by two triangles in
 // opposite directions) with non-zero volume; a mesh whose faces all point inward is flipped.
 // Throws InputError naming the file and the line (ASCII formats), or, for binary STL, line 0

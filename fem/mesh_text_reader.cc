@@ -113,6 +113,11 @@ void CheckAndOrientTets(const std::vector<RawTet>& raw_tets, const std::string& 
   int num_negative = 0;
   for (int t = 0; t < num_tets; ++t) {
     const double quality = CalcTetQuality(mesh->rest_positions_m, mesh->tets.col(t));
+    if (!std::isfinite(quality))  // a node at 1e308 m: the volume overflows (found by fuzzing)
+      throw InputError(file, raw_tets[t].line, key,
+                       "tetrahedron " + std::to_string(raw_tets[t].tag) +
+                           " has a volume that is not a finite number: a node coordinate is too "
+                           "large (units are metres)");
     if (std::abs(quality) <= kDegenerateTetQuality)
       throw InputError(file, raw_tets[t].line, key,
                        "tetrahedron " + std::to_string(raw_tets[t].tag) +

@@ -42,6 +42,8 @@ std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet
           return "tet " + std::to_string(t) + " uses node " + std::to_string(tet[a]) + " twice";
     }
     const double quality = CalcTetQuality(mesh.rest_positions_m, tet);
+    if (!std::isfinite(quality))  // finite coordinates whose products overflow
+      return "tet " + std::to_string(t) + " has a volume or shape that is not a finite number";
     if (quality <= -kDegenerateTetQuality)
       return "tet " + std::to_string(t) + " is inverted (negative volume " +
              std::to_string(CalcSignedVolume(mesh.rest_positions_m, tet)) + " m^3)";

@@ -81,8 +81,9 @@ std::vector<RawNode> ReadTetgenNodes(const std::string& path) {
   std::vector<RawNode> nodes;  // grown entry by entry: a bogus count must not allocate
   const std::string layout = "index, x, y, z, " + std::to_string(num_attributes) +
                              " attribute(s), " + std::to_string(num_markers) + " marker(s)";
+  // Counts are summed as size_t: 4 + 2^31-1 attributes overflowed int (found by fuzzing).
   ReadTetgenEntries(
-      &reader, count, header_line, 4 + num_attributes + num_markers, "point", layout,
+      &reader, count, header_line, size_t{4} + num_attributes + num_markers, "point", layout,
       [&](const std::vector<std::string>& tokens, int i) {
         const long long index = reader.ParseInteger(tokens[0], "point", "the point index");
         const long long first = i == 0 ? index : nodes[0].tag;
@@ -120,7 +121,7 @@ std::vector<RawTet> ReadTetgenTets(const std::string& path) {
   std::vector<RawTet> tets;  // grown entry by entry: a bogus count must not allocate
   const std::string layout = "index, 4 nodes, " + std::to_string(num_attributes) + " attribute(s)";
   ReadTetgenEntries(
-      &reader, count, header_line, 5 + num_attributes, "tetrahedron", layout,
+      &reader, count, header_line, size_t{5} + num_attributes, "tetrahedron", layout,
       [&](const std::vector<std::string>& tokens, int /*i*/) {
         RawTet tet{
             reader.ParseInteger(tokens[0], "tetrahedron", "the index"), {}, reader.line_number()};

@@ -425,6 +425,8 @@ TEST(TriangleMeshIoTest, MalformedObjNamesTheLine) {
   ExpectInputError(WriteText("index-9.obj", vertices + "f 1 2 -9\n"), 10, "", "index -9");
   ExpectInputError(WriteText("two.obj", vertices + "f 1 2\n"), 10, "", "at least 3");
   ExpectInputError(WriteText("letters.obj", vertices + "f 1 a 2\n"), 10, "", "'a'");
+  // Found by fuzzing: a vertex at 1e308 m gave a closed mesh of infinite mass.
+  ExpectInputError(WriteText("far.obj", "v 0 0 0\nv 1 1e308 0\n"), 2, "", "beyond 1000 m");
   // Open: the last quad (line 17) left out; its neighbours are on lines 10–14 (not 15).
   std::string faces = kObjCubeFaces;
   faces = faces.substr(0, faces.rfind("f 2 4 8 6"));

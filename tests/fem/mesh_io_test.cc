@@ -371,6 +371,9 @@ TEST_F(MeshIoTest, MalformedGmshReportsTheLine) {
        "$Nodes", "fewer entries"},
       {"count 2^31", R(base, "$Nodes\n5", "$Nodes\n2147483648"), LineOf(base, "$Nodes") + 1,
        "$Nodes", "node count"},
+      // Found by fuzzing: finite coordinates whose volume overflows (NaN quality passed).
+      {"node at 1e308", R(base, "3 0 0 0", "3 5 1e308 0"), LineOf(base, "3 4 2 7"), "$Elements",
+       "not a finite number"},
   };
   for (size_t i = 0; i < cases.size(); ++i)
     ExpectInputError(Write("bad" + std::to_string(i) + ".msh", cases[i].text), cases[i]);
@@ -413,6 +416,10 @@ TEST_F(MeshIoTest, MalformedTetgenReportsTheLine) {
         Replace(ele, "2   1 2 3 5", "2   1 2 3 6"), "m.ele");
   check({"quadratic", "", 1, "nodes per tetrahedron", "10-node"}, node,
         Replace(ele, "2  4  1", "2  10  1"), "m.ele");
+  // Found by fuzzing: 4 + 2^31-1 attributes overflowed int (UBSan); now a short line.
+  check({"attributes 2^31 - 1", "", LineOf(node, "1   0 0 0"), "point", "expected 2147483652"},
+        Replace(node, "5  3  2  1", "5  3  2147483647  1"), ele, "m.node");
+  // (Last: it leaves a good m.node for the missing-.ele case below.)
   check({"bad token", "", LineOf(ele, "1   1 3 2 4"), "tetrahedron", "'x'"}, node,
         Replace(ele, "1   1 3 2 4", "1   1 3 x 4"), "m.ele");
   // The .ele is missing: the error names it, at line 0.
