@@ -84,8 +84,8 @@ void CheckLatticeFitsMemory(const YamlMap& map, const std::string& key,
   if (nodes > 2147483647.0 || tets > 2147483647.0 || needed_bytes > physical_bytes)
     // Cell counts printed as %g: an ellipsoid's can exceed any integer type (5e30 m radii).
     map.FailKey(key, "a lattice of " + format("%.6g", cells.x()) + " x " +
-                         format("%.6g", cells.y()) + " x " + format("%.6g", cells.z()) + " cells (" +
-                         gib(needed_bytes) + " at least, " + format("%.3g", tets) +
+                         format("%.6g", cells.y()) + " x " + format("%.6g", cells.z()) +
+                         " cells (" + gib(needed_bytes) + " at least, " + format("%.3g", tets) +
                          " tets) does not fit in this machine's " + gib(physical_bytes) +
                          " of memory");
 }

@@ -50,7 +50,8 @@ double ParseCoordinate(const std::string& token, const std::string& path, int li
     throw InputError(path, line, "", "'" + token + "' is not a finite number");
   }
   if (std::abs(value) > kMaxCoordinate_m) {
-    throw InputError(path, line, "", "coordinate " + token + " is beyond 1000 m (units are metres)");
+    throw InputError(path, line, "",
+                     "coordinate " + token + " is beyond 1000 m (units are metres)");
   }
   return value;
 }

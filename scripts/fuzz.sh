@@ -14,7 +14,9 @@
 # regression are printed. 2: usage, or the build or a fuzzer could not run.
 #
 # Environment: HAPSIM_FUZZ_BUILD_DIR (default build-fuzz), HAPSIM_FUZZ_JOBS (build, default 2),
-# HAPSIM_FUZZ_STRICT=1 (a reader's std::exception other than InputError is a finding too).
+# HAPSIM_FUZZ_STRICT=1 (a reader's std::exception other than InputError is a finding too),
+# HAPSIM_FUZZ_KEEP_GOING=1 (long sessions: libFuzzer's fork mode goes on past a finding, so that
+# one known bug does not hide the next; each distinct finding is then listed once).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
@@ -86,6 +88,26 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 # The value of libFuzzer's final `stat::NAME: value` line in file $2.
 final_stat() { sed -n "s/^stat::$1: *\([0-9]*\).*/\1/p" "$2" | tail -1; }
 
+keep_going=()
+if [[ ${HAPSIM_FUZZ_KEEP_GOING:-0} == 1 ]]; then
+  keep_going=(-fork=1 -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1)
+fi
+
+# What input $2 of target $1 breaks: the first error line and the first frame in hapsim's code
+# outside tests/fuzz (timeouts and out-of-memory inputs are named by kind, not re-run).
+describe() {
+  case $(basename "$2") in
+    timeout-*) echo "timeout (an input ran over ${TIMEOUT_S} s)"; return ;;
+    oom-* | malloc-*) echo "out of memory (over ${MALLOC_LIMIT_MB} MB at once or ${RSS_LIMIT_MB} MB)"; return ;;
+  esac
+  local out
+  out=$(HAPSIM_FUZZ_TMPDIR=$scratch/$1 timeout 120 "$build/tests/fuzz/fuzz_$1" "$2" 2>&1)
+  local what where
+  what=$(grep -m1 -E 'runtime error|ERROR: (Address|Leak)Sanitizer|hapsim fuzz finding|terminate called|deadly signal' <<< "$out" | sed 's/^==[0-9]*==//')
+  where=$(grep -E '^ *#[0-9]+ .* in .*/(core|fem|contact|device|config|messages|apps)/[a-z_]+\.(cc|h):[0-9]+' <<< "$out" | head -1 | sed 's/.* in \([^ (]*\).* \(\/[^ ]*\)$/\1 \2/')
+  echo "${what:-unknown (rc only)}${where:+ | at $where}"
+}
+
 printf '\n%-14s %10s %9s %6s %5s %s\n' target executions exec/s added cov findings
 status=0
 findings_report=""
@@ -103,10 +125,15 @@ for t in $targets; do
   HAPSIM_FUZZ_TMPDIR=$scratch/$t timeout -k 10 $((seconds * 2 + 120)) \
     "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -print_final_stats=1 \
     -timeout=$TIMEOUT_S -rss_limit_mb=$RSS_LIMIT_MB -malloc_limit_mb=$MALLOC_LIMIT_MB \
-    -artifact_prefix="$dir/artifacts/" "${dict[@]}" "$dir/corpus" > "$dir/fuzz.log" 2>&1
+    -artifact_prefix="$dir/artifacts/" "${dict[@]}" "${keep_going[@]}" "$dir/corpus" > "$dir/fuzz.log" 2>&1
   rc=$?
   execs=$(final_stat number_of_executed_units "$dir/fuzz.log")
   rate=$(final_stat average_exec_per_sec "$dir/fuzz.log")
+  if ((${#keep_going[@]})); then  # fork mode prints "#EXECS: cov: C ... exec/s R ..." instead
+    last=$(grep -E '^#[0-9]+: cov:' "$dir/fuzz.log" | tail -1)
+    execs=$(sed -n 's/^#\([0-9]*\):.*/\1/p' <<< "$last")
+    rate=$(sed -n 's/.*exec\/s \([0-9]*\).*/\1/p' <<< "$last")
+  fi
   added=$(($(find "$dir/corpus" -type f | wc -l) - seeds_count))
   cov=$(grep -o 'cov: [0-9]*' "$dir/fuzz.log" | tail -1 | cut -d' ' -f2)
   artifacts=$(find "$dir/artifacts" -type f \( -name 'crash-*' -o -name 'leak-*' -o \
@@ -119,9 +146,14 @@ for t in $targets; do
   if ((n > 0)); then
     status=1
     findings_report+=$'\n'"== fuzz_$t: exit $rc; log $dir/fuzz.log"$'\n'
-    findings_report+=$(grep -E '^(==[0-9]+==ERROR|SUMMARY|hapsim fuzz finding|.*runtime error)' \
-      "$dir/fuzz.log" | head -5)$'\n'
+    declare -A seen=()
     for a in $failing; do
+      what=$(describe "$t" "$a")
+      # The same bug again (fork mode): same place in hapsim, or the same message up to numbers.
+      key=$(sed -E 's/.*\| at //; s/0x[0-9a-f]+|[-+]?[0-9][0-9.e+-]*|-?nan|-?inf//g' <<< "$what")
+      [[ -n ${seen[$key]:-} ]] && continue
+      seen[$key]=1
+      findings_report+="finding: $what"$'\n'
       findings_report+="input: $a ($(wc -c < "$a") bytes)"$'\n'
       findings_report+="  reproduce: $build/tests/fuzz/fuzz_$t $a"$'\n'
       findings_report+="  keep it:   cp $a tests/fuzz/regressions/$t/<what-it-breaks>"
@@ -130,6 +162,7 @@ for t in $targets; do
         findings_report+="  base64 (for CI logs): $(base64 -w0 "$a")"$'\n'
       fi
     done
+    unset seen
   fi
 done
 

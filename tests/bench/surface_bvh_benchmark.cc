@@ -44,7 +44,7 @@ fcl::Transform3d Pose(int shape) {
 // args: lattice cells across (12 or 24), shape (0 sphere, 1 cylinder)
 void BM_FclCollideCopiesTree(benchmark::State& state) {
   const Block& block = GetBlock(static_cast<int>(state.range(0)));
-  const auto tree = MakeReferenceTree(block.body, block.body.rest_positions_m);
+  const auto tree = MakeReferenceTree<fcl::AABBd>(block.body, block.body.rest_positions_m);
   const auto shape = MakeShape(static_cast<int>(state.range(1)));
   size_t found = 0;
   for (auto _ : state) {

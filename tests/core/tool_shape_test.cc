@@ -219,8 +219,8 @@ TEST(ToolShapeTest, RoundedCylinderMatchesSphereCapsuleAndSharpCylinder) {
   };
   ToolShape sphere;
   sphere.radius_m = kRadius_m;
-  expect_same(calc(kRadius_m, 2.0 * kRadius_m, kRadius_m), CalcMassProperties(sphere, kDensity_kg_m3),
-              1e-12);
+  expect_same(calc(kRadius_m, 2.0 * kRadius_m, kRadius_m),
+              CalcMassProperties(sphere, kDensity_kg_m3), 1e-12);
   ToolShape capsule;
   capsule.kind = ToolShape::Kind::kCapsule;
   capsule.radius_m = kRadius_m;
