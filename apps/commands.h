@@ -11,6 +11,7 @@ void AddSimCommand(CLI::App* app);
 void AddRunCommand(CLI::App* app);
 void AddHapticCommand(CLI::App* app);
 void AddReplayCommand(CLI::App* app);
+void AddInspectCommand(CLI::App* app);
 
 // Thrown by a command that ends without an error message of its own but with a non-zero exit
 // code (e.g. 130 after SIGINT); main() returns the code.

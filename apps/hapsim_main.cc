@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   hapsim::apps::AddRunCommand(&app);
   hapsim::apps::AddHapticCommand(&app);
   hapsim::apps::AddReplayCommand(&app);
+  hapsim::apps::AddInspectCommand(&app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

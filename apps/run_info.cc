@@ -28,6 +28,10 @@ std::vector<std::string> SceneInputFiles(const config::Scene& scene) {
   }
   if (scene.tool && !scene.tool->mesh_file.empty())
     files.push_back(fs::absolute(scene.tool->mesh_file).lexically_normal().string());
+  for (const config::RigidObjectScene& rigid : scene.rigid_objects) {
+    if (!rigid.mesh_file.empty())
+      files.push_back(fs::absolute(rigid.mesh_file).lexically_normal().string());
+  }
   return files;
 }
 

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
@@ -136,23 +137,25 @@ void RunSim(const SimCommandOptions& options) {
     scene.contact.compliance = *parsed;
   }
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim sim` needs a tool");
-  if (!scene.body)
-    throw InputError(
-        scene.file, 0, "body",
-        "`hapsim sim` needs a deformable body (rigid-only scenes are not supported yet)");
   const device::HapticMode mode =
       config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/true);
   const device::MultirateOptions multirate =
       config::MakeMultirateOptions(scene, mode, CalcStepsPerFrame(scene, options.visual_hz));
-  const config::Body body = config::MakeBody(*scene.body, scene.gravity_m_s2);
-  device::MultirateSimulator simulator(body.model, scene.body->options, body.external_force_N,
-                                       scene.tool->model, scene.tool->initial_state,
-                                       config::MakeVisualFrameOptions(scene), multirate);
+  // A scene without a deformable body builds no FEM: the tool among its rigid objects.
+  const std::optional<config::Body> body =
+      scene.body ? std::optional<config::Body>(config::MakeBody(*scene.body, scene.gravity_m_s2))
+                 : std::nullopt;
+  device::MultirateSimulator simulator(
+      body ? &body->model : nullptr, scene.body ? &scene.body->options : nullptr,
+      body ? body->external_force_N : Eigen::VectorXd(), scene.tool->model,
+      scene.tool->initial_state, config::MakeVisualFrameOptions(scene), multirate);
   const long num_steps = std::lround(scene.num_steps * scene.dt_s * scene.haptic.rate_hz);
   std::printf(
-      "hapsim sim: %s, mode %s: %d tets, %ld haptic steps at %g Hz, a visual frame every %d\n",
-      scene.name.c_str(), device::ToString(mode), body.model.num_tets(), num_steps,
-      scene.haptic.rate_hz, multirate.haptic_steps_per_frame);
+      "hapsim sim: %s, mode %s: %d tets, %zu rigid objects, %ld haptic steps at %g Hz, a visual "
+      "frame every %d\n",
+      scene.name.c_str(), device::ToString(mode), body ? body->model.num_tets() : 0,
+      scene.rigid_objects.size(), num_steps, scene.haptic.rate_hz,
+      multirate.haptic_steps_per_frame);
   SimRecord record;
   record.haptic.reserve(num_steps);
   {

@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "config/simulation_sections.h"
 #include "config/yaml_reader.h"
@@ -222,13 +224,42 @@ BodyScene ReadBody(const YamlMap& map, const std::string& base_dir) {
   return body;
 }
 
+// `objects`: names unique; one deformable object at most, counting `body`.
+void ReadObjects(const YamlMap& root, const std::string& base_dir, Scene* scene) {
+  std::vector<std::pair<std::string, int>> names;  // name, line
+  int deformable_line = root.Has("body") ? root.LineOf("body") : 0;
+  for (const YamlMap& item : root.GetMapList("objects")) {
+    item.CheckKeys({"name", "deformable", "rigid"});
+    const std::string name = item.GetString("name");
+    if (name.empty()) item.FailKey("name", "must not be empty");
+    for (const auto& [other, line] : names) {
+      if (other == name)
+        item.FailKey("name", "duplicate object name '" + name + "' (first given on line " +
+                                 std::to_string(line) + ")");
+    }
+    names.emplace_back(name, item.LineOf("name"));
+    if (item.Has("deformable") == item.Has("rigid"))
+      item.Fail("must give exactly one of deformable, rigid");
+    if (const std::optional<YamlMap> deformable = item.FindMap("deformable")) {
+      if (deformable_line > 0)
+        item.FailKey("deformable", "one deformable object per scene for now; line " +
+                                       std::to_string(deformable_line) + " gives one already");
+      deformable_line = item.LineOf("deformable");
+      scene->body = ReadBody(*deformable, base_dir);
+      scene->body_name = name;
+    } else {
+      scene->rigid_objects.push_back(ReadRigidObject(item.GetMap("rigid"), name, base_dir));
+    }
+  }
+}
+
 }  // namespace
 
 Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
                  const std::string& base_dir) {
   const YamlMap root = YamlMap::Parse(yaml_text, file_label);
-  root.CheckKeys({"name", "description", "gravity_m_s2", "time", "body", "tool", "coupling",
-                  "contact", "haptic", "device"});
+  root.CheckKeys({"name", "description", "gravity_m_s2", "time", "body", "objects", "tool",
+                  "coupling", "contact", "haptic", "device"});
   Scene scene;
   scene.file = file_label;
   scene.name = root.GetString("name");
@@ -244,7 +275,11 @@ Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
   if (const std::optional<YamlMap> body = root.FindMap("body")) {
     scene.body = ReadBody(*body, base_dir);
   }
+  ReadObjects(root, base_dir, &scene);
   ReadSimulationSections(root, time, base_dir, &scene);
+  if (!scene.tool && !scene.rigid_objects.empty())
+    root.FailKey("objects", "a rigid object needs a tool: its contacts are solved in the visual "
+                            "frame (`hapsim sim`, `hapsim run`)");
   return scene;
 }
 

@@ -36,6 +36,19 @@
 //       - {min_m: [..], max_m: [..], total_force_N: [fx, fy, fz]}
 //     probes:                          # optional: points whose displacement is reported
 //       - {name: top_center, position_m: [0, 0, 0.05]}
+//   objects:                           # optional: the scene's objects (DESIGN.md §9), each
+//                                      # exactly one of deformable / rigid
+//     - name: tray                     # required, unique among the objects
+//       rigid:                         # a fixed rigid object: builds no FEM; needs a tool (its
+//                                      # contacts are solved in the visual frame)
+//         shape: {box: {half_extents_m: [0.1, 0.1, 0.005]}}   # as tool.shape (a mesh file:
+//                                      # closed OBJ/STL in metres, kept in its own frame)
+//         position_m: [0, 0, -0.005]   # origin of the shape's frame, world; default 0
+//         rotation_vector_rad: [0, 0, 0]   # default 0
+//     - name: liver
+//       deformable: {mesh: …, material: …}   # the keys of `body`; `body` is the shorthand for
+//                                      # one deformable object named "body". At most one
+//                                      # deformable object in a scene for now.
 //   tool:                              # optional: the rigid tool (DESIGN.md §3); needs coupling
 //                                      # and device
 //     shape:                           # exactly one of (tool frame T: origin at the COM, z the
@@ -150,6 +163,13 @@ struct BodyScene {
   std::vector<Probe> probes;
 };
 
+// A fixed rigid object of `objects`, resolved: a mesh file read.
+struct RigidObjectScene {
+  contact::RigidObject object;  // name, shape (in its own frame O), X_WO
+  std::string mesh_file;        // ToolShape::Kind::kMesh: the file read (resolved path)
+  SourceLocation location;      // the `objects[i]` entry
+};
+
 // The rigid tool, resolved: a mesh file read, mass properties computed.
 struct ToolScene {
   ToolModel model;          // shape in T, mass, body inertia (MakeToolModel / …WithMass)
@@ -194,7 +214,9 @@ struct Scene {
   Eigen::Vector3d gravity_m_s2{0.0, 0.0, -9.81};
   double dt_s = 0.0;
   int num_steps = 0;
-  std::optional<BodyScene> body;
+  std::optional<BodyScene> body;  // `body`, or the deformable entry of `objects`
+  std::string body_name = "body";
+  std::vector<RigidObjectScene> rigid_objects;  // the rigid entries of `objects`, in order
   // The simulation sections. All of them need a tool; with a tool, coupling and a device
   // trajectory are required and contact and haptic take their defaults when absent.
   std::optional<ToolScene> tool;

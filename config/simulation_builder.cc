@@ -14,6 +14,8 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   options.response.stabilization_beta = scene.contact.stabilization_beta;
   options.response.restitution = scene.contact.restitution;
   options.compliance = scene.contact.compliance;
+  for (const RigidObjectScene& rigid : scene.rigid_objects)
+    options.rigid_objects.push_back(rigid.object);
   return options;
 }
 

@@ -9,7 +9,8 @@
 
 namespace hapsim::config {
 
-// Gravity, coupling, detection margin and the contact law's response options. The visual and
+// Gravity, coupling, detection margin, the contact law's response options and the rigid
+// objects. The visual and
 // haptic steps are left to the caller (MultirateSimulator sets them from MultirateOptions).
 contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene);
 

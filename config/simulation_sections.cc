@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "contact/tool_distance.h"
 #include "core/rigid_tool.h"
 #include "core/triangle_mesh_io.h"
 
@@ -128,6 +129,30 @@ ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
       CalcQuaternionExp(map.GetVector3Or("rotation_vector_rad", Eigen::Vector3d::Zero()));
   return tool;
 }
+
+}  // namespace
+
+RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
+                                 const std::string& base_dir) {
+  map.CheckKeys({"shape", "position_m", "rotation_vector_rad"});
+  RigidObjectScene rigid;
+  rigid.location = LocationOf(map);
+  rigid.object.name = name;
+  const YamlMap shape_map = map.GetMap("shape");
+  rigid.object.shape = ReadToolShape(shape_map, base_dir, &rigid.mesh_file);
+  try {  // the distance field checks what the shape checks above cannot (an open mesh)
+    contact::ToolDistanceField field(rigid.object.shape);
+  } catch (const std::invalid_argument& error) {
+    shape_map.Fail(error.what());
+  }
+  rigid.object.X_WO.translation() = map.GetVector3Or("position_m", Eigen::Vector3d::Zero());
+  rigid.object.X_WO.linear() =
+      CalcQuaternionExp(map.GetVector3Or("rotation_vector_rad", Eigen::Vector3d::Zero()))
+          .toRotationMatrix();
+  return rigid;
+}
+
+namespace {
 
 CouplingParams ReadCoupling(const YamlMap& map) {
   map.CheckKeys({"k_lin_N_m", "b_lin_N_s_m", "k_ang_N_m_rad", "b_ang_N_m_s_rad"});

@@ -13,6 +13,10 @@ namespace hapsim::config {
 // checks between sections: everything but `tool` needs a tool; a tool needs coupling and device;
 // haptic.rate_hz · time.dt_s must be a whole number ≥ 1 (`time` is the checked time section).
 // Throws InputError naming file, line and key; errors in a tool mesh file name that file.
+// One `rigid` entry of `objects` (config/scene.h), named `name`.
+RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
+                                 const std::string& base_dir);
+
 void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std::string& base_dir,
                             Scene* scene);
 

@@ -1,5 +1,6 @@
 #pragma once
-// One contact between the rigid tool and the deformable body (DESIGN.md §4), as collision
+// One contact between the rigid tool and the deformable body (DESIGN.md §4), the tool and a fixed
+// rigid object, or the body and a rigid object (§9; contact/rigid_objects.h), as collision
 // detection produces it and the constraint solver consumes it.
 //
 // Sign conventions: n_W points out of the tool, towards the body. The gap is measured along n_W
@@ -7,6 +8,10 @@
 // interpenetrate. The body point is a combination of up to three nodes with barycentric weights
 // (one node with weight 1 for a node-versus-tool contact; a face's three nodes for a tool feature
 // point against a face; a body edge's two nodes for a tool edge against a body edge).
+// A contact that touches no tool (a body node on a rigid object) has on_tool = false: its rows
+// have no tool terms, and "tool" below then means the rigid object (p_tool_W_m is the object's
+// point, n_W points out of the object). A contact with a rigid object has no body nodes on that
+// side: the object does not move.
 
 #include <Eigen/Core>
 #include <array>
@@ -20,6 +25,8 @@ struct Contact {
   double gap_m = 0.0;                                    // signed gap along n_W, m
   std::array<int, 3> nodes = {-1, -1, -1};               // body nodes; -1 = unused slot
   std::array<double, 3> weights = {0.0, 0.0, 0.0};       // barycentric weights, sum 1
+  bool on_tool = true;    // false: a body node against a rigid object
+  int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none
 };
 
 }  // namespace hapsim::contact

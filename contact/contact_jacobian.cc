@@ -33,8 +33,11 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
     const Eigen::Vector3d r_W_m = contact.p_tool_W_m - x_tool_W_m;
     for (int d = 0; d < rows_per_contact; ++d) {
       const int row = rows_per_contact * static_cast<int>(i) + d;
-      J.J_v.row(row) = -directions[d].transpose();
-      J.J_w.row(row) = -r_W_m.cross(directions[d]).transpose();
+      // A body node on a rigid object: neither side is the tool.
+      J.J_v.row(row) = contact.on_tool ? Eigen::RowVector3d(-directions[d].transpose())
+                                       : Eigen::RowVector3d::Zero();
+      J.J_w.row(row) = contact.on_tool ? Eigen::RowVector3d(-r_W_m.cross(directions[d]).transpose())
+                                       : Eigen::RowVector3d::Zero();
       for (int k = 0; k < 3; ++k) {
         if (contact.nodes[k] < 0 || contact.weights[k] == 0.0) continue;
         for (int a = 0; a < 3; ++a) {

@@ -8,7 +8,9 @@
 // (the last at the dofs of the body nodes k carrying the contact point). A multiplier λ_i ≥ 0
 // pushes the bodies apart: the force on the tool is F_c = J_vᵀλ, the torque T_c = J_ωᵀλ, and the
 // force on the body J_uᵀλ. With friction each contact has two more rows, along tangents t1, t2
-// (n, t1, t2 right-handed), built the same way with t in place of n.
+// (n, t1, t2 right-handed), built the same way with t in place of n. A contact with on_tool =
+// false (a body node on a rigid object) has J_v = J_ω = 0; a contact with no body nodes (the tool
+// on a rigid object) has J_u = 0.
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>

@@ -1,6 +1,7 @@
 #include "contact/visual_frame.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <stdexcept>
 
 #include "core/stopwatch.h"
@@ -24,14 +25,32 @@ const char* ToString(ComplianceMethod method) {
 VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_options,
                          Eigen::VectorXd body_external_force_N, ToolModel tool,
                          const VisualFrameOptions& options)
+    : VisualFrame(&body, &fem_options, std::move(body_external_force_N), std::move(tool), options) {}
+
+VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_options,
+                         Eigen::VectorXd body_external_force_N, ToolModel tool,
+                         const VisualFrameOptions& options)
     : body_(body),
       tool_(std::move(tool)),
       options_(options),
       rows_per_contact_(options.response.solve.law == ContactLaw::kFriction ? 3 : 1),
-      stepper_(body, fem_options, options.dt_s, std::move(body_external_force_N)),
-      detector_(body, tool_.shape, options.detection) {
-  if (options.compliance == ComplianceMethod::kWarped)
-    warped_compliance_ = std::make_unique<fem::WarpedCompliance>(body, stepper_);
+      rigid_contacts_(options.rigid_objects, tool_.shape, options.detection.margin_m) {
+  if ((body == nullptr) != (fem_options == nullptr))
+    throw std::invalid_argument("VisualFrame: give both the body and its FEM options, or neither");
+  if (body_ != nullptr) {
+    stepper_ = std::make_unique<fem::TimeStepper>(*body, *fem_options, options.dt_s,
+                                                  std::move(body_external_force_N));
+    detector_ = std::make_unique<CollisionDetector>(*body, tool_.shape, options.detection);
+    if (options.compliance == ComplianceMethod::kWarped)
+      warped_compliance_ = std::make_unique<fem::WarpedCompliance>(*body, *stepper_);
+    if (!options.rigid_objects.empty()) {
+      const Matrix3Xi surface = fem::ExtractBoundarySurface(body->mesh);
+      surface_nodes_.assign(surface.data(), surface.data() + surface.size());
+      std::sort(surface_nodes_.begin(), surface_nodes_.end());
+      surface_nodes_.erase(std::unique(surface_nodes_.begin(), surface_nodes_.end()),
+                           surface_nodes_.end());
+    }
+  }
   if (options.export_contact_rows && rows_per_contact_ != 1)
     throw std::invalid_argument(
         "VisualFrame: the lcp rows are normal rows only; the friction law has no lcp mode");
@@ -49,18 +68,19 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   CalcFreeVelocityChange(tool_system_, &dv_tool_, &dL_tool_);
   stats.free_tool_s = stage.Lap();
   // 3. Collision-free FEM update.
-  stats.fem = stepper_.CalcFreeVelocityChange(*body, &du_body_);
+  if (stepper_) stats.fem = stepper_->CalcFreeVelocityChange(*body, &du_body_);
   stats.free_fem_s = stage.Lap();
   // 4. Collision detection, swept from the start to the free configuration.
   DetectContacts(*body, *tool);
   stats.num_candidates = static_cast<int>(contacts_.size());
+  for (const Contact& contact : contacts_) stats.num_rigid_contacts += contact.rigid_object >= 0;
   stats.detection_s = stage.Lap();
   // 5. Constraint solve and post-collision state of tool and body.
   SolveResponse(*tool, *body);
   stats.solve = last_solve_;
   const Eigen::Isometry3d X_WT_start = CalcPose(*tool);
   AdvanceTool(tool_, options_.dt_s, dv_tool_, dL_tool_, tool);
-  stepper_.Advance(du_body_, body);
+  if (stepper_) stepper_->Advance(du_body_, body);
   stats.num_contacts = static_cast<int>(contacts_.size());
   for (int row = 0; row < lambda_.size(); row += rows_per_contact_)
     stats.num_active += lambda_[row] > 0.0;
@@ -69,17 +89,34 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   BuildLinearModel(device, X_WT_start, *tool, haptic_tool ? *haptic_tool : *tool, *body);
   stats.model_s = stage.Lap();
   // 7. Sanity pass: nodes still inside the tool are moved to its surface.
-  stats.num_sanity_corrections = RunSanityPass(*tool, body, &stats.max_penetration_m);
+  stats.num_sanity_corrections =
+      RunSanityPass(*tool, body, &stats.max_penetration_m, &stats.max_object_penetration_m);
   stats.sanity_s = stage.Lap();
   stats.total_s = total.Elapsed();
   return stats;
 }
 
+// Tool against body, then tool against the rigid objects, then body against them: one list, one
+// response.
 void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) {
-  const Eigen::VectorXd x_end_m = body.x_m + options_.dt_s * (body.v_m_s + du_body_);
   ToolState tool_end = tool;
   AdvanceTool(tool_, options_.dt_s, dv_tool_, dL_tool_, &tool_end);
-  detector_.Detect(body.x_m, CalcPose(tool), x_end_m, CalcPose(tool_end), &contacts_);
+  contacts_.clear();
+  Eigen::VectorXd x_end_m;
+  if (body_ != nullptr) {
+    x_end_m = body.x_m + options_.dt_s * (body.v_m_s + du_body_);
+    detector_->Detect(body.x_m, CalcPose(tool), x_end_m, CalcPose(tool_end), &contacts_);
+  }
+  rigid_contacts_.AddToolContacts(CalcPose(tool), CalcPose(tool_end), &contacts_);
+  if (body_ != nullptr)
+    rigid_contacts_.AddBodyContacts(surface_nodes_, body.x_m, x_end_m, &contacts_);
+}
+
+ContactJacobian VisualFrame::CalcJacobian(const std::vector<Contact>& contacts,
+                                          const Eigen::Vector3d& x_tool_W_m) const {
+  static const std::vector<std::uint8_t> kNoDofs;
+  return CalcContactJacobian(contacts, x_tool_W_m, rows_per_contact_,
+                             body_ ? body_->num_dofs() : 0, body_ ? body_->dof_is_fixed : kNoDofs);
 }
 
 void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
@@ -87,23 +124,26 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
   const Eigen::Vector3d v_free = tool.v_W_m_s + dv_tool_;
   const Eigen::Vector3d w_free = tool_system_.M_inv_W * (tool.L_W_kg_m2_s + dL_tool_);
   const Eigen::VectorXd u_free = body.v_m_s + du_body_;
-  jacobian_ = CalcContactJacobian(contacts_, tool.x_W_m, rows_per_contact_, body_.num_dofs(),
-                                  body_.dof_is_fixed);
+  jacobian_ = CalcJacobian(contacts_, tool.x_W_m);
   Eigen::VectorXd c_free = CalcSeparatingVelocity(jacobian_, v_free, w_free, u_free);
   if (options_.response.solve.law == ContactLaw::kEquality) {
     std::vector<Contact> colliding;
     for (int i : SelectCollidingContacts(contacts_, c_free, rows_per_contact_, dt, 0.0))
       colliding.push_back(contacts_[i]);
     contacts_.swap(colliding);
-    jacobian_ = CalcContactJacobian(contacts_, tool.x_W_m, rows_per_contact_, body_.num_dofs(),
-                                    body_.dof_is_fixed);
+    jacobian_ = CalcJacobian(contacts_, tool.x_W_m);
     c_free = CalcSeparatingVelocity(jacobian_, v_free, w_free, u_free);
   }
   const Eigen::VectorXd c_pre = CalcSeparatingVelocity(
       jacobian_, tool.v_W_m_s, tool_system_.M_inv_W * tool.L_W_kg_m2_s, body.v_m_s);
   b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
-  W_body_ = warped_compliance_ ? warped_compliance_->Calc(jacobian_.J_u, stepper_.rotations())
-                               : stepper_.CalcCompliance(jacobian_.J_u);
+  const int num_rows = jacobian_.num_rows();
+  if (!stepper_)
+    W_body_.setZero(num_rows, num_rows);  // rigid objects only: nothing yields
+  else if (warped_compliance_)
+    W_body_ = warped_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
+  else
+    W_body_ = stepper_->CalcCompliance(jacobian_.J_u);
   const Eigen::MatrixXd W = CalcToolDelassus(jacobian_, tool_system_) + W_body_;
   lambda_.setZero(jacobian_.num_rows());
   last_solve_ = SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve,
@@ -111,9 +151,9 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
   // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.
   dv_tool_ += tool_system_.A_v.inverse() * (dt * jacobian_.J_v.transpose() * lambda_);
   dL_tool_ += tool_system_.A_L.inverse() * (dt * jacobian_.J_w.transpose() * lambda_);
-  if (jacobian_.num_rows() > 0) {
-    Eigen::VectorXd du_contact = Eigen::VectorXd::Zero(body_.num_dofs());
-    stepper_.SolveWithSystemMatrix(dt * (jacobian_.J_u.transpose() * lambda_), &du_contact);
+  if (num_rows > 0 && stepper_) {
+    Eigen::VectorXd du_contact = Eigen::VectorXd::Zero(body_->num_dofs());
+    stepper_->SolveWithSystemMatrix(dt * (jacobian_.J_u.transpose() * lambda_), &du_contact);
     du_body_ += du_contact;
   }
   c_post_ = c_free + dt * W * lambda_;

@@ -3,8 +3,11 @@
 //   1 coupling to the visual tool   2 free tool update   3 free FEM update
 //   4 collision detection           5 constraint solve + post-collision state
 //   6 linear contact model          7 sanity pass on nodes left inside the tool
-// Step() reads top to bottom as that pipeline. Model data (body model, tool model, options) is
-// fixed at construction; the body and tool states are passed in and updated.
+// Step() reads top to bottom as that pipeline. Model data (body model, tool model, rigid objects,
+// options) is fixed at construction; the body and tool states are passed in and updated.
+// A scene without a deformable body (DESIGN.md §9: rigid objects only) builds no FEM: stage 3 does
+// nothing, the body state is empty (no dofs), and every contact row is the tool against a rigid
+// object.
 
 #include <Eigen/Core>
 #include <memory>
@@ -15,6 +18,7 @@
 #include "contact/contact_jacobian.h"
 #include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
+#include "contact/rigid_objects.h"
 #include "core/rigid_tool.h"
 #include "core/tool_integrator.h"
 #include "core/virtual_coupling.h"
@@ -44,6 +48,10 @@ struct VisualFrameOptions {
   // Stage 6 also exports the per-contact rows of every candidate contact for the haptic `lcp`
   // mode (contact_rows()). Needs normal rows only: not with the friction law.
   bool export_contact_rows = false;
+  // The scene's fixed rigid objects (contact/rigid_objects.h). They are model data, kept here so
+  // that every user of the frame (sim, run, the tests) gets them from the one scene mapping
+  // (config::MakeVisualFrameOptions).
+  std::vector<RigidObject> rigid_objects;
 };
 
 // Wall time of each stage, seconds, and what the frame found.
@@ -53,8 +61,11 @@ struct VisualFrameStats {
   int num_candidates = 0;  // contacts detected
   int num_contacts = 0;    // contacts made constraints
   int num_active = 0;      // constraints with λ > 0
+  int num_rigid_contacts = 0;  // of the candidates: tool or body against a rigid object
   int num_sanity_corrections = 0;
   double max_penetration_m = 0.0;  // deepest contact node inside the tool after the step, ≥ 0
+  // Deepest body node of a body–object contact inside its rigid object after the step, ≥ 0.
+  double max_object_penetration_m = 0.0;
   ContactSolveReport solve;
   fem::StepStats fem;
 };
@@ -63,6 +74,11 @@ class VisualFrame {
  public:
   // `body` must outlive the frame. body_external_force_N (3N): gravity on the body and loads.
   VisualFrame(const fem::Model& body, const fem::FemOptions& fem_options,
+              Eigen::VectorXd body_external_force_N, ToolModel tool,
+              const VisualFrameOptions& options);
+  // `body` and `fem_options` null: a scene without a deformable body, the tool among rigid
+  // objects. Step() then takes an empty fem::State (fem::State{}).
+  VisualFrame(const fem::Model* body, const fem::FemOptions* fem_options,
               Eigen::VectorXd body_external_force_N, ToolModel tool,
               const VisualFrameOptions& options);
 
@@ -84,10 +100,14 @@ class VisualFrame {
   Eigen::Vector3d contact_force_N() const;
   Eigen::Vector3d contact_torque_N_m() const;
   const ToolModel& tool_model() const { return tool_; }
+  bool has_body() const { return body_ != nullptr; }
   const VisualFrameOptions& options() const { return options_; }
 
  private:
   void DetectContacts(const fem::State& body, const ToolState& tool);
+  // CalcContactJacobian over the body's dofs (none without a body).
+  ContactJacobian CalcJacobian(const std::vector<Contact>& contacts,
+                               const Eigen::Vector3d& x_tool_W_m) const;
   void SolveResponse(const ToolState& tool, const fem::State& body);
   void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                         const ToolState& tool, const ToolState& haptic_tool,
@@ -98,15 +118,19 @@ class VisualFrame {
                                 const ToolState& haptic_tool, std::vector<Contact>* moved,
                                 Eigen::VectorXd* b) const;
   // Returns the number of nodes moved; *max_penetration_m receives the deepest one found.
-  int RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m) const;
+  // *max_object_penetration_m receives the deepest body node inside a rigid object.
+  int RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,
+                    double* max_object_penetration_m) const;
 
-  const fem::Model& body_;
+  const fem::Model* body_;  // null: no deformable body
   ToolModel tool_;
   VisualFrameOptions options_;
   int rows_per_contact_;
-  fem::TimeStepper stepper_;
-  std::unique_ptr<fem::WarpedCompliance> warped_compliance_;  // kWarped only
-  CollisionDetector detector_;
+  std::unique_ptr<fem::TimeStepper> stepper_;                 // with a body
+  std::unique_ptr<fem::WarpedCompliance> warped_compliance_;  // with a body, kWarped only
+  std::unique_ptr<CollisionDetector> detector_;               // with a body
+  RigidObjectContacts rigid_contacts_;
+  std::vector<int> surface_nodes_;  // the body's surface nodes (body–object contacts)
   // Frame data, in stage order.
   CouplingWrench wrench_;
   ToolStepSystem tool_system_;

@@ -24,11 +24,13 @@ void VisualFrame::MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start,
   for (size_t i = 0; i < moved->size(); ++i) {
     const int row = rows_per_contact_ * static_cast<int>(i);
     Contact& contact = (*moved)[i];
-    const Eigen::Vector3d p_visual_W_m = visual_motion * contact.p_tool_W_m;
-    contact.p_tool_W_m = motion * contact.p_tool_W_m;
-    contact.n_W = motion.linear() * contact.n_W;
     contact.gap_m += options_.dt_s * c_post_[row];  // gap at the end of the frame, to first order
-    contact.gap_m -= contact.n_W.dot(contact.p_tool_W_m - p_visual_W_m);  // haptic tool's offset
+    if (contact.on_tool) {
+      const Eigen::Vector3d p_visual_W_m = visual_motion * contact.p_tool_W_m;
+      contact.p_tool_W_m = motion * contact.p_tool_W_m;
+      contact.n_W = motion.linear() * contact.n_W;
+      contact.gap_m -= contact.n_W.dot(contact.p_tool_W_m - p_visual_W_m);  // haptic tool's offset
+    }  // a body node on a rigid object: neither moves with the tool
     const double fraction = contact.gap_m >= 0.0 ? 1.0 : options_.response.stabilization_beta;
     (*b)[row] = -fraction * contact.gap_m / options_.dt_s;
   }
@@ -54,8 +56,7 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
     active.push_back(moved[i]);
     for (int d = 0; d < rows_per_contact_; ++d) active_rows.push_back(row + d);
   }
-  const ContactJacobian J = CalcContactJacobian(active, tool.x_W_m, rows_per_contact_,
-                                                body_.num_dofs(), body_.dof_is_fixed);
+  const ContactJacobian J = CalcJacobian(active, tool.x_W_m);
   const CouplingWrench wrench =
       CalcCouplingWrench(options_.coupling, device, tool, CalcAngularVelocity(tool_, tool));
   const ToolStepSystem haptic =
@@ -76,16 +77,17 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   for (size_t r = 0; r < active_rows.size(); ++r) body_rhs[r] += held_m_s[active_rows[r]];
   linear_model_ = MakeLinearContactModel(J, W, haptic, body_rhs);
   if (options_.export_contact_rows) {
-    const ContactJacobian J_all = CalcContactJacobian(moved, tool.x_W_m, rows_per_contact_,
-                                                      body_.num_dofs(), body_.dof_is_fixed);
+    const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
     contact_rows_ = MakeContactRows(J_all, W_body_, b_all - J_all.J_u * body.v_m_s + held_m_s);
     contact_rows_.lambda_frame_N = lambda_;
   }
 }
 
-int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body,
-                               double* max_penetration_m) const {
+int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,
+                               double* max_object_penetration_m) const {
   *max_penetration_m = 0.0;
+  *max_object_penetration_m = 0.0;
+  if (body_ == nullptr) return 0;
   const Eigen::Isometry3d X_WT = CalcPose(tool);
   const Eigen::Isometry3d X_TW = X_WT.inverse();
   const Eigen::Vector3d w_W = CalcAngularVelocity(tool_, tool);
@@ -93,16 +95,30 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body,
   for (const Contact& contact : contacts_) {
     for (int k = 0; k < 3; ++k) {
       const int node = contact.nodes[k];
-      if (node < 0 || body_.dof_is_fixed[3 * node]) continue;
+      if (node < 0 || body_->dof_is_fixed[3 * node]) continue;
       const Eigen::Vector3d p_W = body->x_m.segment<3>(3 * node);
-      const ToolDistance d = detector_.tool_distance().Calc(X_TW * p_W);
-      *max_penetration_m = std::max(*max_penetration_m, -d.distance_m);
-      if (d.distance_m >= -options_.sanity_tolerance_m) continue;
-      const Eigen::Vector3d n_W = X_WT.linear() * d.normal_T;
-      body->x_m.segment<3>(3 * node) = X_WT * d.closest_T_m;
-      // Remove the velocity that would carry the node back into the tool.
-      const Eigen::Vector3d v_tool_W = tool.v_W_m_s + w_W.cross(p_W - tool.x_W_m);
-      const double closing = (body->v_m_s.segment<3>(3 * node) - v_tool_W).dot(n_W);
+      // The surface point the node must not pass, its outward normal there, and that surface's
+      // velocity at the node: the tool's, or zero for a fixed rigid object.
+      double distance_m;
+      Eigen::Vector3d closest_W_m, n_W, v_surface_W = Eigen::Vector3d::Zero();
+      if (contact.on_tool) {
+        const ToolDistance d = detector_->tool_distance().Calc(X_TW * p_W);
+        distance_m = d.distance_m;
+        closest_W_m = X_WT * d.closest_T_m;
+        n_W = X_WT.linear() * d.normal_T;
+        v_surface_W = tool.v_W_m_s + w_W.cross(p_W - tool.x_W_m);
+        *max_penetration_m = std::max(*max_penetration_m, -distance_m);
+      } else {
+        const RigidObjectContacts::Penetration d = rigid_contacts_.CalcDeepest(p_W);
+        distance_m = d.distance_m;
+        closest_W_m = d.closest_W_m;
+        n_W = d.normal_W;
+        *max_object_penetration_m = std::max(*max_object_penetration_m, -distance_m);
+      }
+      if (distance_m >= -options_.sanity_tolerance_m) continue;
+      body->x_m.segment<3>(3 * node) = closest_W_m;
+      // Remove the velocity that would carry the node back inside.
+      const double closing = (body->v_m_s.segment<3>(3 * node) - v_surface_W).dot(n_W);
       if (closing < 0.0) body->v_m_s.segment<3>(3 * node) -= closing * n_W;
       ++corrections;
     }

@@ -37,10 +37,18 @@ MultirateSimulator::MultirateSimulator(const fem::Model& body, const fem::FemOpt
                                        const ToolModel& tool, const ToolState& initial_tool,
                                        contact::VisualFrameOptions visual_options,
                                        const MultirateOptions& options)
+    : MultirateSimulator(&body, &fem_options, body_external_force_N, tool, initial_tool,
+                         std::move(visual_options), options) {}
+
+MultirateSimulator::MultirateSimulator(const fem::Model* body, const fem::FemOptions* fem_options,
+                                       const Eigen::VectorXd& body_external_force_N,
+                                       const ToolModel& tool, const ToolState& initial_tool,
+                                       contact::VisualFrameOptions visual_options,
+                                       const MultirateOptions& options)
     : options_(options),
       visual_options_(WithStep(std::move(visual_options), options)),
       frame_(body, fem_options, body_external_force_N, tool, visual_options_),
-      body_state_(fem::MakeRestState(body)),
+      body_state_(body ? fem::MakeRestState(*body) : fem::State{}),
       visual_tool_(initial_tool),
       haptic_(tool, visual_options_.coupling, visual_options_.gravity_m_s2, options.haptic_dt_s,
               initial_tool, options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0) {

@@ -59,6 +59,12 @@ class MultirateSimulator {
                      const Eigen::VectorXd& body_external_force_N, const ToolModel& tool,
                      const ToolState& initial_tool, contact::VisualFrameOptions visual_options,
                      const MultirateOptions& options);
+  // Same; `body` and `fem_options` null for a scene without a deformable body (the tool among
+  // the rigid objects of visual_options; no FEM is built).
+  MultirateSimulator(const fem::Model* body, const fem::FemOptions* fem_options,
+                     const Eigen::VectorXd& body_external_force_N, const ToolModel& tool,
+                     const ToolState& initial_tool, contact::VisualFrameOptions visual_options,
+                     const MultirateOptions& options);
 
   // Runs `num_haptic_steps` steps following `trajectory`, calling the sinks as it goes.
   void Run(const ScriptedTrajectory& trajectory, long num_haptic_steps,

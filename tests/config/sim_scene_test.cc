@@ -261,8 +261,8 @@ const BadCase kBadCases[] = {
      "must be a map"},
     // the document root
     {"UnknownTopKey", "haptic:", "haptics:", 16, "haptics",
-     "allowed keys here: name, description, gravity_m_s2, time, body, tool, coupling, contact, "
-     "haptic, device"},
+     "allowed keys here: name, description, gravity_m_s2, time, body, objects, tool, coupling, "
+     "contact, haptic, device"},
 };
 
 class SimSceneBadInputTest : public testing::TestWithParam<BadCase> {};

@@ -1,0 +1,228 @@
+// `hapsim inspect SCENE [--frames N] [--json FILE]`: what a scene will simulate, before running
+// it (DESIGN.md §9, "model no more than the scene needs"): each object, rigid or deformable, with
+// its nodes, tets and DOFs (a rigid object has none: it builds no FEM), the tool, the contact law
+// and the rates; then the memory the built model takes and the cost of a visual frame, both
+// measured by building the scene and running its first frames (not estimated from formulas).
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "apps/commands.h"
+#include "config/body_builder.h"
+#include "config/scene.h"
+#include "config/simulation_builder.h"
+#include "contact/visual_frame.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/statistics.h"
+#include "core/stopwatch.h"
+#include "device/scripted_trajectory.h"
+#include "fem/time_stepper.h"
+
+namespace hapsim::apps {
+namespace {
+
+struct InspectOptions {
+  std::string scene_path;
+  int num_frames = 30;
+  std::string json_path;  // empty: none
+};
+
+// Resident memory of this process, bytes (/proc/self/statm), or 0 where it cannot be read.
+double ReadResidentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  double total_pages = 0.0, resident_pages = 0.0;
+  if (!(statm >> total_pages >> resident_pages)) return 0.0;
+  return resident_pages * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+}
+
+const char* ShapeName(ToolShape::Kind kind) {
+  switch (kind) {
+    case ToolShape::Kind::kSphere:
+      return "sphere";
+    case ToolShape::Kind::kCapsule:
+      return "capsule";
+    case ToolShape::Kind::kCylinder:
+      return "cylinder";
+    case ToolShape::Kind::kBox:
+      return "box";
+    case ToolShape::Kind::kMesh:
+      return "mesh";
+  }
+  return "?";
+}
+
+nlohmann::json DescribeShape(const ToolShape& shape) {
+  nlohmann::json json{{"shape", ShapeName(shape.kind)}};
+  if (shape.kind == ToolShape::Kind::kBox) {
+    json["half_extents_m"] = {shape.half_extents_m.x(), shape.half_extents_m.y(),
+                              shape.half_extents_m.z()};
+  } else if (shape.kind == ToolShape::Kind::kMesh) {
+    json["triangles"] = shape.mesh.triangles.cols();
+  } else {
+    json["radius_m"] = shape.radius_m;
+    if (shape.kind != ToolShape::Kind::kSphere) json["length_m"] = shape.length_m;
+  }
+  return json;
+}
+
+// The scene's objects and tool as they will be simulated (the body built).
+nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* body) {
+  nlohmann::json objects = nlohmann::json::array();
+  if (body != nullptr) {
+    const fem::FemOptions& fem = scene.body->options;
+    objects.push_back({{"name", scene.body_name},
+                       {"kind", "deformable"},
+                       {"nodes", body->model.num_nodes()},
+                       {"tets", body->model.num_tets()},
+                       {"dofs", body->model.num_dofs()},
+                       {"fixed_nodes", body->model.num_fixed_nodes()},
+                       {"elasticity", fem::ToString(fem.elasticity)},
+                       {"integrator", fem::ToString(fem.integrator)},
+                       {"solver", fem::ToString(fem.solver.kind)},
+                       {"youngs_modulus_Pa", scene.body->material.youngs_modulus_Pa}});
+  }
+  for (const config::RigidObjectScene& rigid : scene.rigid_objects) {
+    nlohmann::json object{{"name", rigid.object.name}, {"kind", "rigid"}, {"dofs", 0}};
+    object.update(DescribeShape(rigid.object.shape));
+    objects.push_back(object);
+  }
+  nlohmann::json json{{"scene", scene.name},
+                      {"visual_dt_s", scene.dt_s},
+                      {"num_frames", scene.num_steps},
+                      {"fem_built", body != nullptr},
+                      {"objects", objects}};
+  if (scene.tool) {
+    nlohmann::json tool = DescribeShape(scene.tool->model.shape);
+    tool["mass_kg"] = scene.tool->model.mass_kg;
+    json["tool"] = tool;
+    json["contact_law"] = contact::ToString(scene.contact.law);
+    json["compliance"] = contact::ToString(scene.contact.compliance);
+    json["haptic_rate_hz"] = scene.haptic.rate_hz;
+    json["haptic_mode"] = device::ToString(scene.haptic.mode);
+  }
+  return json;
+}
+
+// Runs the first `num_frames` frames as `hapsim sim` would (the scripted device) and returns the
+// first frame's time (it factors the system and precomputes the compliance) apart from the
+// median and largest of the others, and the most contacts seen.
+nlohmann::json MeasureFrames(const config::Scene& scene, const config::Body* body, int num_frames) {
+  std::vector<double> frame_s;
+  int max_contacts = 0;
+  if (scene.tool) {
+    contact::VisualFrameOptions options = config::MakeVisualFrameOptions(scene);
+    options.dt_s = scene.dt_s;
+    options.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
+    contact::VisualFrame frame(body ? &body->model : nullptr, body ? &scene.body->options : nullptr,
+                               body ? body->external_force_N : Eigen::VectorXd(), scene.tool->model,
+                               options);
+    fem::State state = body ? fem::MakeRestState(body->model) : fem::State{};
+    ToolState tool = scene.tool->initial_state;
+    const device::ScriptedTrajectory trajectory(scene.trajectory);
+    for (int k = 0; k < num_frames; ++k) {
+      const contact::VisualFrameStats stats =
+          frame.Step(trajectory.Sample(k * scene.dt_s), &state, &tool);
+      frame_s.push_back(stats.total_s);
+      max_contacts = std::max(max_contacts, stats.num_candidates);
+    }
+  } else if (body) {
+    fem::TimeStepper stepper(body->model, scene.body->options, scene.dt_s, body->external_force_N);
+    fem::State state = fem::MakeRestState(body->model);
+    for (int k = 0; k < num_frames; ++k) frame_s.push_back(stepper.Step(&state).total_s);
+  }
+  if (frame_s.empty()) return nlohmann::json{{"frames_run", 0}};
+  const double first_s = frame_s.front();
+  if (frame_s.size() > 1) frame_s.erase(frame_s.begin());
+  const double median_s = Median(frame_s);
+  return {{"frames_run", num_frames},
+          {"first_frame_ms", 1e3 * first_s},
+          {"median_frame_ms", 1e3 * median_s},
+          {"max_frame_ms", 1e3 * *std::max_element(frame_s.begin(), frame_s.end())},
+          {"max_visual_rate_hz", median_s > 0.0 ? 1.0 / median_s : 0.0},
+          {"max_contacts", max_contacts}};
+}
+
+void PrintReport(const nlohmann::json& report) {
+  std::printf("scene %s: visual frame %.4g s (%.4g Hz), %d frames\n",
+              report["scene"].get<std::string>().c_str(), report["visual_dt_s"].get<double>(),
+              1.0 / report["visual_dt_s"].get<double>(), report["num_frames"].get<int>());
+  for (const nlohmann::json& object : report["objects"]) {
+    if (object["kind"] == "deformable") {
+      std::printf(
+          "  %-12s deformable: %d nodes, %d tets, %d DOFs (%d fixed nodes); %s, %s, %s solver\n",
+          object["name"].get<std::string>().c_str(), object["nodes"].get<int>(),
+          object["tets"].get<int>(), object["dofs"].get<int>(), object["fixed_nodes"].get<int>(),
+          object["elasticity"].get<std::string>().c_str(),
+          object["integrator"].get<std::string>().c_str(),
+          object["solver"].get<std::string>().c_str());
+    } else {
+      std::printf("  %-12s rigid %s: 0 DOFs, no FEM\n", object["name"].get<std::string>().c_str(),
+                  object["shape"].get<std::string>().c_str());
+    }
+  }
+  if (!report["fem_built"].get<bool>()) std::printf("  FEM: none built (no deformable object)\n");
+  if (report.contains("tool")) {
+    std::printf(
+        "  tool: %s, %.4g kg; contact %s, compliance %s; haptic %s at %.4g Hz\n",
+        report["tool"]["shape"].get<std::string>().c_str(), report["tool"]["mass_kg"].get<double>(),
+        report["contact_law"].get<std::string>().c_str(),
+        report["compliance"].get<std::string>().c_str(),
+        report["haptic_mode"].get<std::string>().c_str(), report["haptic_rate_hz"].get<double>());
+  }
+  std::printf("  memory: %.1f MiB resident for the built model and its first frames (measured)\n",
+              report["model_memory_bytes"].get<double>() / (1 << 20));
+  const nlohmann::json& cost = report["frame_cost"];
+  if (cost["frames_run"].get<int>() > 0) {
+    std::printf(
+        "  frame cost over the first %d frames: the first %.3f ms (factor, precompute), then "
+        "median %.3f ms, max %.3f ms (up to %.0f Hz on this machine), up to %d contacts\n",
+        cost["frames_run"].get<int>(), cost["first_frame_ms"].get<double>(),
+        cost["median_frame_ms"].get<double>(), cost["max_frame_ms"].get<double>(),
+        cost["max_visual_rate_hz"].get<double>(), cost["max_contacts"].get<int>());
+  }
+}
+
+void RunInspect(const InspectOptions& options) {
+  const config::Scene scene = config::LoadScene(options.scene_path);
+  const int num_frames = std::min(options.num_frames, scene.num_steps);
+  const double resident_before = ReadResidentBytes();
+  const std::optional<config::Body> body =
+      scene.body ? std::optional<config::Body>(config::MakeBody(*scene.body, scene.gravity_m_s2))
+                 : std::nullopt;
+  nlohmann::json report = DescribeScene(scene, body ? &*body : nullptr);
+  report["frame_cost"] = MeasureFrames(scene, body ? &*body : nullptr, num_frames);
+  report["model_memory_bytes"] = std::max(0.0, ReadResidentBytes() - resident_before);
+  PrintReport(report);
+  if (!options.json_path.empty()) {
+    WriteFileAtomically(options.json_path,
+                        [&](std::ostream& out) { out << report.dump(2) << '\n'; });
+    std::printf("  wrote %s\n", options.json_path.c_str());
+  }
+}
+
+}  // namespace
+
+void AddInspectCommand(CLI::App* app) {
+  auto options = std::make_shared<InspectOptions>();
+  CLI::App* inspect = app->add_subcommand(
+      "inspect",
+      "What a scene will simulate: each object (deformable: nodes, tets, DOFs; rigid: no FEM),\n"
+      "the tool, contact law and rates; then the memory the built model takes and the cost of a\n"
+      "visual frame, measured by building the scene and running its first frames.");
+  inspect->add_option("scene", options->scene_path, "Scene file (YAML)")->required();
+  inspect->add_option("--frames", options->num_frames, "Frames to run for the cost (default 30)")
+      ->check(CLI::Range(1, 100000));
+  inspect->add_option("--json", options->json_path, "Also write the report as JSON to FILE");
+  inspect->callback([options] { RunInspect(*options); });
+}
+
+}  // namespace hapsim::apps

@@ -1,0 +1,190 @@
+#include "contact/rigid_objects.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace hapsim::contact {
+namespace {
+
+// The points a shape touches with, in its own frame, and the radius of the ball around each:
+// a sphere's centre (radius r); a capsule's segment sampled at no more than r/2 (radius r); a
+// cylinder with a rim rounded by e, which is a sharp cylinder (r − e, L − 2e) grown by e: that
+// cylinder's rim points (radius e); the feature points of the others (radius 0: on the surface).
+struct SamplePoints {
+  Matrix3Xd points_m;
+  double radius_m = 0.0;
+};
+
+SamplePoints MakeSamplePoints(const ToolShape& shape) {
+  SamplePoints samples;
+  if (shape.kind == ToolShape::Kind::kSphere) {
+    samples.points_m = Matrix3Xd::Zero(3, 1);
+    samples.radius_m = shape.radius_m;
+  } else if (shape.kind == ToolShape::Kind::kCapsule) {
+    const int intervals =
+        std::max(1, static_cast<int>(std::ceil(2.0 * shape.length_m / shape.radius_m)));
+    samples.points_m = Matrix3Xd::Zero(3, intervals + 1);
+    for (int k = 0; k <= intervals; ++k)
+      samples.points_m(2, k) = shape.length_m * (static_cast<double>(k) / intervals - 0.5);
+    samples.radius_m = shape.radius_m;
+  } else if (shape.kind == ToolShape::Kind::kCylinder && shape.edge_radius_m > 0.0) {
+    ToolShape inner = shape;
+    inner.radius_m -= shape.edge_radius_m;
+    inner.length_m -= 2.0 * shape.edge_radius_m;
+    inner.edge_radius_m = 0.0;
+    samples.points_m = MakeToolFeatures(inner).vertices_T_m;
+    samples.radius_m = shape.edge_radius_m;
+  } else {
+    samples.points_m = MakeToolFeatures(shape).vertices_T_m;
+  }
+  return samples;
+}
+
+// Bounding box of the shape in its own frame.
+Eigen::AlignedBox3d CalcLocalBox(const ToolShape& shape) {
+  Eigen::Vector3d half = Eigen::Vector3d::Zero();
+  switch (shape.kind) {
+    case ToolShape::Kind::kSphere:
+      half.setConstant(shape.radius_m);
+      break;
+    case ToolShape::Kind::kCapsule:
+      half = {shape.radius_m, shape.radius_m, 0.5 * shape.length_m + shape.radius_m};
+      break;
+    case ToolShape::Kind::kCylinder:
+      half = {shape.radius_m, shape.radius_m, 0.5 * shape.length_m};
+      break;
+    case ToolShape::Kind::kBox:
+      half = shape.half_extents_m;
+      break;
+    case ToolShape::Kind::kMesh: {
+      Eigen::AlignedBox3d box;
+      for (int v = 0; v < shape.mesh.vertices_m.cols(); ++v)
+        box.extend(shape.mesh.vertices_m.col(v));
+      return box;
+    }
+  }
+  return Eigen::AlignedBox3d(-half, half);
+}
+
+Eigen::AlignedBox3d TransformBox(const Eigen::AlignedBox3d& box_O, const Eigen::Isometry3d& X_WO) {
+  Eigen::AlignedBox3d box_W;
+  for (int corner = 0; corner < 8; ++corner)
+    box_W.extend(X_WO * box_O.corner(static_cast<Eigen::AlignedBox3d::CornerType>(corner)));
+  return box_W;
+}
+
+}  // namespace
+
+RigidObjectContacts::RigidObjectContacts(std::vector<RigidObject> objects, const ToolShape& tool,
+                                         double margin_m)
+    : tool_field_(tool), margin_m_(margin_m) {
+  if (!(margin_m >= 0.0)) throw std::invalid_argument("RigidObjectContacts: margin must be >= 0");
+  const SamplePoints tool_samples = MakeSamplePoints(tool);
+  tool_points_T_m_ = tool_samples.points_m;
+  tool_point_radius_m_ = tool_samples.radius_m;
+  objects_.reserve(objects.size());
+  for (RigidObject& object : objects) {
+    ToolDistanceField field(object.shape);
+    SamplePoints samples = MakeSamplePoints(object.shape);
+    const Eigen::AlignedBox3d box_W = TransformBox(CalcLocalBox(object.shape), object.X_WO);
+    objects_.push_back(Placed{std::move(object), std::move(field), std::move(samples.points_m),
+                              samples.radius_m, box_W});
+  }
+}
+
+void RigidObjectContacts::AddPointContact(int i, const Eigen::Vector3d& p_W_m, double radius_m,
+                                          double threshold_m,
+                                          std::vector<Contact>* contacts) const {
+  const Placed& placed = objects_[i];
+  if (placed.box_W_m.exteriorDistance(p_W_m) > threshold_m + radius_m) return;
+  const Eigen::Isometry3d& X_WO = placed.object.X_WO;
+  const ToolDistance d = placed.field.Calc(X_WO.inverse() * p_W_m);
+  const double gap_m = d.distance_m - radius_m;
+  if (gap_m > threshold_m) return;
+  const Eigen::Vector3d m_W = X_WO.linear() * d.normal_T;  // out of the object
+  Contact contact;
+  contact.n_W = -m_W;  // out of the tool, towards the object
+  contact.p_tool_W_m = p_W_m - radius_m * m_W;
+  contact.p_body_W_m = X_WO * d.closest_T_m;
+  contact.gap_m = gap_m;
+  contact.rigid_object = i;
+  contacts->push_back(contact);
+}
+
+void RigidObjectContacts::AddToolContacts(const Eigen::Isometry3d& X_WT_start,
+                                          const Eigen::Isometry3d& X_WT_end,
+                                          std::vector<Contact>* contacts) const {
+  const double angle_rad =
+      Eigen::AngleAxisd(X_WT_start.linear().transpose() * X_WT_end.linear()).angle();
+  const double threshold_m = margin_m_ +
+                             (X_WT_end.translation() - X_WT_start.translation()).norm() +
+                             angle_rad * tool_field_.bounding_radius_m();
+  const Eigen::Isometry3d X_TW = X_WT_start.inverse();
+  for (int i = 0; i < num_objects(); ++i) {
+    // The tool's sample points against the object.
+    for (int k = 0; k < tool_points_T_m_.cols(); ++k)
+      AddPointContact(i, X_WT_start * tool_points_T_m_.col(k), tool_point_radius_m_, threshold_m,
+                      contacts);
+    // The object's sample points against the tool.
+    const Placed& placed = objects_[i];
+    for (int k = 0; k < placed.points_O_m.cols(); ++k) {
+      const Eigen::Vector3d s_W = placed.object.X_WO * placed.points_O_m.col(k);
+      const ToolDistance d = tool_field_.Calc(X_TW * s_W);
+      const double gap_m = d.distance_m - placed.point_radius_m;
+      if (gap_m > threshold_m) continue;
+      Contact contact;
+      contact.n_W = X_WT_start.linear() * d.normal_T;  // out of the tool
+      contact.p_tool_W_m = X_WT_start * d.closest_T_m;
+      contact.p_body_W_m = s_W - placed.point_radius_m * contact.n_W;
+      contact.gap_m = gap_m;
+      contact.rigid_object = i;
+      contacts->push_back(contact);
+    }
+  }
+}
+
+void RigidObjectContacts::AddBodyContacts(const std::vector<int>& surface_nodes,
+                                          const Eigen::VectorXd& x_start_m,
+                                          const Eigen::VectorXd& x_end_m,
+                                          std::vector<Contact>* contacts) const {
+  for (int i = 0; i < num_objects(); ++i) {
+    const Placed& placed = objects_[i];
+    const Eigen::Isometry3d X_OW = placed.object.X_WO.inverse();
+    for (const int node : surface_nodes) {
+      const Eigen::Vector3d x_W = x_start_m.segment<3>(3 * node);
+      const double threshold_m = margin_m_ + (x_end_m.segment<3>(3 * node) - x_W).norm();
+      if (placed.box_W_m.exteriorDistance(x_W) > threshold_m) continue;
+      const ToolDistance d = placed.field.Calc(X_OW * x_W);
+      if (d.distance_m > threshold_m) continue;
+      Contact contact;
+      contact.on_tool = false;
+      contact.rigid_object = i;
+      contact.n_W = placed.object.X_WO.linear() * d.normal_T;  // out of the object
+      contact.p_tool_W_m = placed.object.X_WO * d.closest_T_m;
+      contact.p_body_W_m = x_W;
+      contact.gap_m = d.distance_m;
+      contact.nodes = {node, -1, -1};
+      contact.weights = {1.0, 0.0, 0.0};
+      contacts->push_back(contact);
+    }
+  }
+}
+
+RigidObjectContacts::Penetration RigidObjectContacts::CalcDeepest(
+    const Eigen::Vector3d& p_W_m) const {
+  Penetration deepest;
+  deepest.distance_m = std::numeric_limits<double>::infinity();
+  for (const Placed& placed : objects_) {
+    if (placed.box_W_m.exteriorDistance(p_W_m) > 0.0) continue;  // outside: d > 0
+    const ToolDistance d = placed.field.Calc(placed.object.X_WO.inverse() * p_W_m);
+    if (d.distance_m >= deepest.distance_m) continue;
+    deepest.distance_m = d.distance_m;
+    deepest.closest_W_m = placed.object.X_WO * d.closest_T_m;
+    deepest.normal_W = placed.object.X_WO.linear() * d.normal_T;
+  }
+  return deepest;
+}
+
+}  // namespace hapsim::contact

@@ -1,0 +1,153 @@
+// Tests of the `objects` list of config/scene.h (DESIGN.md §9): rigid and deformable entries
+// parse to the expected values; a rigid-only scene has no body (builds no FEM); each kind of bad
+// input throws InputError with the expected line and key; a rigid mesh object is read from disk
+// and its file is named in errors.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <string>
+
+#include "config/scene.h"
+#include "config/simulation_builder.h"
+#include "tests/config/scene_test_support.h"
+
+namespace hapsim::config {
+namespace {
+
+// Trailing comments number the lines.
+constexpr char kObjectsScene[] = R"(name: objects                                 #  1
+time: {dt_s: 0.02, num_steps: 10}             #  2
+objects:                                      #  3
+  - name: tray                                #  4
+    rigid:                                    #  5
+      shape: {box: {half_extents_m: [0.1, 0.08, 0.005]}}   #  6
+      position_m: [0, 0, -0.005]              #  7
+  - name: wall                                #  8
+    rigid:                                    #  9
+      shape: {cylinder: {radius_m: 0.02, length_m: 0.1}}   # 10
+      position_m: [0.05, 0, 0.02]             # 11
+      rotation_vector_rad: [1.5707963267948966, 0, 0]   # 12
+  - name: organ                               # 13
+    deformable:                               # 14
+      mesh: {box: {min_m: [-0.02, -0.02, 0], max_m: [0.02, 0.02, 0.02], cells: [2, 2, 1]}}  # 15
+      material: {youngs_modulus_Pa: 5000, poisson_ratio: 0.45, density_kg_m3: 1000}   # 16
+tool: {shape: {sphere: {radius_m: 0.005}}, mass_kg: 0.02, position_m: [0, 0, 0.05]}   # 17
+coupling: {k_lin_N_m: 500, b_lin_N_s_m: 2, k_ang_N_m_rad: 0, b_ang_N_m_s_rad: 0}   # 18
+device: {trajectory: [{t_s: 0, position_m: [0, 0, 0.05]}]}   # 19
+)";
+
+constexpr char kLabel[] = "objects.yaml";
+constexpr char kOrganLines[] =
+    R"(  - name: organ                               # 13
+    deformable:                               # 14
+      mesh: {box: {min_m: [-0.02, -0.02, 0], max_m: [0.02, 0.02, 0.02], cells: [2, 2, 1]}}  # 15
+      material: {youngs_modulus_Pa: 5000, poisson_ratio: 0.45, density_kg_m3: 1000}   # 16
+)";
+
+using test::BadCase;
+using test::Replace;
+
+TEST(ObjectsSceneTest, RigidAndDeformableObjectsParse) {
+  const Scene scene = ParseScene(kObjectsScene, kLabel, "");
+  ASSERT_TRUE(scene.body.has_value());
+  EXPECT_EQ(scene.body_name, "organ");
+  EXPECT_EQ(scene.body->material.youngs_modulus_Pa, 5000.0);
+  ASSERT_EQ(scene.rigid_objects.size(), 2u);
+  const contact::RigidObject& tray = scene.rigid_objects[0].object;
+  EXPECT_EQ(tray.name, "tray");
+  EXPECT_EQ(tray.shape.kind, ToolShape::Kind::kBox);
+  EXPECT_EQ(tray.shape.half_extents_m, Eigen::Vector3d(0.1, 0.08, 0.005));
+  EXPECT_TRUE(tray.X_WO.translation().isApprox(Eigen::Vector3d(0, 0, -0.005)));
+  EXPECT_TRUE(tray.X_WO.linear().isIdentity());
+  EXPECT_EQ(scene.rigid_objects[0].location.line, 5);
+  const contact::RigidObject& wall = scene.rigid_objects[1].object;
+  EXPECT_EQ(wall.shape.kind, ToolShape::Kind::kCylinder);
+  // A quarter turn about x takes the cylinder's axis z to −y.
+  EXPECT_TRUE((wall.X_WO.linear() * Eigen::Vector3d::UnitZ()).isApprox(-Eigen::Vector3d::UnitY()));
+  // The visual frame gets them in order.
+  const contact::VisualFrameOptions options = MakeVisualFrameOptions(scene);
+  ASSERT_EQ(options.rigid_objects.size(), 2u);
+  EXPECT_EQ(options.rigid_objects[1].name, "wall");
+}
+
+TEST(ObjectsSceneTest, ARigidOnlySceneHasNoBody) {
+  const Scene scene = ParseScene(Replace(kObjectsScene, kOrganLines, ""), kLabel, "");
+  EXPECT_FALSE(scene.body.has_value());
+  EXPECT_EQ(scene.rigid_objects.size(), 2u);
+}
+
+TEST(ObjectsSceneTest, BodyIsTheShorthandForOneDeformableObject) {
+  const std::string body =
+      "body:\n  mesh: {box: {min_m: [0, 0, 0], max_m: [1, 1, 1], cells: [1, 1, 1]}}\n"
+      "  material: {youngs_modulus_Pa: 5000, poisson_ratio: 0.45, density_kg_m3: 1000}\n";
+  const Scene scene = ParseScene(Replace(kObjectsScene, kOrganLines, "") + body, kLabel, "");
+  ASSERT_TRUE(scene.body.has_value());
+  EXPECT_EQ(scene.body_name, "body");
+  // `body` and a deformable object: two deformable objects, not supported yet.
+  test::ExpectError(std::string(kObjectsScene) + body, kLabel, 14, "objects[2].deformable",
+                    "one deformable object per scene for now; line 20 gives one already");
+}
+
+const BadCase kBadCases[] = {
+    {"UnknownObjectKey", "  - name: tray", "  - nam: tray", 4, "objects[0].nam",
+     "allowed keys here: name, deformable, rigid"},
+    {"NoKind",
+     "    rigid:                                    #  5\n      shape: {box: {half_extents_m: "
+     "[0.1, 0.08, 0.005]}}   #  6\n      position_m: [0, 0, -0.005]              #  7\n",
+     "", 4, "objects[0]", "exactly one of deformable, rigid"},
+    {"DuplicateName", "  - name: wall", "  - name: tray", 8, "objects[1].name",
+     "duplicate object name 'tray' (first given on line 4)"},
+    {"EmptyName", "  - name: wall", "  - name: ''", 8, "objects[1].name", "must not be empty"},
+    {"UnknownRigidKey", "      position_m: [0, 0, -0.005]", "      offset_m: [0, 0, -0.005]", 7,
+     "objects[0].rigid.offset_m", "allowed keys here: shape, position_m, rotation_vector_rad"},
+    {"BadRigidShape", "{box: {half_extents_m: [0.1, 0.08, 0.005]}}",
+     "{box: {half_extents_m: [0.1, 0, 0.005]}}", 6, "objects[0].rigid.shape.box.half_extents_m",
+     "must be > 0"},
+    {"NoShape", "{box: {half_extents_m: [0.1, 0.08, 0.005]}}", "{}", 6, "objects[0].rigid.shape",
+     "exactly one of sphere, capsule, cylinder, box, mesh"},
+};
+
+class ObjectsSceneBadInputTest : public testing::TestWithParam<BadCase> {};
+
+TEST_P(ObjectsSceneBadInputTest, ThrowsAtLineAndKey) {
+  const BadCase& c = GetParam();
+  test::ExpectError(Replace(kObjectsScene, c.find, c.replace), kLabel, c.line, c.key,
+                    c.message_part);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, ObjectsSceneBadInputTest, testing::ValuesIn(kBadCases),
+                         [](const testing::TestParamInfo<BadCase>& info) {
+                           return std::string(info.param.name);
+                         });
+
+TEST(ObjectsSceneTest, RigidObjectsNeedATool) {
+  std::string scene = kObjectsScene;
+  scene = scene.substr(0, scene.find("tool:"));
+  test::ExpectError(scene, kLabel, 3, "objects", "a rigid object needs a tool");
+}
+
+// A closed mesh object is read from its file, kept in its own frame; an open one is an error
+// naming the mesh file.
+TEST(ObjectsSceneTest, RigidMeshObjectIsReadInItsOwnFrame) {
+  const test::TempFolder folder("rigid_mesh");
+  // A unit tetrahedron away from the origin: kept there (not re-centred like a tool).
+  const std::string tetra =
+      "v 1 0 0\nv 2 0 0\nv 1 1 0\nv 1 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+  folder.Write("tetra.obj", tetra);
+  const std::string yaml = Replace(kObjectsScene, "{cylinder: {radius_m: 0.02, length_m: 0.1}}",
+                                   "{mesh: {file: tetra.obj}}");
+  const Scene scene = ParseScene(yaml, kLabel, folder.path());
+  const contact::RigidObject& wall = scene.rigid_objects[1].object;
+  EXPECT_EQ(wall.shape.kind, ToolShape::Kind::kMesh);
+  EXPECT_EQ(wall.shape.mesh.vertices_m.col(0), Eigen::Vector3d(1, 0, 0));
+  EXPECT_EQ(scene.rigid_objects[1].mesh_file, folder.path() + "/tetra.obj");
+  // One face removed: open.
+  folder.Write("tetra.obj", tetra.substr(0, tetra.rfind("f 2 3 4")));
+  const std::optional<InputError> error = test::ParseError(yaml, kLabel, folder.path());
+  ASSERT_TRUE(error.has_value());
+  EXPECT_EQ(error->file(), folder.path() + "/tetra.obj") << error->what();
+}
+
+}  // namespace
+}  // namespace hapsim::config
