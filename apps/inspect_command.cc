@@ -115,16 +115,15 @@ nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* bod
 // Runs the first `num_frames` frames as `hapsim sim` would (the scripted device) and returns the
 // first frame's time (it factors the system and precomputes the compliance) apart from the
 // median and largest of the others, and the most contacts seen.
-nlohmann::json MeasureFrames(const config::Scene& scene, const config::Body* body, int num_frames) {
+nlohmann::json MeasureFrames(const config::Scene& scene, const std::optional<config::Body>& body,
+                             int num_frames) {
   std::vector<double> frame_s;
   int max_contacts = 0;
   if (scene.tool) {
     contact::VisualFrameOptions options = config::MakeVisualFrameOptions(scene);
     options.dt_s = scene.dt_s;
     options.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
-    contact::VisualFrame frame(body ? &body->model : nullptr, body ? &scene.body->options : nullptr,
-                               body ? body->external_force_N : Eigen::VectorXd(), scene.tool->model,
-                               options);
+    contact::VisualFrame frame = config::MakeVisualFrame(scene, body, options);
     fem::State state = body ? fem::MakeRestState(body->model) : fem::State{};
     ToolState tool = scene.tool->initial_state;
     const device::ScriptedTrajectory trajectory(scene.trajectory);
@@ -195,11 +194,9 @@ void RunInspect(const InspectOptions& options) {
   const config::Scene scene = config::LoadScene(options.scene_path);
   const int num_frames = std::min(options.num_frames, scene.num_steps);
   const double resident_before = ReadResidentBytes();
-  const std::optional<config::Body> body =
-      scene.body ? std::optional<config::Body>(config::MakeBody(*scene.body, scene.gravity_m_s2))
-                 : std::nullopt;
+  const std::optional<config::Body> body = config::MakeSceneBody(scene);
   nlohmann::json report = DescribeScene(scene, body ? &*body : nullptr);
-  report["frame_cost"] = MeasureFrames(scene, body ? &*body : nullptr, num_frames);
+  report["frame_cost"] = MeasureFrames(scene, body, num_frames);
   report["model_memory_bytes"] = std::max(0.0, ReadResidentBytes() - resident_before);
   PrintReport(report);
   if (!options.json_path.empty()) {

@@ -22,6 +22,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -224,18 +225,18 @@ hapsim_lcm::sim_frame_t MakeSimFrame(const fem::State& body, const Matrix3Xi& su
 long RunFrames(const config::Scene& scene, device::HapticMode mode,
                const RunCommandOptions& options, const hapsim_lcm::run_info_t& info, lcm::LCM* lcm,
                Listener* listener, pid_t* child, int* child_code, std::string* child_end) {
-  const config::Body body = config::MakeBody(*scene.body, scene.gravity_m_s2);
+  const std::optional<config::Body> body = config::MakeSceneBody(scene);
   contact::VisualFrameOptions visual = config::MakeVisualFrameOptions(scene);
   visual.dt_s = scene.dt_s;
   visual.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
   visual.export_contact_rows = mode == device::HapticMode::kLcp;
   // coupling: there is no haptic tool; the model is linearised at the visual tool (and unused).
   const bool haptic_tool = mode != device::HapticMode::kCoupling;
-  contact::VisualFrame frame(body.model, scene.body->options, body.external_force_N,
-                             scene.tool->model, visual);
-  fem::State body_state = fem::MakeRestState(body.model);
+  contact::VisualFrame frame = config::MakeVisualFrame(scene, body, visual);
+  // A scene of rigid objects: no body state, no surface (SIM_FRAME has no nodes).
+  fem::State body_state = body ? fem::MakeRestState(body->model) : fem::State{};
   ToolState visual_tool = scene.tool->initial_state;
-  const Matrix3Xi surface = fem::ExtractBoundarySurface(body.model.mesh);
+  const Matrix3Xi surface = body ? fem::ExtractBoundarySurface(body->model.mesh) : Matrix3Xi();
   *child = options.no_spawn ? -1 : SpawnHaptic(options);
   const double duration_s =
       options.duration_s > 0.0 ? options.duration_s : scene.num_steps * scene.dt_s;
@@ -289,9 +290,7 @@ int RunVisual(RunCommandOptions options) {
                      "not 1-16 hex digits (and not 0): '" + options.run_id + "'");
   }
   const config::Scene scene = config::LoadScene(options.scene_path);
-  if (!scene.tool || !scene.body)
-    throw InputError(scene.file, 0, scene.tool ? "body" : "tool",
-                     "`hapsim run` needs a deformable body and a tool");
+  if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim run` needs a tool");
   const device::HapticMode mode =
       config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/false);
   lcm::LCM lcm(options.lcm_url);

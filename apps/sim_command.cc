@@ -1,15 +1,16 @@
 // `hapsim sim SCENE --mode M [--compliance C] [--visual-hz H] [--out DIR] [--summary FILE.json]`:
 // the in-process multirate simulator (device/multirate_simulator.h) on a scene with a body, a tool
-// and a scripted device. Writes <out>/haptic.csv (one row per haptic step: device force and torque, tool pose,
-// contacts in the model, model age), <out>/frames.csv (one row per visual frame: stage timings,
-// contacts, solver figures, penetration) and a JSON summary; all after the run, atomically.
+// and a scripted device. Writes <out>/haptic.csv (one row per haptic step: device force and torque,
+// tool pose, contacts in the model, model age), <out>/frames.csv (one row per visual frame: stage
+// timings, contacts, solver figures, penetration) and a JSON summary; all after the run,
+// atomically.
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "apps/commands.h"
 #include "config/body_builder.h"
@@ -142,9 +143,7 @@ void RunSim(const SimCommandOptions& options) {
   const device::MultirateOptions multirate =
       config::MakeMultirateOptions(scene, mode, CalcStepsPerFrame(scene, options.visual_hz));
   // A scene without a deformable body builds no FEM: the tool among its rigid objects.
-  const std::optional<config::Body> body =
-      scene.body ? std::optional<config::Body>(config::MakeBody(*scene.body, scene.gravity_m_s2))
-                 : std::nullopt;
+  const std::optional<config::Body> body = config::MakeSceneBody(scene);
   device::MultirateSimulator simulator(
       body ? &body->model : nullptr, scene.body ? &scene.body->options : nullptr,
       body ? body->external_force_N : Eigen::VectorXd(), scene.tool->model,
@@ -208,10 +207,11 @@ void AddSimCommand(CLI::App* app) {
       "linear (the paper's model), lcp (a unilateral solve on the frame's contact rows each\n"
       "haptic step), coupling (standard multirate), reference (all at the haptic rate, exact\n"
       "compliance); default: the scene's haptic.mode");
-  sim->add_option("--compliance", options->compliance,
-                  "Body contact compliance: warped (precomputed at rest, warped by node rotations)\n"
-                  "or exact (forward solves with the step's factor); default: the scene's\n"
-                  "contact.compliance");
+  sim->add_option(
+      "--compliance", options->compliance,
+      "Body contact compliance: warped (precomputed at rest, warped by node rotations)\n"
+      "or exact (forward solves with the step's factor); default: the scene's\n"
+      "contact.compliance");
   sim->add_option(
          "--visual-hz", options->visual_hz,
          "Visual frame rate; the haptic rate must be a whole multiple (default: 1/time.dt_s)")

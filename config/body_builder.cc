@@ -70,4 +70,9 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
   return body;
 }
 
+std::optional<Body> MakeSceneBody(const Scene& scene) {
+  if (!scene.body) return std::nullopt;
+  return MakeBody(*scene.body, scene.gravity_m_s2);
+}
+
 }  // namespace hapsim::config

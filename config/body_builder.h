@@ -4,6 +4,7 @@
 // box holding no node) throw InputError at the scene line of the offending key.
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,5 +27,8 @@ struct Body {
 
 // Builds the mesh (lattice, cut lattice or file), the model, the loads and the probes.
 Body MakeBody(const BodyScene& body, const Eigen::Vector3d& gravity_m_s2);
+
+// The scene's deformable object built, or none: a scene of rigid objects builds no FEM.
+std::optional<Body> MakeSceneBody(const Scene& scene);
 
 }  // namespace hapsim::config

@@ -278,8 +278,9 @@ Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
   ReadObjects(root, base_dir, &scene);
   ReadSimulationSections(root, time, base_dir, &scene);
   if (!scene.tool && !scene.rigid_objects.empty())
-    root.FailKey("objects", "a rigid object needs a tool: its contacts are solved in the visual "
-                            "frame (`hapsim sim`, `hapsim run`)");
+    root.FailKey("objects",
+                 "a rigid object needs a tool: its contacts are solved in the visual "
+                 "frame (`hapsim sim`, `hapsim run`)");
   return scene;
 }
 

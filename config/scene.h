@@ -81,7 +81,8 @@
 //                                      # the friction law; its 1 kHz rows are normal only)
 //     lcp_max_rows: 512                # ≥ 1: rows the 1 kHz lcp solver holds (≈ 16 n² bytes);
 //                                      # a frame with more falls back to the linear model
-//     safety:                          # optional: the haptic process's limits (device/haptic_safety.h)
+//     safety:                          # optional: the haptic process's limits
+//     (device/haptic_safety.h)
 //       {max_force_N: 10, max_torque_N_m: 0.5, max_force_rate_N_s: 5000,
 //        max_torque_rate_N_m_s: 250, device_stale_s: 0.005, model_stale_s: 0.1,
 //        blend_time_s: 0.01}           # > 0 each; any subset, the rest as shown

@@ -1,5 +1,7 @@
 #include "config/simulation_builder.h"
 
+#include <stdexcept>
+
 #include "core/error.h"
 
 namespace hapsim::config {
@@ -17,6 +19,14 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   for (const RigidObjectScene& rigid : scene.rigid_objects)
     options.rigid_objects.push_back(rigid.object);
   return options;
+}
+
+contact::VisualFrame MakeVisualFrame(const Scene& scene, const std::optional<Body>& body,
+                                     const contact::VisualFrameOptions& options) {
+  if (!scene.tool) throw std::invalid_argument("MakeVisualFrame: the scene has no tool");
+  return contact::VisualFrame(body ? &body->model : nullptr, body ? &scene.body->options : nullptr,
+                              body ? body->external_force_N : Eigen::VectorXd(), scene.tool->model,
+                              options);
 }
 
 device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& option_value,
@@ -37,7 +47,8 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
                      "the reference mode runs in `hapsim sim` only; the two processes render "
                      "linear, lcp or coupling");
   if (mode == device::HapticMode::kLcp && scene.contact.law == contact::ContactLaw::kFriction)
-    throw InputError(file, 0, key, "lcp solves normal rows only; the scene's contact law is friction");
+    throw InputError(file, 0, key,
+                     "lcp solves normal rows only; the scene's contact law is friction");
   return mode;
 }
 

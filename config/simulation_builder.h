@@ -3,6 +3,9 @@
 // the visual frame and the multirate simulator: the one mapping `hapsim sim`, the tests and the
 // two-process run share.
 
+#include <optional>
+
+#include "config/body_builder.h"
 #include "config/scene.h"
 #include "contact/visual_frame.h"
 #include "device/multirate_simulator.h"
@@ -13,6 +16,11 @@ namespace hapsim::config {
 // objects. The visual and
 // haptic steps are left to the caller (MultirateSimulator sets them from MultirateOptions).
 contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene);
+
+// The visual frame of the scene: on its deformable body when it has one (built by
+// MakeSceneBody, which must outlive the frame), or on its rigid objects alone.
+contact::VisualFrame MakeVisualFrame(const Scene& scene, const std::optional<Body>& body,
+                                     const contact::VisualFrameOptions& options);
 
 // The haptic mode of a run: the scene's haptic.mode, or `option_value` when given (a
 // command-line override). Throws InputError naming `option` (or haptic.mode, when the scene's

@@ -26,7 +26,7 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr contact::ComplianceMethod kComplianceMethods[] = {contact::ComplianceMethod::kWarped,
-                                                           contact::ComplianceMethod::kExact};
+                                                            contact::ComplianceMethod::kExact};
 constexpr ContactLaw kContactLaws[] = {ContactLaw::kEquality, ContactLaw::kUnilateral,
                                        ContactLaw::kFriction};
 constexpr HapticMode kHapticModes[] = {HapticMode::kLinear, HapticMode::kLcp, HapticMode::kCoupling,
@@ -181,8 +181,7 @@ ContactScene ReadContact(const YamlMap& map) {
   contact.restitution =
       map.GetDoubleOr("restitution", contact.restitution, ClosedInterval(0.0, 1.0));
   contact.margin_m = map.GetDoubleOr("margin_m", contact.margin_m, AtLeast(0.0));
-  contact.compliance =
-      map.GetEnumOr("compliance", Choices(kComplianceMethods), contact.compliance);
+  contact.compliance = map.GetEnumOr("compliance", Choices(kComplianceMethods), contact.compliance);
   return contact;
 }
 
@@ -225,7 +224,8 @@ HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, C
     haptic.rate_hz = map->GetDoubleOr("rate_hz", haptic.rate_hz, Above(0.0));
     haptic.mode = map->GetEnumOr("mode", Choices(kHapticModes), haptic.mode);
     if (haptic.mode == HapticMode::kLcp && law == ContactLaw::kFriction)
-      map->FailKey("mode", "lcp solves normal rows only; it cannot be used with contact law friction");
+      map->FailKey("mode",
+                   "lcp solves normal rows only; it cannot be used with contact law friction");
     haptic.lcp_max_rows = map->GetIntOr("lcp_max_rows", haptic.lcp_max_rows, AtLeast(1));
     if (const std::optional<YamlMap> safety = map->FindMap("safety"))
       haptic.safety = ReadSafety(*safety);
