@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   hapsim::apps::AddHapticCommand(&app);
   hapsim::apps::AddReplayCommand(&app);
   hapsim::apps::AddInspectCommand(&app);
+  hapsim::apps::AddViewCommand(&app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

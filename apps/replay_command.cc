@@ -21,6 +21,7 @@
 
 #include "apps/commands.h"
 #include "apps/haptic_inputs.h"
+#include "apps/logged_run.h"
 #include "apps/realtime.h"
 #include "apps/run_info.h"
 #include "config/scene.h"
@@ -92,45 +93,12 @@ bool DecodeEvent(const messages::LcmLogEvent& event, const std::string& log_path
   return false;
 }
 
-// The run to replay: `requested` (--run-id) or, when empty, the log's only run. `runs` counts the
-// hapsim messages of each run id in the log.
-std::int64_t ChooseRun(const std::map<std::int64_t, long>& runs, const std::string& requested,
-                       const std::string& path) {
-  std::string listing;
-  for (const auto& [id, count] : runs)
-    listing += (listing.empty() ? "" : ", ") + messages::FormatRunId(id) + " (" +
-               std::to_string(count) + " messages)";
-  if (!requested.empty()) {
-    std::int64_t id = 0;
-    if (!messages::ParseRunId(requested, &id))
-      throw InputError("--run-id", 0, "", "not 1-16 hex digits (and not 0): '" + requested + "'");
-    if (!runs.count(id))
-      throw InputError(path, 0, "--run-id",
-                       "no run " + messages::FormatRunId(id) + " in the log; it holds " + listing);
-    return id;
-  }
-  if (runs.empty()) throw InputError(path, 0, "", "no hapsim messages in the log");
-  if (runs.size() > 1)
-    throw InputError(path, 0, "",
-                     "the log holds " + std::to_string(runs.size()) + " runs: " + listing +
-                         "; choose one with --run-id");
-  return runs.begin()->first;
-}
-
-// Reads the log twice: once for the runs it holds (a message's run id is at a fixed place, so
-// nothing is decoded), then the chosen run's messages. Other runs' messages are left alone.
+// Reads the log twice: once for the run to replay (ChooseLoggedRun), then its messages. Other
+// runs' messages are left alone.
 LogContents ReadLog(const std::string& path, const std::string& requested_run) {
-  std::map<std::int64_t, long> runs;
-  messages::LcmLogEvent event;
-  {
-    messages::LcmLogReader log(path);  // throws at a truncated or corrupt event, naming its byte
-    std::int64_t run_id = 0;
-    while (log.Next(&event))
-      if (messages::PeekRunId(event.data.data(), static_cast<int>(event.data.size()), &run_id))
-        ++runs[run_id];
-  }
   LogContents contents;
-  contents.run_id = ChooseRun(runs, requested_run, path);
+  contents.run_id = ChooseLoggedRun(path, requested_run);
+  messages::LcmLogEvent event;
   messages::LcmLogReader log(path);
   while (log.Next(&event)) {
     std::int64_t run_id = 0;

@@ -259,7 +259,7 @@ Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
                  const std::string& base_dir) {
   const YamlMap root = YamlMap::Parse(yaml_text, file_label);
   root.CheckKeys({"name", "description", "gravity_m_s2", "time", "body", "objects", "tool",
-                  "coupling", "contact", "haptic", "device"});
+                  "coupling", "contact", "haptic", "device", "task"});
   Scene scene;
   scene.file = file_label;
   scene.name = root.GetString("name");

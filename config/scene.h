@@ -93,6 +93,15 @@
 //                                      # rotation_vector_rad optional, default 0
 //     hand: {mass_kg: 0.3, k_N_m: 300, b_N_s_m: 10}   # optional: the simulated hand of
 //                                      # `hapsim haptic --device hand`; mass > 0, k, b ≥ 0
+//   task:                              # optional (with a tool): the trainee's task (`hapsim
+//                                      # train`): touch every target with the device force
+//                                      # inside the band for hold_s in one go
+//     targets:                         # ≥ 1; names unique
+//       - {name: left_lobe, position_m: [0.02, 0, 0.03], radius_m: 0.008}   # radius > 0
+//     force_band_N: [0.5, 2.0]         # 0 ≤ min < max; default [0.5, 2.0]
+//     hold_s: 0.5                      # > 0, default 0.5
+//     force_limit_N: 4.0               # > band max, default 4: time above it is scored
+//     time_limit_s: 60                 # > 0, default the scene's duration (time.num_steps·dt_s)
 
 #include <Eigen/Core>
 #include <optional>
@@ -203,6 +212,23 @@ struct HapticScene {
   int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
 };
 
+// A palpation target of the task: a ball on or near the tissue's rest surface.
+struct PalpationTarget {
+  std::string name;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // centre, world
+  double radius_m = 0.0;
+  SourceLocation location;
+};
+
+struct TaskScene {
+  std::vector<PalpationTarget> targets;
+  double force_band_min_N = 0.5;
+  double force_band_max_N = 2.0;
+  double hold_s = 0.5;
+  double force_limit_N = 4.0;
+  double time_limit_s = 0.0;  // the scene's duration when not given
+};
+
 // The value contact::ToString / device::ToString names `name`, or nullopt (command-line overrides).
 std::optional<ContactLaw> ParseContactLaw(const std::string& name);
 std::optional<HapticMode> ParseHapticMode(const std::string& name);
@@ -226,6 +252,7 @@ struct Scene {
   HapticScene haptic;
   std::vector<device::Waypoint> trajectory;  // device.trajectory, times strictly increasing
   device::HandParams hand;                   // device.hand: `hapsim haptic --device hand`
+  std::optional<TaskScene> task;             // `hapsim train`
 };
 
 // Loads and validates a scene file. Throws hapsim::InputError naming file, line and key.

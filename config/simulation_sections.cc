@@ -268,13 +268,43 @@ std::vector<device::Waypoint> ReadTrajectory(const YamlMap& device) {
   return trajectory;
 }
 
+TaskScene ReadTask(const YamlMap& map, double duration_s) {
+  map.CheckKeys({"targets", "force_band_N", "hold_s", "force_limit_N", "time_limit_s"});
+  TaskScene task;
+  for (const YamlMap& item : map.GetMapList("targets")) {
+    item.CheckKeys({"name", "position_m", "radius_m"});
+    PalpationTarget target;
+    target.name = item.GetString("name");
+    if (target.name.empty()) item.FailKey("name", "must not be empty");
+    for (const PalpationTarget& other : task.targets) {
+      if (other.name == target.name)
+        item.FailKey("name", "duplicate target name '" + target.name + "' (first given on line " +
+                                 std::to_string(other.location.line) + ")");
+    }
+    target.position_m = item.GetVector3("position_m");
+    target.radius_m = item.GetDouble("radius_m", Above(0.0));
+    target.location = LocationOf(item);
+    task.targets.push_back(target);
+  }
+  if (task.targets.empty()) map.FailKey("targets", "needs at least one target");
+  const Eigen::Vector2d band =
+      map.GetVector2Or("force_band_N", Eigen::Vector2d(0.5, 2.0), AtLeast(0.0));
+  if (!(band[0] < band[1])) map.FailKey("force_band_N", "must be [min, max] with min < max");
+  task.force_band_min_N = band[0];
+  task.force_band_max_N = band[1];
+  task.hold_s = map.GetDoubleOr("hold_s", task.hold_s, Above(0.0));
+  task.force_limit_N = map.GetDoubleOr("force_limit_N", task.force_limit_N, Above(band[1]));
+  task.time_limit_s = map.GetDoubleOr("time_limit_s", duration_s, Above(0.0));
+  return task;
+}
+
 }  // namespace
 
 void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std::string& base_dir,
                             Scene* scene) {
   const std::optional<YamlMap> tool = root.FindMap("tool");
   if (!tool.has_value()) {
-    for (const char* key : {"coupling", "contact", "haptic", "device"}) {
+    for (const char* key : {"coupling", "contact", "haptic", "device", "task"}) {
       if (root.Has(key)) root.FailKey(key, "applies only to a scene with a tool; there is none");
     }
     return;
@@ -294,6 +324,8 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
   const YamlMap device = root.GetMap("device");
   scene->trajectory = ReadTrajectory(device);
   if (const std::optional<YamlMap> hand = device.FindMap("hand")) scene->hand = ReadHand(*hand);
+  if (const std::optional<YamlMap> task = root.FindMap("task"))
+    scene->task = ReadTask(*task, scene->num_steps * scene->dt_s);
 }
 
 std::optional<ContactLaw> ParseContactLaw(const std::string& name) {

@@ -195,19 +195,30 @@ std::string YamlMap::GetString(const std::string& key) const {
   return value.Scalar();
 }
 
-Eigen::Vector3d YamlMap::ReadVector3(const std::string& key, bool integer,
+Eigen::VectorXd YamlMap::ReadNumbers(const std::string& key, int count, bool integer,
                                      const Bounds& bounds) const {
   const YAML::Node& value = Require(key).value;
-  const std::string expected = integer ? "a list of 3 integers" : "a list of 3 numbers";
-  if (!value.IsSequence() || value.size() != 3) {
+  const std::string expected = "a list of " + std::to_string(count) +
+                               (integer ? " integers" : " numbers");
+  if (!value.IsSequence() || value.size() != static_cast<std::size_t>(count)) {
     FailKey(key, "must be " + expected + ", got " + DescribeNode(value));
   }
-  Eigen::Vector3d vector;
-  for (int i = 0; i < 3; ++i) {
+  Eigen::VectorXd vector(count);
+  for (int i = 0; i < count; ++i) {
     vector[i] =
         ReadNumber(key, value[i], integer, bounds, "element " + std::to_string(i + 1) + " ");
   }
   return vector;
+}
+
+Eigen::Vector3d YamlMap::ReadVector3(const std::string& key, bool integer,
+                                     const Bounds& bounds) const {
+  return ReadNumbers(key, 3, integer, bounds);
+}
+
+Eigen::Vector2d YamlMap::GetVector2Or(const std::string& key, const Eigen::Vector2d& default_value,
+                                      const Bounds& bounds) const {
+  return Has(key) ? Eigen::Vector2d(ReadNumbers(key, 2, /*integer=*/false, bounds)) : default_value;
 }
 
 Eigen::Vector3d YamlMap::GetVector3(const std::string& key, const Bounds& bounds) const {

@@ -78,6 +78,8 @@ class YamlMap {
   std::string GetStringOr(const std::string& key, const std::string& default_value) const;
   Eigen::Vector3d GetVector3Or(const std::string& key, const Eigen::Vector3d& default_value,
                                const Bounds& bounds = Any()) const;
+  Eigen::Vector2d GetVector2Or(const std::string& key, const Eigen::Vector2d& default_value,
+                               const Bounds& bounds = Any()) const;
   double GetDoubleOr(const std::string& key, double default_value,
                      const Bounds& bounds = Any()) const;
   int GetIntOr(const std::string& key, int default_value, const Bounds& bounds = Any()) const;
@@ -109,6 +111,8 @@ class YamlMap {
   const Entry& Require(const std::string& key) const;  // throws "missing required key"
   double ReadNumber(const std::string& key, const YAML::Node& node, bool integer,
                     const Bounds& bounds, const std::string& element) const;
+  Eigen::VectorXd ReadNumbers(const std::string& key, int count, bool integer,
+                              const Bounds& bounds) const;
   Eigen::Vector3d ReadVector3(const std::string& key, bool integer, const Bounds& bounds) const;
   int GetChoiceIndex(const std::string& key, const std::vector<std::string>& names) const;
 

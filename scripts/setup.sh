@@ -13,7 +13,9 @@ cd "$(dirname "$0")/.."
 # LCM (message types, UDP multicast transport between the visual and the haptic process, event
 # logs; liblcm-bin has lcm-gen, lcm-logger and lcm-logplayer), libssl-dev (OpenSSL's SHA-256 of
 # the files a run reads, recorded in its log), clang and libclang-rt-14-dev (libFuzzer and the
-# sanitizer runtimes for scripts/fuzz.sh).
+# sanitizer runtimes for scripts/fuzz.sh), OpenCV's viz (VTK), imgcodecs and videoio with libx11
+# (`hapsim view` and `hapsim train`: the 3D window, PNG screenshots, AVI videos), xvfb, xdotool
+# and x11-utils (headless windows in the tests, driven as a person would; xwininfo).
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas0-serial
@@ -21,6 +23,8 @@ packages=(
   liblcm-dev liblcm-bin libssl-dev
   nlohmann-json3-dev python3 python3-matplotlib
   clang libclang-rt-14-dev
+  libopencv-viz-dev libopencv-imgcodecs-dev libopencv-videoio-dev libx11-dev
+  xvfb xdotool x11-utils
 )
 
 missing=()

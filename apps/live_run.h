@@ -1,0 +1,45 @@
+#pragma once
+// One run heard live over LCM (`hapsim view` without a log, `hapsim train`): its RUN_INFO and its
+// timeline, filled by the LCM receive thread. Messages of other runs are ignored and counted
+// (messages/message_gate.h); without a run id, the first RUN_INFO heard names the run.
+
+#include <atomic>
+#include <cstdint>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <mutex>
+#include <optional>
+
+#include "apps/run_timeline.h"
+#include "messages/adapters.h"
+#include "messages/message_gate.h"
+
+namespace hapsim::apps {
+
+class LiveRun {
+ public:
+  // Subscribes on `lcm` (handled by the caller's ReceiveThread). run_id 0: the first run heard.
+  LiveRun(lcm::LCM* lcm, std::int64_t run_id, const char* process);
+
+  // The run's RUN_INFO, waiting up to wait_s for it; nullopt on timeout.
+  std::optional<hapsim_lcm::run_info_t> WaitForRunInfo(double wait_s) const;
+  // Null until RUN_INFO has come (the haptic rate sets the timeline's step).
+  RunTimeline* timeline() { return timeline_.get(); }
+  // Seconds since the last SIM_FRAME arrived (infinity before the first).
+  double SecondsSinceLastFrame() const;
+  const messages::MessageGate& gate() const { return gate_; }
+
+ private:
+  void OnRunInfo(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  void OnFrame(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  void OnHapticState(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  void OnDeviceState(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+
+  messages::MessageGate gate_;
+  mutable std::mutex mutex_;
+  std::optional<hapsim_lcm::run_info_t> info_;
+  std::unique_ptr<RunTimeline> timeline_;  // set once, under mutex_, then only read
+  std::atomic<std::int64_t> last_frame_ns_{0};
+};
+
+}  // namespace hapsim::apps

@@ -1,0 +1,72 @@
+#pragma once
+// Draws one instant of a run with OpenCV viz (VTK, rendering off screen: x11_window.h), for `hapsim
+// view` and `hapsim train`: the tissue surface coloured by displacement, the rigid objects, the
+// tool, the device's ghost, the contact points, the force arrow, palpation targets, and an
+// on-screen gauge of the device force and the haptic loop's state. Drawing is a function of a
+// ViewState alone, so a picture of a logged run at time t is the picture the live run showed at t.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/viz.hpp>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "config/scene.h"
+#include "core/eigen_types.h"
+#include "messages/adapters.h"
+
+namespace hapsim::apps {
+
+// What one picture shows: the newest messages of the run at one instant.
+struct ViewState {
+  bool has_frame = false;
+  hapsim_lcm::sim_frame_t frame;  // body surface, visual tool, contacts
+  bool has_haptic = false;
+  hapsim_lcm::haptic_state_t haptic;  // device force, the loop's state
+  bool has_device = false;
+  hapsim_lcm::device_state_t device;  // the device's pose: the ghost
+  // Per target of the scene's task (trainer): reached (drawn green) or not (orange).
+  std::vector<bool> targets_reached;
+  std::string status;  // an extra line under the gauge (the trainer's task), may be empty
+};
+
+struct PainterOptions {
+  double displacement_scale_m = 0.002;  // displacement drawn at the top of the colour map
+  double force_scale_m_N = 0.01;        // length of the force arrow per newton
+  double force_gauge_N = 10.0;          // full scale of the on-screen gauge
+};
+
+class ScenePainter {
+ public:
+  // Draws the fixed parts (rigid objects, targets) and points the camera at the scene.
+  // rest_positions_m: (3 × N) the body's rest node positions (for the displacement), or empty.
+  ScenePainter(cv::viz::Viz3d* window, const config::Scene& scene, Matrix3Xd rest_positions_m,
+               const PainterOptions& options);
+
+  void Draw(const ViewState& state);
+
+ private:
+  void DrawBody(const hapsim_lcm::sim_frame_t& frame);
+  void DrawGauge(const ViewState& state);
+  // showWidget / removeWidget, remembering what is shown (viz asserts on removing an unknown name).
+  void Show(const std::string& name, const cv::viz::Widget& widget,
+            const cv::Affine3d& pose = cv::Affine3d::Identity());
+  void Hide(const std::string& name);
+
+  cv::viz::Viz3d* window_;
+  const config::Scene& scene_;
+  Matrix3Xd rest_positions_m_;
+  PainterOptions options_;
+  std::set<std::string> shown_;
+  ToolShape ghost_shape_;  // the tool, a little larger (see Inflate)
+};
+
+// A viz widget of `shape` (core/tool_shape.h) in its own frame; wireframe for the ghost.
+cv::viz::Widget3D MakeShapeWidget(const ToolShape& shape, const cv::viz::Color& color,
+                                  bool wireframe);
+
+// The pose x, q (w, x, y, z) as viz wants it.
+cv::Affine3d ToAffine(const double x_W_m[3], const double q[4]);
+
+}  // namespace hapsim::apps

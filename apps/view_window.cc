@@ -1,0 +1,90 @@
+#include "apps/view_window.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <optional>
+#include <stdexcept>
+
+#include "config/body_builder.h"
+#include "core/error.h"
+
+namespace hapsim::apps {
+namespace fs = std::filesystem;
+namespace {
+
+// `path` with ".<pid>.tmp" before its extension (the extension tells OpenCV the format).
+std::string TemporaryName(const std::string& path) {
+  const fs::path target(path);
+  return (target.parent_path() / ("." + target.stem().string() + "." + std::to_string(getpid()) +
+                                  ".tmp" + target.extension().string()))
+      .string();
+}
+
+}  // namespace
+
+cv::Size ParseWindowSize(const std::string& text, const std::string& option) {
+  int width = 0, height = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &width, &x, &height, &extra) != 3 || x != 'x' ||
+      width < 64 || height < 64 || width > 8192 || height > 8192)
+    throw InputError("", 0, option, "must be WIDTHxHEIGHT, each 64 to 8192, got '" + text + "'");
+  return {width, height};
+}
+
+ViewWindow::ViewWindow(const std::string& title, const config::Scene& scene, cv::Size size,
+                       const PainterOptions& options, bool open_window)
+    : renderer_(title + " (renderer)") {
+  if (std::getenv("DISPLAY") == nullptr)
+    throw std::runtime_error(
+        "no X display (DISPLAY is unset): the pictures are rendered with "
+        "OpenGL on one; for headless use run under Xvfb, e.g. xvfb-run -a");
+  renderer_.setOffScreenRendering();
+  renderer_.setWindowSize(size);
+  const std::optional<config::Body> body = config::MakeSceneBody(scene);
+  painter_ = std::make_unique<ScenePainter>(
+      &renderer_, scene, body ? body->model.mesh.rest_positions_m : Matrix3Xd(), options);
+  if (open_window) window_ = std::make_unique<X11Window>(title, size);
+}
+
+const cv::Mat& ViewWindow::Show(const ViewState& state) {
+  painter_->Draw(state);
+  picture_ = renderer_.getScreenshot();  // renders
+  if (window_) window_->Show(picture_);
+  return picture_;
+}
+
+std::vector<WindowEvent> ViewWindow::Poll() {
+  return window_ ? window_->Poll() : std::vector<WindowEvent>();
+}
+
+void ViewWindow::SaveScreenshot(const std::string& path) const {
+  const std::string temp = TemporaryName(path);
+  if (picture_.empty() || !cv::imwrite(temp, picture_)) {
+    std::error_code ignored;
+    fs::remove(temp, ignored);
+    throw std::runtime_error("cannot write the screenshot " + path);
+  }
+  fs::rename(temp, path);
+}
+
+void ViewWindow::AddVideoFrame(const std::string& path, double fps) {
+  if (!video_.isOpened()) {
+    video_path_ = path;
+    video_temp_path_ = TemporaryName(path);
+    if (!video_.open(video_temp_path_, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps,
+                     picture_.size()))
+      throw std::runtime_error("cannot write the video " + path);
+  }
+  video_.write(picture_);
+}
+
+void ViewWindow::FinishVideo() {
+  if (!video_.isOpened()) return;
+  video_.release();
+  fs::rename(video_temp_path_, video_path_);
+}
+
+}  // namespace hapsim::apps

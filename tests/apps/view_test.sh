@@ -1,0 +1,148 @@
+#!/usr/bin/env bash
+# End-to-end checks of `hapsim view` as a person uses it, in Xvfb (run by ctest from the
+# repository root), and of `hapsim inspect` on a rigid scene:
+#  1. a live view of `hapsim run scenes/block_press.yaml` takes a screenshot at 1.5 s; the log of
+#     that run viewed at 1.5 s from another folder shows the same messages (frame, haptic step,
+#     device sample) and the same picture (identical pixels when measured; 0.01% allowed);
+#  2. the picture shows the run: the tissue's tone where the block is, the tool pressed into it
+#     at 1.5 s (the tool's blue above the block) and, against the picture at 0 s, the tissue
+#     reddened by its displacement around the tool;
+#  3. --video writes an AVI of one picture per 1/fps s of the log (its header's frame count);
+#     the playback window takes keys typed by xdotool (space, period, bracketright, q);
+#  4. bad input: a missing log and a bad --size exit 2 naming them, writing nothing;
+#  5. `hapsim inspect` of a rigid-only scene builds no FEM (0 DOFs, fem_built false).
+# Traffic stays on this machine: a private network namespace when root, else a unique port.
+# Usage: view_test.sh HAPSIM
+set -euo pipefail
+hapsim="$(realpath "$1")"
+if [ -z "${HAPSIM_IN_NETNS:-}" ] && [ "$(id -u)" -eq 0 ] && unshare -n true 2>/dev/null; then
+  exec env HAPSIM_IN_NETNS=1 unshare -n bash -c \
+    'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' "$0" "$@"
+fi
+port=$((20000 + $$ % 20000))
+url="udpm://239.255.76.67:$port?ttl=0&recv_buf_size=4194304"
+work=$(mktemp -d -p /dev/shm 2> /dev/null || mktemp -d)
+trap 'kill $(jobs -p) 2> /dev/null || true; rm -rf "$work"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+repo=$(pwd)
+mkdir "$work/elsewhere"
+# One X server for the whole test.
+display=":$((100 + $$ % 400))"
+Xvfb "$display" -screen 0 1280x1024x24 -nolisten tcp > "$work/xvfb.log" 2>&1 &
+export DISPLAY="$display"
+for _ in $(seq 50); do xdpyinfo > /dev/null 2>&1 && break; sleep 0.1; done
+xdpyinfo > /dev/null 2>&1 || fail "Xvfb did not start: $(cat "$work/xvfb.log")"
+
+# 1. Live screenshot during a run, then the log's at the same time.
+"$hapsim" view --lcm-url "$url" --screenshot "$work/live.png" --at 1.5 --size 800x600 \
+  > "$work/live.out" 2>&1 &
+viewer=$!
+"$hapsim" run scenes/block_press.yaml --lcm-url "$url" --log "$work/run.lcm" > "$work/run.out" 2>&1 ||
+  fail "hapsim run: $(cat "$work/run.out")"
+wait "$viewer" || fail "live view: $(cat "$work/live.out")"
+(cd "$work/elsewhere" && "$hapsim" view ../run.lcm --screenshot "$work/log.png" --at 1.5 \
+  --size 800x600 > "$work/log.out" 2>&1) || fail "log view: $(cat "$work/log.out")"
+# The displacement colours, saturated at 1 mm, before the press and during it.
+for t in 0 1.5; do
+  "$hapsim" view "$work/run.lcm" --screenshot "$work/colour_$t.png" --at "$t" --size 800x600 \
+    --displacement-scale 0.001 > "$work/colour.out" 2>&1 || fail "log view at $t: $(cat "$work/colour.out")"
+done
+shown() { grep -o "(frame [0-9]*, haptic step [0-9]*, device sample [0-9]*)" "$1"; }
+[ -n "$(shown "$work/live.out")" ] && [ "$(shown "$work/live.out")" = "$(shown "$work/log.out")" ] ||
+  fail "live and log pictures show different messages: $(shown "$work/live.out") vs $(shown "$work/log.out")"
+echo "live and log at 1.5 s: $(shown "$work/log.out")"
+
+# 2. What the pictures show, and 1's comparison.
+/usr/bin/python3 - "$work/live.png" "$work/log.png" "$work/colour_0.png" "$work/colour_1.5.png" <<'PY'
+import sys
+import matplotlib.image as image
+import numpy as np
+live, log, start, pressed = (image.imread(p)[:, :, :3] for p in sys.argv[1:5])
+assert live.shape == log.shape == (600, 800, 3), (live.shape, log.shape)
+differ = (np.abs(live - log).sum(axis=2) > 0).mean()
+print(f"live vs log: {100 * differ:.4f}% of pixels differ")
+assert differ <= 1e-4, differ
+# Tissue: the painter's rest tone (RGB 235, 170, 170 lit by VTK: red clearly above green and blue).
+def tissue(img):
+    r, g, b = img[:, :, 0], img[:, :, 1], img[:, :, 2]
+    return (r > g + 0.08) & (r > b + 0.08)
+# The tool: light blue (RGB 120, 200, 230 lit), blue and green above red.
+def tool(img):
+    r, g, b = img[:, :, 0], img[:, :, 1], img[:, :, 2]
+    return (b > r + 0.15) & (g > r + 0.1)
+assert tissue(log).mean() > 0.05, f"no tissue in the picture ({tissue(log).mean():.3f})"
+assert tool(log).mean() > 0.02, f"no tool in the picture ({tool(log).mean():.3f})"
+# Pressed: at 1.5 s the tool's lowest pixel is lower in the image than at 0 s (5 mm down, ~10
+# pixels at this zoom), and the tissue next to it is redder (its displacement colour).
+rows_tool = lambda img: np.nonzero(tool(img).any(axis=1))[0]
+assert rows_tool(pressed).max() >= rows_tool(start).max() + 5, (rows_tool(pressed).max(), rows_tool(start).max())
+# Redness (red over green) of the tissue seen in both pictures: the rest tone at 0 s, the colour
+# map's red once the press has moved the block by a millimetre.
+red = lambda img, mask: (img[:, :, 0] - img[:, :, 1])[mask].mean()
+mask = tissue(pressed) & tissue(start)
+print(f"tissue redness {red(start, mask):.3f} at 0 s, {red(pressed, mask):.3f} at 1.5 s")
+assert red(pressed, mask) > red(start, mask) + 0.1, "no displacement colour where the block is pressed"
+PY
+
+# 3. A video of the log, and playback keys in the window.
+"$hapsim" view "$work/run.lcm" --video "$work/run.avi" --fps 10 --size 320x240 > "$work/video.out" 2>&1 ||
+  fail "video: $(cat "$work/video.out")"
+/usr/bin/python3 - "$work/run.avi" <<'PY'
+import struct, sys
+data = open(sys.argv[1], "rb").read()
+assert data[:4] == b"RIFF" and data[8:12] == b"AVI ", "not an AVI file"
+at = data.find(b"avih")
+frames = struct.unpack("<I", data[at + 8 + 16: at + 8 + 20])[0]
+# One picture per 0.1 s from the first frame (0 s) to the last (frame 99 of 33.3 Hz: 2.97 s),
+# the span rounded to whole pictures: round(29.7) + 1 = 31.
+assert frames == 31, frames
+print(f"video: {frames} frames")
+PY
+"$hapsim" view "$work/run.lcm" --size 640x480 > "$work/play.out" 2>&1 &
+player=$!
+window=""
+for _ in $(seq 100); do
+  window=$(xdotool search --onlyvisible --name "hapsim view: block_press" 2> /dev/null | head -1) &&
+    [ -n "$window" ] && break
+  sleep 0.1
+done
+[ -n "$window" ] || fail "no viewer window"
+# No window manager in Xvfb: focus the window, then type as a keyboard does (XTEST).
+xdotool windowfocus --sync "$window"
+xdotool key --delay 100 space period period bracketright
+sleep 0.5
+kill -0 "$player" || fail "the viewer died under the keys: $(cat "$work/play.out")"
+xdotool key q  # viz closes its window on q
+for _ in $(seq 50); do kill -0 "$player" 2> /dev/null || break; sleep 0.1; done
+kill "$player" 2> /dev/null && fail "the viewer did not close on q"
+wait "$player" || fail "the viewer failed: $(cat "$work/play.out")"
+# The keys took effect: paused by space, two frames on by period, a second on by bracketright.
+grep -q "key space: log .* paused" "$work/play.out" &&
+  grep -q "key bracketright: log .* paused" "$work/play.out" ||
+  fail "playback keys not taken: $(cat "$work/play.out")"
+
+# 4. Bad input.
+set +e
+"$hapsim" view "$work/missing.lcm" --screenshot "$work/x.png" > "$work/bad.out" 2>&1
+status=$?
+set -e
+[ "$status" -eq 2 ] && grep -q "missing.lcm" "$work/bad.out" || fail "missing log: exit $status: $(cat "$work/bad.out")"
+set +e
+"$hapsim" view "$work/run.lcm" --screenshot "$work/x.png" --size 10x10 > "$work/bad.out" 2>&1
+status=$?
+set -e
+[ "$status" -eq 2 ] && grep -q -- "--size" "$work/bad.out" || fail "bad size: exit $status: $(cat "$work/bad.out")"
+[ ! -e "$work/x.png" ] || fail "a failed view wrote a screenshot"
+ls -a "$work" | grep -q "\.tmp" && fail "temporary files left behind"
+
+# 5. A rigid-only scene builds no FEM.
+"$hapsim" inspect scenes/probe_on_tray.yaml --json "$work/inspect.json" --frames 5 > "$work/inspect.out"
+grep -q "FEM: none built" "$work/inspect.out" || fail "inspect: $(cat "$work/inspect.out")"
+/usr/bin/python3 - "$work/inspect.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["fem_built"] is False, r
+assert [o["kind"] for o in r["objects"]] == ["rigid"] and r["objects"][0]["dofs"] == 0, r
+assert r["frame_cost"]["frames_run"] == 5, r
+PY
+echo "view and inspect: all checks passed"
