@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   hapsim::apps::AddReplayCommand(&app);
   hapsim::apps::AddInspectCommand(&app);
   hapsim::apps::AddViewCommand(&app);
+  hapsim::apps::AddTrainCommand(&app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

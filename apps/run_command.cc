@@ -10,7 +10,6 @@
 // event log (a temporary name, renamed when the run ends).
 
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,6 +25,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "apps/child_process.h"
 #include "apps/commands.h"
 #include "apps/log_writer.h"
 #include "apps/realtime.h"
@@ -145,36 +145,7 @@ pid_t SpawnHaptic(const RunCommandOptions& options) {
     args.insert(args.end(), {"--duration", std::to_string(options.duration_s)});
   if (!options.haptic_summary_path.empty())
     args.insert(args.end(), {"--summary", options.haptic_summary_path});
-  // Everything the child needs is built before fork: between fork and exec only
-  // async-signal-safe calls (other threads may hold the allocator's locks).
-  std::vector<char*> argv;
-  for (std::string& arg : args) argv.push_back(arg.data());
-  argv.push_back(nullptr);
-  static const char kExecFailed[] = "hapsim run: exec of the haptic process failed\n";
-  const pid_t parent = getpid();
-  const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error("cannot fork the haptic process");
-  if (pid == 0) {
-    prctl(PR_SET_PDEATHSIG, SIGTERM);   // the haptic process stops if this one dies
-    if (getppid() != parent) _exit(1);  // ... or has already died
-    close_range(3, ~0U, 0);             // not this process's LCM sockets and log
-    execv("/proc/self/exe", argv.data());
-    [[maybe_unused]] const ssize_t ignored = write(2, kExecFailed, sizeof(kExecFailed) - 1);
-    _exit(127);
-  }
-  return pid;
-}
-
-// "" while the child runs; else how it ended.
-std::string CheckChild(pid_t pid, int* exit_code) {
-  int status = 0;
-  if (pid <= 0 || waitpid(pid, &status, WNOHANG) != pid) return "";
-  if (WIFEXITED(status)) {
-    *exit_code = WEXITSTATUS(status);
-    return "exited with code " + std::to_string(*exit_code);
-  }
-  *exit_code = 128 + WTERMSIG(status);
-  return std::string("was killed by signal ") + strsignal(WTERMSIG(status));
+  return SpawnSelf(std::move(args), "the haptic process");
 }
 
 hapsim_lcm::sim_frame_t MakeSimFrame(const fem::State& body, const Matrix3Xi& surface,

@@ -79,6 +79,13 @@ ViewState RunTimeline::StateAt(double t_s) const {
   return state;
 }
 
+std::vector<hapsim_lcm::haptic_state_t> RunTimeline::HapticStatesAfter(std::int64_t step) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<hapsim_lcm::haptic_state_t> states;
+  for (auto it = haptic_.upper_bound(step); it != haptic_.end(); ++it) states.push_back(it->second);
+  return states;
+}
+
 double RunTimeline::first_frame_s() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return frames_.empty() ? 0.0 : frames_.begin()->second.t_s;

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "apps/scene_painter.h"
 #include "messages/adapters.h"
@@ -29,6 +30,8 @@ class RunTimeline {
   // floor(t / Δt_haptic), or the last before it; the device state that step used (its
   // device_sequence), or the last before it. has_* false where there is none.
   ViewState StateAt(double t_s) const;
+  // Copies of the haptic states after `step`, in step order (a scorer's next states).
+  std::vector<hapsim_lcm::haptic_state_t> HapticStatesAfter(std::int64_t step) const;
   // The time of the first and the newest frame (0 and 0 without frames).
   double first_frame_s() const;
   double last_frame_s() const;

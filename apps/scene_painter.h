@@ -32,7 +32,7 @@ struct ViewState {
 };
 
 struct PainterOptions {
-  double displacement_scale_m = 0.002;  // displacement drawn at the top of the colour map
+  double displacement_scale_m = 0.005;  // displacement drawn in the deepest red
   double force_scale_m_N = 0.01;        // length of the force arrow per newton
   double force_gauge_N = 10.0;          // full scale of the on-screen gauge
 };
@@ -45,6 +45,9 @@ class ScenePainter {
                const PainterOptions& options);
 
   void Draw(const ViewState& state);
+  // Displacements from `frame`'s node positions from now on, instead of from the rest shape: a
+  // soft organ that settles under gravity is displaced everywhere, and the touch is what to see.
+  void SetDisplacementReference(const hapsim_lcm::sim_frame_t& frame);
 
  private:
   void DrawBody(const hapsim_lcm::sim_frame_t& frame);
@@ -53,13 +56,16 @@ class ScenePainter {
   void Show(const std::string& name, const cv::viz::Widget& widget,
             const cv::Affine3d& pose = cv::Affine3d::Identity());
   void Hide(const std::string& name);
+  // Shows the tool's or the ghost's widget (made once) at `pose`.
+  void Place(const std::string& name, const cv::Affine3d& pose);
 
   cv::viz::Viz3d* window_;
   const config::Scene& scene_;
   Matrix3Xd rest_positions_m_;
   PainterOptions options_;
   std::set<std::string> shown_;
-  ToolShape ghost_shape_;  // the tool, a little larger (see Inflate)
+  cv::viz::Widget3D tool_widget_;
+  cv::viz::Widget3D ghost_widget_;  // the tool, a little larger (see Inflate), as lines
 };
 
 // A viz widget of `shape` (core/tool_shape.h) in its own frame; wireframe for the ghost.

@@ -8,18 +8,22 @@
 #include <cmath>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "apps/commands.h"
 #include "apps/live_run.h"
+#include "apps/palpation_score.h"
 #include "apps/realtime.h"
 #include "apps/receive_thread.h"
 #include "apps/run_info.h"
 #include "apps/run_timeline.h"
 #include "apps/view_window.h"
 #include "config/scene.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "messages/channels.h"
 
@@ -37,8 +41,10 @@ struct ViewOptions {
   double fps = 30.0;
   double speed = 1.0;
   std::string size = "1024x768";
-  double wait_s = 30.0;     // live: for the run to be heard
-  double duration_s = 0.0;  // live video: seconds to record (0: until the run ends)
+  double wait_s = 30.0;               // live: for the run to be heard
+  double duration_s = 0.0;            // live video: seconds to record (0: until the run ends)
+  double displacement_from_s = -1.0;  // colour displacements from the frame at this time; < 0: rest
+  std::string score_path;             // a log: score the scene's task, write it here and exit
   PainterOptions painter;
 };
 
@@ -84,15 +90,51 @@ std::string Describe(const ViewState& state) {
   return text;
 }
 
+// The task's score over the whole logged run, and when each target was reached (never: +inf).
+nlohmann::json ScoreLoggedRun(const config::Scene& scene, const RunTimeline& timeline,
+                              double haptic_dt_s, std::vector<double>* reached_at_s) {
+  PalpationScorer scorer(*scene.task, scene.tool->model.shape, haptic_dt_s);
+  for (const hapsim_lcm::haptic_state_t& state : timeline.HapticStatesAfter(-1)) scorer.Add(state);
+  const nlohmann::json score = scorer.ToJson();
+  for (const nlohmann::json& target : score["targets"])
+    reached_at_s->push_back(target.value("reached_at_s", std::numeric_limits<double>::infinity()));
+  return score;
+}
+
 void ViewLog(const ViewOptions& options) {
   const LoggedRun run = ReadLoggedRun(options.log_path, options.run_id);
   const config::Scene scene = options.scene_path.empty()
                                   ? LoadLoggedScene(run.info, options.log_path)
                                   : config::LoadScene(options.scene_path);
   const RunTimeline& timeline = *run.timeline;
+  // The task's targets turn green at the time the run reached them.
+  std::vector<double> reached_at_s;
+  if (scene.task && scene.tool) {
+    const nlohmann::json score =
+        ScoreLoggedRun(scene, timeline, 1.0 / run.info.haptic_rate_hz, &reached_at_s);
+    if (!options.score_path.empty()) {
+      WriteFileAtomically(options.score_path,
+                          [&](std::ostream& out) { out << score.dump(2) << '\n'; });
+      std::printf("hapsim view: %d of %zu targets reached in %s -> %s\n",
+                  score["targets_reached"].get<int>(), scene.task->targets.size(),
+                  options.log_path.c_str(), options.score_path.c_str());
+      return;
+    }
+  } else if (!options.score_path.empty()) {
+    throw InputError(options.log_path, 0, "task", "the logged scene has no task to score");
+  }
+  const auto state_at = [&](double t_s) {
+    ViewState state = timeline.StateAt(t_s);
+    for (const double at_s : reached_at_s) state.targets_reached.push_back(at_s <= t_s + 1e-9);
+    return state;
+  };
   const bool interactive = options.screenshot_path.empty() && options.video_path.empty();
   ViewWindow window("hapsim view: " + scene.name, scene, ParseWindowSize(options.size, "--size"),
                     options.painter, interactive);
+  if (options.displacement_from_s >= 0.0) {
+    const ViewState reference = timeline.StateAt(options.displacement_from_s);
+    if (reference.has_frame) window.SetDisplacementReference(reference.frame);
+  }
   Player player;
   player.first_s = timeline.first_frame_s();
   player.last_s = timeline.last_frame_s();
@@ -100,7 +142,7 @@ void ViewLog(const ViewOptions& options) {
   player.speed = options.speed;
   if (!options.screenshot_path.empty()) {
     const double t_s = options.at_s >= 0.0 ? options.at_s : player.last_s;
-    const ViewState state = timeline.StateAt(t_s);
+    const ViewState state = state_at(t_s);
     window.Show(state);
     window.SaveScreenshot(options.screenshot_path);
     std::printf("hapsim view: %s at %.3f s (%s) -> %s\n", options.log_path.c_str(), t_s,
@@ -111,7 +153,7 @@ void ViewLog(const ViewOptions& options) {
     const long num_frames =
         std::lround((player.last_s - player.first_s) * options.fps / options.speed) + 1;
     for (long k = 0; k < num_frames && !g_stop_requested.load(); ++k) {
-      window.Show(timeline.StateAt(player.first_s + k * options.speed / options.fps));
+      window.Show(state_at(player.first_s + k * options.speed / options.fps));
       window.AddVideoFrame(options.video_path, options.fps);
     }
     window.FinishVideo();
@@ -130,7 +172,7 @@ void ViewLog(const ViewOptions& options) {
       player.OnKey(event.key);
     }
     if (quit) break;
-    ViewState state = timeline.StateAt(player.t_s);
+    ViewState state = state_at(player.t_s);
     state.status = player.Status();
     window.Show(state);
     deadline_ns += period_ns;
@@ -251,9 +293,15 @@ void AddViewCommand(CLI::App* app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   view->add_option("--displacement-scale", options->painter.displacement_scale_m,
-                   "Displacement at the top of the colour map, m")
+                   "Displacement drawn in the deepest red, m")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  view->add_option("--score", options->score_path,
+                   "Score the logged run's task (as `hapsim train` does), write FILE.json, exit");
+  view->add_option("--displacement-from", options->displacement_from_s,
+                   "Colour displacements from the body's shape at this time, s (a log; default: "
+                   "from the rest shape)")
+      ->check(CLI::NonNegativeNumber);
   view->callback([options] { RunView(*options); });
 }
 

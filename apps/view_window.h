@@ -30,6 +30,10 @@ class ViewWindow {
 
   // Renders `state`, shows it in the window (if open) and returns the picture (BGR).
   const cv::Mat& Show(const ViewState& state);
+  // Colour displacements from this frame's shape (ScenePainter::SetDisplacementReference).
+  void SetDisplacementReference(const hapsim_lcm::sim_frame_t& frame) {
+    painter_->SetDisplacementReference(frame);
+  }
   // The window's events since the last call; none without a window.
   std::vector<WindowEvent> Poll();
   bool closed() const { return window_ && window_->closed(); }

@@ -77,6 +77,10 @@ Eigen::AlignedBox3d TransformBox(const Eigen::AlignedBox3d& box_O, const Eigen::
 
 }  // namespace
 
+Eigen::AlignedBox3d CalcWorldBox(const RigidObject& object) {
+  return TransformBox(CalcLocalBox(object.shape), object.X_WO);
+}
+
 RigidObjectContacts::RigidObjectContacts(std::vector<RigidObject> objects, const ToolShape& tool,
                                          double margin_m)
     : tool_field_(tool), margin_m_(margin_m) {
@@ -88,7 +92,7 @@ RigidObjectContacts::RigidObjectContacts(std::vector<RigidObject> objects, const
   for (RigidObject& object : objects) {
     ToolDistanceField field(object.shape);
     SamplePoints samples = MakeSamplePoints(object.shape);
-    const Eigen::AlignedBox3d box_W = TransformBox(CalcLocalBox(object.shape), object.X_WO);
+    const Eigen::AlignedBox3d box_W = CalcWorldBox(object);
     objects_.push_back(Placed{std::move(object), std::move(field), std::move(samples.points_m),
                               samples.radius_m, box_W});
   }

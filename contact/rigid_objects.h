@@ -45,6 +45,9 @@ struct RigidObject {
   Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
 };
 
+// The object's bounding box in the world frame.
+Eigen::AlignedBox3d CalcWorldBox(const RigidObject& object);
+
 class RigidObjectContacts {
  public:
   // Builds each object's distance field and feature points once. Throws std::invalid_argument

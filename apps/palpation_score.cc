@@ -1,0 +1,85 @@
+#include "apps/palpation_score.h"
+
+#include <Eigen/Geometry>
+#include <cstdio>
+
+namespace hapsim::apps {
+
+PalpationScorer::PalpationScorer(const config::TaskScene& task, const ToolShape& tool,
+                                 double haptic_dt_s)
+    : task_(task), tool_(tool), haptic_dt_s_(haptic_dt_s), targets_(task.targets.size()) {}
+
+void PalpationScorer::Add(const hapsim_lcm::haptic_state_t& state) {
+  if (state.step <= last_step_) return;  // a repeat or an older step
+  const bool consecutive = state.step == last_step_ + 1;
+  const double t_s = (state.step + 1) * haptic_dt_s_;  // the end of this step
+  const Eigen::Vector3d x_W_m(state.x_W_m[0], state.x_W_m[1], state.x_W_m[2]);
+  const Eigen::Quaterniond q_WT(state.q_WT[0], state.q_WT[1], state.q_WT[2], state.q_WT[3]);
+  const double force_N = Eigen::Map<const Eigen::Vector3d>(state.force_device_W_N).norm();
+  // The path on 10 ms samples: the haptic tool's 1 kHz jitter (tens of micrometres a step)
+  // would otherwise add up to metres over a session.
+  if (state.step % kPathSampleSteps == 0) {
+    if (path_started_) path_length_m_ += (x_W_m - last_x_W_m_).norm();
+    last_x_W_m_ = x_W_m;
+    path_started_ = true;
+  }
+  last_step_ = state.step;
+  peak_force_N_ = std::max(peak_force_N_, force_N);
+  over_limit_ = force_N > task_.force_limit_N;
+  if (over_limit_) time_over_limit_s_ += haptic_dt_s_;
+  const bool in_band = force_N >= task_.force_band_min_N && force_N <= task_.force_band_max_N;
+  const Eigen::Isometry3d X_TW = (Eigen::Translation3d(x_W_m) * q_WT.normalized()).inverse();
+  for (size_t i = 0; i < targets_.size(); ++i) {
+    Target& target = targets_[i];
+    const config::PalpationTarget& where = task_.targets[i];
+    const bool touching = tool_.Calc(X_TW * where.position_m).distance_m <= where.radius_m;
+    target.hold_s = touching && in_band ? (consecutive ? target.hold_s : 0.0) + haptic_dt_s_ : 0.0;
+    // 1e-9: hold_s sums hold_s / dt steps of dt, which may round just below hold_s.
+    if (!target.reached && target.hold_s >= task_.hold_s - 1e-9) {
+      target.reached = true;
+      target.reached_at_s = t_s;
+      if (++num_reached_ == static_cast<int>(targets_.size())) completed_at_s_ = t_s;
+    }
+  }
+}
+
+std::vector<bool> PalpationScorer::reached() const {
+  std::vector<bool> reached;
+  for (const Target& target : targets_) reached.push_back(target.reached);
+  return reached;
+}
+
+std::string PalpationScorer::StatusLine(double force_N) const {
+  char text[256];
+  std::snprintf(text, sizeof(text), "task: %d of %zu targets  %.1f / %.0f s  band %.1f-%.1f N%s%s",
+                num_reached_, targets_.size(), elapsed_s(), task_.time_limit_s,
+                task_.force_band_min_N, task_.force_band_max_N,
+                force_N > task_.force_limit_N ? "   OVER THE FORCE LIMIT" : "",
+                completed() ? "   DONE" : "");
+  return text;
+}
+
+nlohmann::json PalpationScorer::ToJson() const {
+  nlohmann::json targets = nlohmann::json::array();
+  for (size_t i = 0; i < targets_.size(); ++i) {
+    nlohmann::json target{{"name", task_.targets[i].name}, {"reached", targets_[i].reached}};
+    if (targets_[i].reached) target["reached_at_s"] = targets_[i].reached_at_s;
+    targets.push_back(target);
+  }
+  nlohmann::json json{{"steps", last_step_ + 1},
+                      {"elapsed_s", elapsed_s()},
+                      {"targets_reached", num_reached_},
+                      {"targets_total", targets_.size()},
+                      {"completed", completed()},
+                      {"peak_force_N", peak_force_N_},
+                      {"time_over_force_limit_s", time_over_limit_s_},
+                      {"force_limit_N", task_.force_limit_N},
+                      {"force_band_N", {task_.force_band_min_N, task_.force_band_max_N}},
+                      {"hold_s", task_.hold_s},
+                      {"tool_path_length_m", path_length_m_},
+                      {"targets", targets}};
+  if (completed()) json["time_to_complete_s"] = completed_at_s_;
+  return json;
+}
+
+}  // namespace hapsim::apps
