@@ -184,7 +184,8 @@ void RunTrain(TrainOptions options) {
   const std::string out_dir =
       options.out_dir.empty() ? "out/" + scene.name + "_train" : options.out_dir;
   CreateOutputDirectory(out_dir);
-  const std::string log_path = out_dir + "/run.lcm", score_path = out_dir + "/score.json";
+  const std::string log_path = out_dir + "/run.lcm", score_path = out_dir + "/score.json",
+                    haptic_summary_path = out_dir + "/haptic_summary.json";
   const std::int64_t run_id = messages::MakeRunId();
   const double haptic_dt_s = 1.0 / scene.haptic.rate_hz;
   InstallStopHandlers();
@@ -207,7 +208,8 @@ void RunTrain(TrainOptions options) {
   const pid_t child =
       SpawnSelf({"hapsim", "run", options.scene_path, "--device", "external", "--lcm-url",
                  options.lcm_url, "--run-id", messages::FormatRunId(run_id), "--log", log_path,
-                 "--duration", std::to_string(task.time_limit_s)},
+                 "--haptic-summary", haptic_summary_path, "--duration",
+                 std::to_string(task.time_limit_s)},
                 "the visual process");
   std::printf(
       "hapsim train: %s, run %s; %zu targets, force band %.1f-%.1f N, hold %.1f s, limit "
@@ -337,7 +339,8 @@ void AddTrainCommand(CLI::App* app) {
       ->capture_default_str();
   train->add_option("--lcm-url", options->lcm_url, "LCM URL of the run")->capture_default_str();
   train->add_option("--out", options->out_dir,
-                    "Folder for run.lcm, score.json and screenshots (default out/<scene>_train)");
+                    "Folder for run.lcm, score.json, haptic_summary.json and screenshots\n"
+                    "(default out/<scene>_train)");
   train->add_option("--size", options->size, "Window size")->capture_default_str();
   train
       ->add_option("--settle", options->settle_s,

@@ -40,10 +40,20 @@ run_asan() {
   # sanitizer owns the allocator). Left out: BlockPressAccuracy, the one 60 s accuracy sweep
   # (540 s under ASan, a third of the CI budget); it runs the multirate simulator's code that
   # the MultirateSimulator tests run here too.
+  # The window tests (view_test, train_test) run without LeakSanitizer: Mesa's software OpenGL
+  # leaves 112 bytes allocated from its JIT-compiled code (a stack of calloc and an unknown
+  # module, nothing to name in a suppression); every other ASan check stays on. Under ASan the
+  # visual process is several times slower than the 50 Hz the trainer's scene needs, so
+  # train_test checks that the session runs and ends cleanly and reports itself skipped (77).
   (cd build-asan &&
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1 \
       UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-      ctest --output-on-failure -j"$jobs" --timeout 900 -E '^BlockPressAccuracy\.') || status=1
+      ctest --output-on-failure -j"$jobs" --timeout 900 -E '^BlockPressAccuracy\.|^view_test$|^train_test$') ||
+    status=1
+  (cd build-asan &&
+    HAPSIM_SANITIZED=1 ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:strict_string_checks=1 \
+      UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+      ctest --output-on-failure --timeout 900 -R '^view_test$|^train_test$') || status=1
   echo "test_sanitized: ASan+UBSan suite took $((SECONDS - start)) s in all"
 }
 

@@ -12,7 +12,8 @@
 #  4. the log is the session's record: `hapsim view LOG --score` gives the same score, and
 #     `hapsim replay LOG` reproduces every force bit for bit.
 # Traffic stays on this machine: a private network namespace when root, else a unique port.
-# Usage: train_test.sh HAPSIM
+# Usage: train_test.sh HAPSIM   (HAPSIM_TRAIN_KEEP=DIR keeps the session's outputs there:
+# scripts/bench_train.sh reads the haptic loop's summary from it)
 set -euo pipefail
 hapsim="$(realpath "$1")"
 if [ -z "${HAPSIM_IN_NETNS:-}" ] && [ "$(id -u)" -eq 0 ] && unshare -n true 2>/dev/null; then
@@ -61,6 +62,16 @@ xdotool mousemove --sync "$x2" "$y2"
 sleep 1.0
 shoot                 # 3: above the second target
 press "$d2"
+if [ -n "${HAPSIM_SANITIZED:-}" ]; then
+  # Under a sanitizer the frames are too slow for the task: end the session, and require only
+  # that it ran and ended cleanly (a sanitizer report aborts with a non-zero exit).
+  sleep 2
+  xdotool key q
+  wait "$trainer" || fail "the trainer failed under the sanitizer: $(cat "$work/train.out")"
+  [ -s "$work/session/score.json" ] && [ -s "$work/session/run.lcm" ] || fail "no score or log"
+  echo "train: ran and ended cleanly under the sanitizer; the timing checks are skipped"
+  exit 77
+fi
 for _ in $(seq 150); do kill -0 "$trainer" 2> /dev/null || break; sleep 0.1; done
 if kill -0 "$trainer" 2> /dev/null; then
   xdotool key q
@@ -117,4 +128,8 @@ PY
 "$hapsim" replay "$work/session/run.lcm" > "$work/replay.out" 2>&1 ||
   fail "replay: $(cat "$work/replay.out")"
 grep -q "bit for bit" "$work/replay.out" || fail "replay: $(cat "$work/replay.out")"
+if [ -n "${HAPSIM_TRAIN_KEEP:-}" ]; then
+  mkdir -p "$HAPSIM_TRAIN_KEEP" && cp -r "$work/session/." "$HAPSIM_TRAIN_KEEP/"
+  cp "$work/train.out" "$HAPSIM_TRAIN_KEEP/train.out"
+fi
 echo "train: all checks passed"

@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "contact/visual_frame.h"
@@ -127,6 +128,8 @@ TEST(RigidObjects, DeformableBlockOnAFrictionlessPlateCarriesItsWeight) {
   fem::State body = fem::MakeRestState(block.model);
   for (int k = 0; k < 180; ++k) frame.Step(device, &body, &tool);  // 3 s
   const double weight_N = block.mass_kg * kGravity_m_s2;
+  std::printf("block on the plate: plate force %.6f N, m g %.6f N, deepest node %.2e m\n",
+              CalcObjectForceOnBody_N(frame), weight_N, CalcDeepestNodeInPlate_m(body));
   EXPECT_NEAR(CalcObjectForceOnBody_N(frame), weight_N, 5e-3 * weight_N);
   EXPECT_LE(CalcDeepestNodeInPlate_m(body), 1e-4);
   // Nothing touched the tool.
@@ -153,6 +156,9 @@ TEST(RigidObjects, ToolPushedOntoAPlateStopsAtItsSurfaceAndThePlateCarriesTheLoa
     for (int k = 0; k < 180; ++k) frame.Step(device, &no_body, &tool);
     // At rest on the surface the coupling pulls with k · 5 mm, gravity with m g (statics).
     const double load_N = mass_kg * kGravity_m_s2 + k_N_m * device_depth_m;
+    std::printf("tool shape %d on the plate: contact force %.6f N, load %.6f N, depth %.2e m\n",
+                static_cast<int>(kind), frame.contact_force_N().z(), load_N,
+                height_m - tool.x_W_m.z());
     EXPECT_NEAR(frame.contact_force_N().z(), load_N, 5e-3 * load_N);
     EXPECT_LT(frame.contact_force_N().head<2>().norm(), 1e-6 * load_N);
     // Stopped at the surface: its deepest point no more than 0.1 mm inside the plate.
@@ -179,6 +185,8 @@ TEST(RigidObjects, ToolPressingTheBlockAddsItsForceToThePlates) {
   EXPECT_GT(tool_force_N, 2.0 * weight_N);  // a load that counts beside the block's weight
   // Body at rest: plate force = its weight + the tool's push (third law).
   const double expected_N = weight_N + tool_force_N;
+  std::printf("tool on the block on the plate: plate force %.6f N, weight + tool force %.6f N\n",
+              CalcObjectForceOnBody_N(frame), expected_N);
   EXPECT_NEAR(CalcObjectForceOnBody_N(frame), expected_N, 5e-3 * expected_N);
   EXPECT_LE(CalcDeepestNodeInPlate_m(body), 1e-4);
 }
