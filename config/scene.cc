@@ -281,6 +281,12 @@ Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
     root.FailKey("objects",
                  "a rigid object needs a tool: its contacts are solved in the visual "
                  "frame (`hapsim sim`, `hapsim run`)");
+  // One law serves every row of the response, rigid objects' included (DESIGN.md §9 wants those
+  // unilateral): equality would glue a body resting on a support to it.
+  if (!scene.rigid_objects.empty() && scene.contact.law == ContactLaw::kEquality)
+    root.GetMap("contact").FailKey(
+        "law", "equality holds bodies together, and a body resting on a rigid object could not "
+               "lift off it: use unilateral or friction with rigid objects");
   return scene;
 }
 

@@ -40,7 +40,8 @@
 //                                      # exactly one of deformable / rigid
 //     - name: tray                     # required, unique among the objects
 //       rigid:                         # a fixed rigid object: builds no FEM; needs a tool (its
-//                                      # contacts are solved in the visual frame)
+//                                      # contacts are solved in the visual frame) and the
+//                                      # unilateral or friction law (not equality)
 //         shape: {box: {half_extents_m: [0.1, 0.1, 0.005]}}   # as tool.shape (a mesh file:
 //                                      # closed OBJ/STL in metres, kept in its own frame)
 //         position_m: [0, 0, -0.005]   # origin of the shape's frame, world; default 0

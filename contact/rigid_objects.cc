@@ -133,9 +133,12 @@ void RigidObjectContacts::AddToolContacts(const Eigen::Isometry3d& X_WT_start,
                       contacts);
     // The object's sample points against the tool.
     const Placed& placed = objects_[i];
+    const double reach_m = tool_field_.bounding_radius_m() + threshold_m + placed.point_radius_m;
     for (int k = 0; k < placed.points_O_m.cols(); ++k) {
       const Eigen::Vector3d s_W = placed.object.X_WO * placed.points_O_m.col(k);
-      const ToolDistance d = tool_field_.Calc(X_TW * s_W);
+      const Eigen::Vector3d s_T = X_TW * s_W;
+      if (s_T.norm() > reach_m) continue;  // beyond the tool's bounding sphere: no contact
+      const ToolDistance d = tool_field_.Calc(s_T);
       const double gap_m = d.distance_m - placed.point_radius_m;
       if (gap_m > threshold_m) continue;
       Contact contact;

@@ -32,16 +32,7 @@
 set -euo pipefail
 hapsim="$(realpath "$1")"
 driver="$(realpath "$2")"
-if [ -z "${HAPSIM_IN_NETNS:-}" ] && [ "$(id -u)" -eq 0 ] && unshare -n true 2>/dev/null; then
-  exec env HAPSIM_IN_NETNS=1 unshare -n bash -c \
-    'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' "$0" "$@"
-fi
-port=$((20000 + $$ % 20000))
-url="udpm://239.255.76.67:$port?ttl=0&recv_buf_size=4194304"
-# Logs on tmpfs when there is one: a log writer stalled by a busy disk would drop datagrams.
-work=$(mktemp -d -p /dev/shm 2> /dev/null || mktemp -d)
-trap 'kill $(jobs -p) 2> /dev/null || true; rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
+source "$(dirname "$0")/local_network.sh" "$0" "$@"  # url, work, fail
 scene=scenes/block_press.yaml
 mkdir "$work/elsewhere"  # replays run from here: a folder without the scene
 

@@ -15,23 +15,10 @@
 # Usage: view_test.sh HAPSIM
 set -euo pipefail
 hapsim="$(realpath "$1")"
-if [ -z "${HAPSIM_IN_NETNS:-}" ] && [ "$(id -u)" -eq 0 ] && unshare -n true 2>/dev/null; then
-  exec env HAPSIM_IN_NETNS=1 unshare -n bash -c \
-    'ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' "$0" "$@"
-fi
-port=$((20000 + $$ % 20000))
-url="udpm://239.255.76.67:$port?ttl=0&recv_buf_size=4194304"
-work=$(mktemp -d -p /dev/shm 2> /dev/null || mktemp -d)
-trap 'kill $(jobs -p) 2> /dev/null || true; rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
-repo=$(pwd)
+source "$(dirname "$0")/local_network.sh" "$0" "$@"  # url, work, fail, start_xvfb
 mkdir "$work/elsewhere"
 # One X server for the whole test.
-display=":$((100 + $$ % 400))"
-Xvfb "$display" -screen 0 1280x1024x24 -nolisten tcp > "$work/xvfb.log" 2>&1 &
-export DISPLAY="$display"
-for _ in $(seq 50); do xdpyinfo > /dev/null 2>&1 && break; sleep 0.1; done
-xdpyinfo > /dev/null 2>&1 || fail "Xvfb did not start: $(cat "$work/xvfb.log")"
+start_xvfb
 
 # 1. Live screenshot during a run, then the log's at the same time.
 "$hapsim" view --lcm-url "$url" --screenshot "$work/live.png" --at 1.5 --size 800x600 \

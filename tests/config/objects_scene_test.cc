@@ -121,6 +121,13 @@ INSTANTIATE_TEST_SUITE_P(Cases, ObjectsSceneBadInputTest, testing::ValuesIn(kBad
                            return std::string(info.param.name);
                          });
 
+TEST(ObjectsSceneTest, RigidObjectsNeedAUnilateralLaw) {
+  test::ExpectError(std::string(kObjectsScene) + "contact: {law: equality}\n", kLabel, 20,
+                    "contact.law", "use unilateral or friction with rigid objects");
+  EXPECT_NO_THROW(
+      ParseScene(std::string(kObjectsScene) + "contact: {law: unilateral}\n", kLabel, ""));
+}
+
 TEST(ObjectsSceneTest, RigidObjectsNeedATool) {
   std::string scene = kObjectsScene;
   scene = scene.substr(0, scene.find("tool:"));
