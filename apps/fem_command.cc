@@ -33,6 +33,11 @@ config::Scene LoadBodyScene(const std::string& path) {
   config::Scene scene = config::LoadScene(path);
   if (!scene.body)
     throw InputError(path, 0, "body", "the scene has no deformable body; `hapsim fem` needs one");
+  // `fem` steps the deformable object alone: a body resting on a rigid object would fall through.
+  if (!scene.rigid_objects.empty())
+    throw InputError(path, scene.rigid_objects.front().location.line, "objects",
+                     "the scene has rigid objects, which `hapsim fem` does not simulate; run it "
+                     "with `hapsim sim` or `hapsim run`");
   return scene;
 }
 

@@ -285,8 +285,9 @@ Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
   // unilateral): equality would glue a body resting on a support to it.
   if (!scene.rigid_objects.empty() && scene.contact.law == ContactLaw::kEquality)
     root.GetMap("contact").FailKey(
-        "law", "equality holds bodies together, and a body resting on a rigid object could not "
-               "lift off it: use unilateral or friction with rigid objects");
+        "law",
+        "equality holds bodies together, and a body resting on a rigid object could not "
+        "lift off it: use unilateral or friction with rigid objects");
   return scene;
 }
 

@@ -25,7 +25,8 @@
 // What is left approximate: a cylinder tool's side and a box tool's faces against a convex
 // object edge or corner (only the object's own feature points and the tool's feature points are
 // tested, no edge-versus-edge); a capsule's segment is sampled, so against a sharp object edge
-// it may sink by up to the sagitta between samples (≤ r (1 − cos(atan(1/4))) ≈ 3% of r).
+// it may sink by up to the sagitta between samples (r (1 − √(1 − 1/16)) ≈ 3% of r: an edge lies
+// at most r/4 from the nearest sample).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -44,4 +44,14 @@ set -e
 [ "$status" -eq 1 ] || fail "diverging run should exit 1, got $status"
 grep -q "diverged at step" "$work/explicit.err" || fail "message: $(cat "$work/explicit.err")"
 [ ! -e "$work/explicit_out" ] || fail "diverged run must write nothing"
+# A scene with rigid objects (the liver on its tray): `fem` would drop the organ through the
+# tray, so it refuses, naming the objects' line; nothing written.
+set +e
+"$hapsim" fem scenes/liver_palpation.yaml --out "$work/rigid_out" > /dev/null 2> "$work/rigid.err"
+status=$?
+set -e
+[ "$status" -eq 2 ] || fail "a scene with rigid objects should exit 2, got $status"
+grep -q "liver_palpation.yaml:[0-9]*: key 'objects'" "$work/rigid.err" ||
+  fail "message: $(cat "$work/rigid.err")"
+[ ! -e "$work/rigid_out" ] || fail "a refused scene must write nothing"
 echo "fem_command_test: all checks passed"

@@ -78,9 +78,11 @@ PY
 # "  target left_lobe: pointer at (327, 204), touches 16 mm down"
 target() { grep "target $1:" "$work/train.out" | sed -E 's/.*\(([0-9]+), ([0-9]+)\), touches ([0-9]+) mm.*/\1 \2 \3/'; }
 shoot() { xdotool key s; sleep 0.3; }
-# Down until the tool has gone 20 mm past the touch (2 mm a press): about 1 N on this tissue.
-press() { for _ in $(seq $((($1 + 20) / 2))); do xdotool key Down; sleep 0.05; done; }
-lift() { for _ in $(seq $((($1 + 20) / 2))); do xdotool key Up; sleep 0.02; done; }
+# Down until the device is 14 mm past the touch (2 mm a press): ~0.8 N on this tissue, the
+# scripted palpation's depth. (20 mm past, the contact set of this coarse mesh flip-flops and the
+# two-process rendering vibrates: the force left the band and a target was missed.)
+press() { for _ in $(seq $((($1 + 14) / 2))); do xdotool key Down; sleep 0.05; done; }
+lift() { for _ in $(seq $((($1 + 14) / 2))); do xdotool key Up; sleep 0.02; done; }
 
 for attempt in 1 2 3; do
   result=0

@@ -9,11 +9,14 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <exception>
 #include <string>
+#include <vector>
 
 #include "config/body_builder.h"
 #include "config/scene.h"
 #include "config/simulation_builder.h"
+#include "contact/rigid_objects.h"
 #include "tests/fuzz/fuzz_support.h"
 
 namespace {
@@ -149,6 +152,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const device::HapticMode mode = config::ResolveHapticMode(scene, "", "--mode", true);
       config::MakeMultirateOptions(scene, mode, scene.haptic.steps_per_frame);
     });
+    // Rigid objects: the parser checked each shape's distance field, so the contact stage must
+    // take them all (with the tool) without an exception, and their boxes must be finite.
+    std::vector<contact::RigidObject> objects;
+    for (const config::RigidObjectScene& rigid : scene.rigid_objects) {
+      objects.push_back(rigid.object);
+      const Eigen::AlignedBox3d box = contact::CalcWorldBox(rigid.object);
+      fuzz::CheckOrDie(box.min().allFinite() && box.max().allFinite(),
+                       "ParseScene accepted a rigid object with a non-finite extent");
+    }
+    try {
+      contact::RigidObjectContacts contacts(objects, scene.tool->model.shape,
+                                            scene.contact.margin_m);
+    } catch (const std::exception& error) {
+      fuzz::CheckOrDie(false, std::string("ParseScene accepted rigid objects the contact stage "
+                                          "refuses: ") +
+                                  error.what());
+    }
   }
   return 0;
 }
