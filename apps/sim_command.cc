@@ -2,7 +2,8 @@
 // the in-process multirate simulator (device/multirate_simulator.h) on a scene with a body, a tool
 // and a scripted device. Writes <out>/haptic.csv (one row per haptic step: device force and torque,
 // tool pose, contacts in the model, model age), <out>/frames.csv (one row per visual frame: stage
-// timings, contacts, solver figures, penetration) and a JSON summary; all after the run,
+// timings, contacts, solver figures, penetration of the tool and of the rigid objects) and a JSON
+// summary; all after the run,
 // atomically.
 
 #include <cmath>
@@ -73,7 +74,7 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
   WriteFileAtomically(path, [&](std::ostream& out) {
     out << "t_s,coupling_ms,free_tool_ms,free_fem_ms,detection_ms,response_ms,model_ms,sanity_ms,"
            "total_ms,candidates,contacts,active,solver_iterations,solver_residual,"
-           "sanity_corrections,max_penetration_m\n";
+           "sanity_corrections,max_penetration_m,rigid_contacts,max_object_penetration_m\n";
     for (const device::FrameSample& f : record.frames) {
       const contact::VisualFrameStats& s = f.stats;
       out << f.t_s << ',' << 1e3 * s.coupling_s << ',' << 1e3 * s.free_tool_s << ','
@@ -81,7 +82,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
           << 1e3 * s.model_s << ',' << 1e3 * s.sanity_s << ',' << 1e3 * s.total_s << ','
           << s.num_candidates << ',' << s.num_contacts << ',' << s.num_active << ','
           << s.solve.iterations << ',' << s.solve.residual << ',' << s.num_sanity_corrections << ','
-          << s.max_penetration_m << '\n';
+          << s.max_penetration_m << ',' << s.num_rigid_contacts << ','
+          << s.max_object_penetration_m << '\n';
     }
   });
 }
@@ -90,7 +92,7 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
                            contact::ComplianceMethod compliance, int steps_per_frame,
                            const SimRecord& record) {
   std::vector<double> stage[8];
-  double max_penetration_m = 0.0;
+  double max_penetration_m = 0.0, max_object_penetration_m = 0.0;
   int max_contacts = 0;
   for (const device::FrameSample& f : record.frames) {
     const contact::VisualFrameStats& s = f.stats;
@@ -98,6 +100,7 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
                               s.response_s, s.model_s,     s.sanity_s,   s.total_s};
     for (int i = 0; i < 8; ++i) stage[i].push_back(1e3 * values[i]);
     max_penetration_m = std::max(max_penetration_m, s.max_penetration_m);
+    max_object_penetration_m = std::max(max_object_penetration_m, s.max_object_penetration_m);
     max_contacts = std::max(max_contacts, s.num_contacts);
   }
   double peak_N = 0.0, sum_sq = 0.0;
@@ -125,6 +128,8 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
           {"peak_force_N", peak_N},
           {"rms_force_N", record.haptic.empty() ? 0.0 : std::sqrt(sum_sq / record.haptic.size())},
           {"max_penetration_m", max_penetration_m},
+          // deepest body node found inside a rigid object by a frame's sanity pass (then moved out)
+          {"max_object_penetration_m", max_object_penetration_m},
           {"lcp_fallback_steps", lcp_fallbacks}};
 }
 

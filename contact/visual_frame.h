@@ -64,7 +64,8 @@ struct VisualFrameStats {
   int num_rigid_contacts = 0;  // of the candidates: tool or body against a rigid object
   int num_sanity_corrections = 0;
   double max_penetration_m = 0.0;  // deepest contact node inside the tool after the step, ≥ 0
-  // Deepest body node of a body–object contact inside its rigid object after the step, ≥ 0.
+  // Deepest body node of a body–object contact inside its rigid object after the step, as the
+  // sanity pass finds it before moving it out, ≥ 0.
   double max_object_penetration_m = 0.0;
   ContactSolveReport solve;
   fem::StepStats fem;
