@@ -23,8 +23,12 @@ class LiveRun {
 
   // The run's RUN_INFO, waiting up to wait_s for it; nullopt on timeout.
   std::optional<hapsim_lcm::run_info_t> WaitForRunInfo(double wait_s) const;
-  // Null until RUN_INFO has come (the haptic rate sets the timeline's step).
-  RunTimeline* timeline() { return timeline_.get(); }
+  // Null until RUN_INFO has come (the haptic rate sets the timeline's step). The receive thread
+  // sets it once, under the lock this takes; the timeline itself locks its own reads and writes.
+  RunTimeline* timeline() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return timeline_.get();
+  }
   // Seconds since the last SIM_FRAME arrived (infinity before the first).
   double SecondsSinceLastFrame() const;
   const messages::MessageGate& gate() const { return gate_; }
@@ -38,7 +42,7 @@ class LiveRun {
   messages::MessageGate gate_;
   mutable std::mutex mutex_;
   std::optional<hapsim_lcm::run_info_t> info_;
-  std::unique_ptr<RunTimeline> timeline_;  // set once, under mutex_, then only read
+  std::unique_ptr<RunTimeline> timeline_;  // set once by the receive thread, under mutex_
   std::atomic<std::int64_t> last_frame_ns_{0};
 };
 

@@ -70,10 +70,6 @@ class MouseDevice {
     target_W_m_ = x_W_m;
     buttons_ = buttons;
   }
-  Eigen::Vector3d target() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return target_W_m_;
-  }
 
  private:
   void Loop() {
