@@ -40,6 +40,11 @@ void LiveRun::OnRunInfo(const lcm::ReceiveBuffer* buffer, const std::string& cha
 void LiveRun::OnFrame(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
   hapsim_lcm::sim_frame_t msg;
   if (!gate_.Admit(buffer, channel, &msg) || !timeline_) return;
+  std::string error;
+  if (!IsDrawableFrame(msg, &error)) {
+    gate_.CountRejected(channel, error);
+    return;
+  }
   timeline_->Add(msg);
   last_frame_ns_.store(MonotonicNs());
 }

@@ -11,7 +11,9 @@ PalpationScorer::PalpationScorer(const config::TaskScene& task, const ToolShape&
 
 void PalpationScorer::Add(const hapsim_lcm::haptic_state_t& state) {
   if (state.step <= last_step_) return;  // a repeat or an older step
-  const bool consecutive = state.step == last_step_ + 1;
+  // A few missing steps (datagrams lost on the way) do not break a hold; a longer gap does.
+  const std::int64_t gap_steps = last_step_ < 0 ? 1 : state.step - last_step_;
+  const bool consecutive = gap_steps <= kMaxGapSteps;
   const double t_s = (state.step + 1) * haptic_dt_s_;  // the end of this step
   const Eigen::Vector3d x_W_m(state.x_W_m[0], state.x_W_m[1], state.x_W_m[2]);
   const Eigen::Quaterniond q_WT(state.q_WT[0], state.q_WT[1], state.q_WT[2], state.q_WT[3]);
@@ -26,14 +28,16 @@ void PalpationScorer::Add(const hapsim_lcm::haptic_state_t& state) {
   last_step_ = state.step;
   peak_force_N_ = std::max(peak_force_N_, force_N);
   over_limit_ = force_N > task_.force_limit_N;
-  if (over_limit_) time_over_limit_s_ += haptic_dt_s_;
+  if (over_limit_) time_over_limit_s_ += (consecutive ? gap_steps : 1) * haptic_dt_s_;
   const bool in_band = force_N >= task_.force_band_min_N && force_N <= task_.force_band_max_N;
   const Eigen::Isometry3d X_TW = (Eigen::Translation3d(x_W_m) * q_WT.normalized()).inverse();
   for (size_t i = 0; i < targets_.size(); ++i) {
     Target& target = targets_[i];
     const config::PalpationTarget& where = task_.targets[i];
     const bool touching = tool_.Calc(X_TW * where.position_m).distance_m <= where.radius_m;
-    target.hold_s = touching && in_band ? (consecutive ? target.hold_s : 0.0) + haptic_dt_s_ : 0.0;
+    target.hold_s = touching && in_band
+                        ? (consecutive ? target.hold_s + gap_steps * haptic_dt_s_ : haptic_dt_s_)
+                        : 0.0;
     // 1e-9: hold_s sums hold_s / dt steps of dt, which may round just below hold_s.
     if (!target.reached && target.hold_s >= task_.hold_s - 1e-9) {
       target.reached = true;

@@ -23,8 +23,8 @@ class PalpationScorer {
  public:
   PalpationScorer(const config::TaskScene& task, const ToolShape& tool, double haptic_dt_s);
 
-  // The next haptic state of the run (steps in order; a gap counts its missing steps' time
-  // towards nothing: a hold is broken by it).
+  // The next haptic state of the run (steps in order). Up to kMaxGapSteps missing steps (lost
+  // datagrams) count as the state that follows them; a longer gap breaks a hold.
   void Add(const hapsim_lcm::haptic_state_t& state);
 
   std::int64_t last_step() const { return last_step_; }  // −1 before the first
@@ -53,6 +53,7 @@ class PalpationScorer {
   double time_over_limit_s_ = 0.0;
   bool over_limit_ = false;
   static constexpr std::int64_t kPathSampleSteps = 10;
+  static constexpr std::int64_t kMaxGapSteps = 5;
   double path_length_m_ = 0.0;
   bool path_started_ = false;
   Eigen::Vector3d last_x_W_m_ = Eigen::Vector3d::Zero();  // at the last path sample

@@ -50,7 +50,45 @@ void RunTimeline::Forget(double keep_s) {
     const std::int64_t newest_device = device_.rbegin()->first;
     device_.erase(device_.begin(), device_.lower_bound(newest_device - keep_steps));
   }
-  // Frames are kept: a live view of a long run holds ~80 kB a frame, a few MB a minute.
+  if (!frames_.empty()) {
+    const double oldest_s = frames_.rbegin()->second.t_s - keep_s;
+    while (frames_.size() > 1 && frames_.begin()->second.t_s < oldest_s)
+      frames_.erase(frames_.begin());
+  }
+}
+
+bool IsDrawableFrame(const hapsim_lcm::sim_frame_t& frame, std::string* error) {
+  for (const std::vector<float>& p : frame.positions_W_m) {
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      *error = "a node position is not finite";
+      return false;
+    }
+  }
+  for (const std::vector<int32_t>& triangle : frame.triangles) {
+    for (const int32_t node : triangle) {
+      if (node < 0 || node >= frame.num_nodes) {
+        *error = "a triangle names node " + std::to_string(node) + " of " +
+                 std::to_string(frame.num_nodes);
+        return false;
+      }
+    }
+  }
+  for (int i = 0; i < frame.num_contacts; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      if (!std::isfinite(frame.p_W_m[i][d]) || !std::isfinite(frame.n_W[i][d])) {
+        *error = "a contact is not finite";
+        return false;
+      }
+    }
+  }
+  for (const double x : {frame.x_W_m[0], frame.x_W_m[1], frame.x_W_m[2], frame.q_WT[0],
+                         frame.q_WT[1], frame.q_WT[2], frame.q_WT[3], frame.t_s}) {
+    if (!std::isfinite(x)) {
+      *error = "the tool pose or the time is not finite";
+      return false;
+    }
+  }
+  return true;
 }
 
 ViewState RunTimeline::StateAt(double t_s) const {
@@ -134,7 +172,13 @@ LoggedRun ReadLoggedRun(const std::string& path, const std::string& requested_ru
       if (decode(&msg)) info = std::move(msg);
     } else if (event.channel == messages::kSimFrameChannel) {
       hapsim_lcm::sim_frame_t msg;
-      if (decode(&msg)) frames.push_back(std::move(msg));
+      std::string error;
+      if (!decode(&msg)) continue;
+      if (IsDrawableFrame(msg, &error)) {
+        frames.push_back(std::move(msg));
+      } else {
+        ++run.skipped;
+      }
     } else if (event.channel == messages::kHapticStateChannel) {
       hapsim_lcm::haptic_state_t msg;
       if (decode(&msg)) haptic.push_back(std::move(msg));

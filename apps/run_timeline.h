@@ -23,7 +23,8 @@ class RunTimeline {
   void Add(const hapsim_lcm::sim_frame_t& frame);
   void Add(const hapsim_lcm::haptic_state_t& state);  // step < 0 (waiting) is ignored
   void Add(const hapsim_lcm::device_state_t& state);
-  // Drops haptic and device states more than `keep_s` older than the newest (a live view).
+  // Drops frames, haptic and device states more than `keep_s` older than the newest (a live
+  // view; a frame of 5,000 nodes holds ~0.5 MB).
   void Forget(double keep_s);
 
   // The picture at t: the last frame starting at or before t; the haptic state of step
@@ -45,6 +46,11 @@ class RunTimeline {
   std::map<std::int64_t, hapsim_lcm::haptic_state_t> haptic_;  // by step
   std::map<std::int64_t, hapsim_lcm::device_state_t> device_;  // by sequence
 };
+
+// Whether a decoded SIM_FRAME can be drawn: positions finite, every triangle's nodes among the
+// frame's nodes, contacts finite. Untrusted bytes (another publisher on the URL, a corrupt log)
+// decode into any values; *error says what is wrong.
+bool IsDrawableFrame(const hapsim_lcm::sim_frame_t& frame, std::string* error);
 
 // A logged run: its RUN_INFO and its timeline. Reads the run `requested_run` (hex; empty: the
 // log's only run) of the log at `path`; messages that do not decode are skipped and counted.

@@ -8,6 +8,7 @@
 // `hapsim view`.
 
 #include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <Eigen/Geometry>
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <mutex>
@@ -103,6 +105,9 @@ class MouseDevice {
       msg.buttons = buttons;
       lcm_->publish(messages::kDeviceStateChannel, &msg);
       deadline_ns += period_ns;
+      // Held off the CPU for more than a period: start again from now, rather than publish
+      // the missed samples back to back.
+      if (MonotonicNs() > deadline_ns + period_ns) deadline_ns = MonotonicNs();
       SleepUntil(deadline_ns);
     }
   }
@@ -243,15 +248,22 @@ void WriteScore(const PalpationScorer& scorer, const config::Scene& scene, std::
       log_path.c_str(), run_end.c_str());
 }
 
-// Stops the run (SIGINT: `hapsim run` ends its haptic process and completes its log) and waits.
-int StopRun(pid_t child) {
+// Stops the run (SIGINT: `hapsim run` ends its haptic process and completes its log) and waits;
+// after 5 s, kills it (SIGKILL: its log may then be incomplete). Returns its exit status.
+int StopRun(pid_t child, std::string* how) {
   int code = 0;
-  if (CheckChild(child, &code).empty()) {
-    kill(child, SIGINT);
-    for (int i = 0; i < 500 && CheckChild(child, &code).empty(); ++i)
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  *how = CheckChild(child, &code);
+  if (!how->empty()) return code;
+  kill(child, SIGINT);
+  for (int i = 0; i < 500; ++i) {
+    *how = CheckChild(child, &code);
+    if (!how->empty()) return code;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  return code;
+  kill(child, SIGKILL);
+  waitpid(child, nullptr, 0);
+  *how = "did not stop within 5 s of SIGINT and was killed (its log may be incomplete)";
+  return 128 + SIGKILL;
 }
 
 void RunTrain(TrainOptions options) {
@@ -310,47 +322,56 @@ void RunTrain(TrainOptions options) {
   // of a core, and the two simulation processes need the rest of two cores.
   const std::int64_t period_ns = std::llround(1e9 / 15.0);
   std::int64_t deadline_ns = MonotonicNs();
-  while (!input.quit && !window.closed() && !g_stop_requested.load()) {
-    TakeInput(window.Poll(), window, start_W_m.z(), options.depth_step_m, &input);
-    if (input.screenshot) {
-      const std::string path = out_dir + "/screenshot_" + std::to_string(++screenshots) + ".png";
-      window.SaveScreenshot(path);
-      std::printf("hapsim train: t %.2f s: screenshot %s\n", scorer.elapsed_s(), path.c_str());
-      std::fflush(stdout);
-    }
-    if (mouse)
-      mouse->SetTarget(input.pointer_W_m - input.depth_m * Eigen::Vector3d::UnitZ(), input.buttons);
-    RunTimeline* timeline = live.timeline();
-    ViewState state;
-    if (timeline != nullptr) {
-      ScoreNewStates(*timeline, task, &scorer);
-      state = timeline->StateAt(timeline->last_frame_s());
-      if (!reference_set && state.has_frame && state.frame.t_s >= options.settle_s) {
-        window.SetDisplacementReference(state.frame);
-        reference_set = true;
+  // Whatever ends the session (the task, the time limit, q, an error such as a screenshot that
+  // cannot be written), the run is stopped and the score written.
+  std::exception_ptr failure;
+  try {
+    while (!input.quit && !window.closed() && !g_stop_requested.load()) {
+      TakeInput(window.Poll(), window, start_W_m.z(), options.depth_step_m, &input);
+      if (input.screenshot) {
+        const std::string path = out_dir + "/screenshot_" + std::to_string(++screenshots) + ".png";
+        window.SaveScreenshot(path);
+        std::printf("hapsim train: t %.2f s: screenshot %s\n", scorer.elapsed_s(), path.c_str());
+        std::fflush(stdout);
       }
-      timeline->Forget(5.0);
+      if (mouse)
+        mouse->SetTarget(input.pointer_W_m - input.depth_m * Eigen::Vector3d::UnitZ(),
+                         input.buttons);
+      RunTimeline* timeline = live.timeline();
+      ViewState state;
+      if (timeline != nullptr) {
+        ScoreNewStates(*timeline, task, &scorer);
+        state = timeline->StateAt(timeline->last_frame_s());
+        if (!reference_set && state.has_frame && state.frame.t_s >= options.settle_s) {
+          window.SetDisplacementReference(state.frame);
+          reference_set = true;
+        }
+        timeline->Forget(5.0);
+      }
+      state.targets_reached = scorer.reached();
+      const double force_N =
+          state.has_haptic ? Eigen::Map<const Eigen::Vector3d>(state.haptic.force_device_W_N).norm()
+                           : 0.0;
+      state.status = scorer.StatusLine(force_N) + (input.buttons ? "   [button]" : "");
+      window.Show(state);
+      if (scorer.completed() && done_at_s < 0.0) done_at_s = scorer.elapsed_s();
+      // Done: every target reached (a second more to see it), or the run ended (the time limit).
+      if (done_at_s >= 0.0 && scorer.elapsed_s() > done_at_s + 1.0) input.quit = true;
+      child_end = CheckChild(child, &child_code);
+      if (!child_end.empty()) break;
+      deadline_ns += period_ns;
+      SleepUntil(deadline_ns);
     }
-    state.targets_reached = scorer.reached();
-    const double force_N =
-        state.has_haptic ? Eigen::Map<const Eigen::Vector3d>(state.haptic.force_device_W_N).norm()
-                         : 0.0;
-    state.status = scorer.StatusLine(force_N) + (input.buttons ? "   [button]" : "");
-    window.Show(state);
-    if (scorer.completed() && done_at_s < 0.0) done_at_s = scorer.elapsed_s();
-    // Done: every target reached (a second more to see it), or the run ended (the time limit).
-    if (done_at_s >= 0.0 && scorer.elapsed_s() > done_at_s + 1.0) input.quit = true;
-    child_end = CheckChild(child, &child_code);
-    if (!child_end.empty()) break;
-    deadline_ns += period_ns;
-    SleepUntil(deadline_ns);
+  } catch (...) {
+    failure = std::current_exception();
   }
   if (child_end.empty()) {
-    child_code = StopRun(child);
-    child_end = "stopped";
+    child_code = StopRun(child, &child_end);
+    if (child_code == 0 || child_code == 130) child_end = "stopped";
   }
   if (RunTimeline* timeline = live.timeline()) ScoreNewStates(*timeline, task, &scorer);
   WriteScore(scorer, scene, run_id, log_path, score_path, child_end);
+  if (failure) std::rethrow_exception(failure);
   // 130: the run was interrupted (our own SIGINT or the trainee's q): its log is complete.
   if (child_code != 0 && child_code != 130)
     throw std::runtime_error("the visual process " + child_end);

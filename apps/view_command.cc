@@ -214,8 +214,13 @@ void ViewLive(const ViewOptions& options) {
     // The picture at `at` by the log's rule: wait until the frame after it has come, so that
     // the haptic states up to it have too (the haptic loop runs ahead of the frames).
     const double at_s = std::max(options.at_s, 0.0);
-    while (!g_stop_requested.load() && !ended() && timeline.last_frame_s() <= at_s + 1e-6)
+    const std::int64_t give_up_ns = MonotonicNs() + std::llround(1e9 * options.wait_s);
+    while (!g_stop_requested.load() && !ended() && timeline.last_frame_s() <= at_s + 1e-6) {
+      if (!timeline.has_frames() && MonotonicNs() > give_up_ns)
+        throw std::runtime_error("the run sent no SIM_FRAME within " +
+                                 std::to_string(options.wait_s) + " s of its RUN_INFO");
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
     const ViewState state = timeline.StateAt(at_s);
     window.Show(state);
     window.SaveScreenshot(options.screenshot_path);
@@ -290,7 +295,7 @@ void AddViewCommand(CLI::App* app) {
       ->check(CLI::NonNegativeNumber);
   view->add_option("--size", options->size, "Window size")->capture_default_str();
   view->add_option("--wait", options->wait_s, "Live: seconds to wait for the run")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(0.001, 86400.0))
       ->capture_default_str();
   view->add_option("--displacement-scale", options->painter.displacement_scale_m,
                    "Displacement drawn in the deepest red, m")

@@ -64,6 +64,7 @@ X11Window::~X11Window() {
 }
 
 void X11Window::Show(const cv::Mat& bgr) {
+  if (closed_) return;  // drawing into a destroyed window is an X error that ends the process
   if (bgr.size() != size_ || bgr.type() != CV_8UC3)
     throw std::invalid_argument("X11Window::Show: a BGR picture of the window's size is needed");
   for (int y = 0; y < size_.height; ++y) {

@@ -1,6 +1,7 @@
 #include "contact/rigid_objects.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -23,8 +24,10 @@ SamplePoints MakeSamplePoints(const ToolShape& shape) {
     samples.points_m = Matrix3Xd::Zero(3, 1);
     samples.radius_m = shape.radius_m;
   } else if (shape.kind == ToolShape::Kind::kCapsule) {
-    const int intervals =
-        std::max(1, static_cast<int>(std::ceil(2.0 * shape.length_m / shape.radius_m)));
+    // Spacing ≤ r/2, at most 1000 intervals (a needle-thin capsule then sinks by more than 3% of
+    // r at a sharp edge, between samples).
+    const double wanted = std::ceil(2.0 * shape.length_m / shape.radius_m);
+    const int intervals = static_cast<int>(std::clamp(wanted, 1.0, 1000.0));
     samples.points_m = Matrix3Xd::Zero(3, intervals + 1);
     for (int k = 0; k <= intervals; ++k)
       samples.points_m(2, k) = shape.length_m * (static_cast<double>(k) / intervals - 0.5);

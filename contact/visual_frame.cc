@@ -25,7 +25,8 @@ const char* ToString(ComplianceMethod method) {
 VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_options,
                          Eigen::VectorXd body_external_force_N, ToolModel tool,
                          const VisualFrameOptions& options)
-    : VisualFrame(&body, &fem_options, std::move(body_external_force_N), std::move(tool), options) {}
+    : VisualFrame(&body, &fem_options, std::move(body_external_force_N), std::move(tool), options) {
+}
 
 VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_options,
                          Eigen::VectorXd body_external_force_N, ToolModel tool,
@@ -48,6 +49,10 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
       surface_nodes_.assign(surface.data(), surface.data() + surface.size());
       std::sort(surface_nodes_.begin(), surface_nodes_.end());
       surface_nodes_.erase(std::unique(surface_nodes_.begin(), surface_nodes_.end()),
+                           surface_nodes_.end());
+      // A fixed node cannot move: its contact row with an object would be all zero (W_ii = 0).
+      surface_nodes_.erase(std::remove_if(surface_nodes_.begin(), surface_nodes_.end(),
+                                          [&](int n) { return body->dof_is_fixed[3 * n] != 0; }),
                            surface_nodes_.end());
     }
   }
@@ -115,8 +120,8 @@ void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) 
 ContactJacobian VisualFrame::CalcJacobian(const std::vector<Contact>& contacts,
                                           const Eigen::Vector3d& x_tool_W_m) const {
   static const std::vector<std::uint8_t> kNoDofs;
-  return CalcContactJacobian(contacts, x_tool_W_m, rows_per_contact_,
-                             body_ ? body_->num_dofs() : 0, body_ ? body_->dof_is_fixed : kNoDofs);
+  return CalcContactJacobian(contacts, x_tool_W_m, rows_per_contact_, body_ ? body_->num_dofs() : 0,
+                             body_ ? body_->dof_is_fixed : kNoDofs);
 }
 
 void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {

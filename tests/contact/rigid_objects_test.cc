@@ -136,6 +136,34 @@ TEST(RigidObjects, DeformableBlockOnAFrictionlessPlateCarriesItsWeight) {
   EXPECT_EQ(frame.contact_force_N().norm(), 0.0);
 }
 
+// A body clamped at its base onto the plate (its bottom nodes fixed, touching the plate): a fixed
+// node makes no contact row (it would be all zero: W_ii = 0, and the friction law's tangent rows
+// divided 0 by 0, turning the tool's state into NaN before the fix).
+TEST(RigidObjects, FixedNodesOnAnObjectMakeNoContactRows) {
+  const fem::TetMesh mesh = fem::MakeBoxTetMesh({-0.02, -0.02, 0.0}, {0.02, 0.02, 0.02}, {4, 4, 2});
+  fem::Material material;
+  material.youngs_modulus_Pa = 50e3;
+  material.poisson_ratio = 0.45;
+  const fem::Model block = fem::MakeModel(
+      mesh, material, fem::FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0.0));
+  ToolState tool;
+  const ToolModel tool_model = MakeParkedTool(&tool);
+  VisualFrameOptions options = MakeOptions(CouplingParams{2000.0, 20.0, 2.0, 0.02});
+  options.response.solve.law = ContactLaw::kFriction;
+  options.response.solve.friction_coefficient = 0.5;
+  VisualFrame frame(block, fem::FemOptions{}, fem::CalcGravityForce(block, {0, 0, -kGravity_m_s2}),
+                    tool_model, options);
+  DeviceState device;
+  device.x_W_m = tool.x_W_m;
+  fem::State body = fem::MakeRestState(block);
+  for (int k = 0; k < 10; ++k) frame.Step(device, &body, &tool);
+  for (const Contact& contact : frame.contacts()) {
+    for (int k = 0; k < 3; ++k)
+      EXPECT_TRUE(contact.nodes[k] < 0 || !block.dof_is_fixed[3 * contact.nodes[k]]);
+  }
+  EXPECT_TRUE(body.x_m.allFinite() && tool.x_W_m.allFinite() && frame.impulses().allFinite());
+}
+
 // The tool against the plate alone: no body, no FEM.
 TEST(RigidObjects, ToolPushedOntoAPlateStopsAtItsSurfaceAndThePlateCarriesTheLoad) {
   const double mass_kg = 0.05, k_N_m = 200.0, device_depth_m = 0.005;
