@@ -34,6 +34,7 @@
 #include "apps/receive_thread.h"
 #include "apps/view_window.h"
 #include "config/scene.h"
+#include "contact/rigid_objects.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "messages/channels.h"
@@ -149,23 +150,6 @@ cv::Point2d PixelOf(cv::viz::Viz3d& renderer, const Eigen::Vector3d& p_W) {
   return {focal[0] * p_C[0] / p_C[2] + centre[0], focal[1] * p_C[1] / p_C[2] + centre[1]};
 }
 
-// How far below its centre the tool reaches, upright (its tip), m.
-double TipBelowCentre_m(const ToolShape& shape) {
-  switch (shape.kind) {
-    case ToolShape::Kind::kSphere:
-      return shape.radius_m;
-    case ToolShape::Kind::kCapsule:
-      return 0.5 * shape.length_m + shape.radius_m;
-    case ToolShape::Kind::kCylinder:
-      return 0.5 * shape.length_m;
-    case ToolShape::Kind::kBox:
-      return shape.half_extents_m.z();
-    case ToolShape::Kind::kMesh:
-      return -shape.mesh.vertices_m.row(2).minCoeff();
-  }
-  return 0.0;
-}
-
 // What the trainee asks for through the window.
 struct TraineeInput {
   Eigen::Vector3d pointer_W_m = Eigen::Vector3d::Zero();  // under the pointer, in the plane
@@ -202,7 +186,9 @@ void TakeInput(const std::vector<WindowEvent>& events, ViewWindow& window, doubl
 // trainee, and for scripted sessions); then the controls.
 void PrintTargetHints(const config::Scene& scene, const Eigen::Vector3d& start_W_m,
                       ViewWindow& window) {
-  const double tip_m = TipBelowCentre_m(scene.tool->model.shape);
+  // How far below its centre the upright tool reaches: the bottom of its bounding box.
+  const double tip_m =
+      -contact::CalcWorldBox({"", scene.tool->model.shape, Eigen::Isometry3d::Identity()}).min().z();
   for (const config::PalpationTarget& target : scene.task->targets) {
     const Eigen::Vector3d above(target.position_m.x(), target.position_m.y(), start_W_m.z());
     const cv::Point2d pixel = PixelOf(window.renderer(), above);
