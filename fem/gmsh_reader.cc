@@ -255,8 +255,8 @@ void ReadNodeBlockV41(MeshTextReader* reader, const Section& section, int count,
     reader->Fail(section.key(), "entity dimension must be 0..3 and parametric 0 or 1");
   if (n > count - *total)
     reader->Fail(section.key(), "this block brings the node total to " +
-                                    std::to_string(*total + n) + ", more than the " +
-                                    std::to_string(count) + " declared");
+                                    std::to_string(static_cast<long long>(*total) + n) +
+                                    ", more than the " + std::to_string(count) + " declared");
   // Tags and their lines (RawNode::line is the tag's line, where a duplicate tag is reported).
   std::vector<std::pair<long long, int>> tags;  // grown per entry: a bogus n must not allocate
   for (int i = 0; i < n; ++i) {
@@ -290,8 +290,8 @@ void ReadElementBlockV41(MeshTextReader* reader, const Section& section, int cou
   if (type != kGmshTet4 && !IsLowerDimensionalType(type)) FailUnknownType(*reader, section, type);
   if (n > count - *total)
     reader->Fail(section.key(), "this block brings the element total to " +
-                                    std::to_string(*total + n) + ", more than the " +
-                                    std::to_string(count) + " declared");
+                                    std::to_string(static_cast<long long>(*total) + n) +
+                                    ", more than the " + std::to_string(count) + " declared");
   for (int i = 0; i < n; ++i) {
     tokens = ReadEntry(reader, section, "element " + OrdinalOf(i, n, block_line));
     const long long tag = ParseTag(*reader, section, tokens[0], "the element tag");
