@@ -25,7 +25,7 @@ namespace {
 class Driver {
  public:
   Driver(const hapsim::config::Scene& scene, double dt_s, std::int64_t run_id)
-      : hand_(hapsim::device::ScriptedTrajectory(scene.trajectory), scene.hand, dt_s),
+      : hand_(hapsim::ScriptedTrajectory(scene.trajectory), scene.hand, dt_s),
         gate_("hapsim_example_driver", run_id) {}
 
   // SDK: read the handle's pose and velocity (world frame, SI units).

@@ -30,7 +30,7 @@
 #include "core/statistics.h"
 #include "device/device_backend.h"
 #include "device/haptic_loop.h"
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
 #include "messages/message_gate.h"
@@ -201,7 +201,7 @@ const device::ContactModelUpdate* WaitForFirstModel(lcm::LCM* lcm, std::int64_t 
                                                     const device::HapticLoop& loop,
                                                     bool in_process_device, double timeout_s) {
   const std::int64_t give_up_ns = MonotonicNs() + std::llround(1e9 * timeout_s);
-  const DeviceState device = device::ScriptedTrajectory(scene.trajectory).Sample(0.0);
+  const DeviceState device = ScriptedTrajectory(scene.trajectory).Sample(0.0);
   constexpr std::int64_t kAnnouncePeriodNs = 10000000, kPollPeriodNs = 100000;
   std::int64_t next_announcement_ns = MonotonicNs();
   while (!g_stop_requested.load()) {
@@ -304,9 +304,9 @@ void RunHaptic(const HapticCommandOptions& options) {
   std::unique_ptr<device::DeviceBackend> backend;
   if (options.device == "scripted") {
     backend =
-        std::make_unique<device::ScriptedDevice>(device::ScriptedTrajectory(scene.trajectory));
+        std::make_unique<device::ScriptedDevice>(ScriptedTrajectory(scene.trajectory));
   } else if (options.device == "hand") {
-    backend = std::make_unique<device::SimulatedHand>(device::ScriptedTrajectory(scene.trajectory),
+    backend = std::make_unique<device::SimulatedHand>(ScriptedTrajectory(scene.trajectory),
                                                       scene.hand, loop_options.dt_s);
   } else {
     auto external = std::make_unique<ExternalDevice>(&gate);

@@ -24,7 +24,7 @@
 #include "core/error.h"
 #include "core/statistics.h"
 #include "core/stopwatch.h"
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 #include "fem/time_stepper.h"
 
 namespace hapsim::apps {
@@ -126,7 +126,7 @@ nlohmann::json MeasureFrames(const config::Scene& scene, const std::optional<con
     contact::VisualFrame frame = config::MakeVisualFrame(scene, body, options);
     fem::State state = body ? fem::MakeRestState(body->model) : fem::State{};
     ToolState tool = scene.tool->initial_state;
-    const device::ScriptedTrajectory trajectory(scene.trajectory);
+    const ScriptedTrajectory trajectory(scene.trajectory);
     for (int k = 0; k < num_frames; ++k) {
       const contact::VisualFrameStats stats =
           frame.Step(trajectory.Sample(k * scene.dt_s), &state, &tool);

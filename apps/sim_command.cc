@@ -165,7 +165,7 @@ void RunSim(const SimCommandOptions& options) {
   {
     ProgressBar progress("sim", num_steps);
     simulator.Run(
-        device::ScriptedTrajectory(scene.trajectory), num_steps,
+        ScriptedTrajectory(scene.trajectory), num_steps,
         [&](const device::HapticSample& s) {
           record.haptic.push_back(s);
           progress.Update(static_cast<long>(record.haptic.size()));

@@ -88,7 +88,7 @@
 //        max_torque_rate_N_m_s: 250, device_stale_s: 0.005, model_stale_s: 0.1,
 //        blend_time_s: 0.01}           # > 0 each; any subset, the rest as shown
 //   device:                            # required with a tool
-//     trajectory:                      # scripted device motion (device/scripted_trajectory.h)
+//     trajectory:                      # scripted device motion (core/scripted_trajectory.h)
 //       - {t_s: 0.0, position_m: [0, 0, 0.09], rotation_vector_rad: [0, 0, 0]}
 //                                      # ≥ 1 waypoint; t_s ≥ 0 and strictly increasing;
 //                                      # rotation_vector_rad optional, default 0
@@ -116,7 +116,7 @@
 #include "device/device_backend.h"
 #include "device/haptic_mode.h"
 #include "device/haptic_safety.h"
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 #include "fem/fem_options.h"
 #include "fem/material.h"
 
@@ -251,7 +251,7 @@ struct Scene {
   CouplingParams coupling;
   ContactScene contact;
   HapticScene haptic;
-  std::vector<device::Waypoint> trajectory;  // device.trajectory, times strictly increasing
+  std::vector<Waypoint> trajectory;  // device.trajectory, times strictly increasing
   device::HandParams hand;                   // device.hand: `hapsim haptic --device hand`
   std::optional<TaskScene> task;             // `hapsim train`
 };

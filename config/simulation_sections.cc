@@ -243,16 +243,16 @@ device::HandParams ReadHand(const YamlMap& map) {
   return hand;
 }
 
-std::vector<device::Waypoint> ReadTrajectory(const YamlMap& device) {
+std::vector<Waypoint> ReadTrajectory(const YamlMap& device) {
   device.CheckKeys({"trajectory", "hand"});
   if (!device.Has("trajectory")) device.FailKey("trajectory", "missing required key");
   const std::vector<YamlMap> items = device.GetMapList("trajectory");
   if (items.empty()) device.FailKey("trajectory", "must hold at least one waypoint");
-  std::vector<device::Waypoint> trajectory;
+  std::vector<Waypoint> trajectory;
   for (std::size_t i = 0; i < items.size(); ++i) {
     const YamlMap& item = items[i];
     item.CheckKeys({"t_s", "position_m", "rotation_vector_rad"});
-    device::Waypoint waypoint;
+    Waypoint waypoint;
     waypoint.t_s = item.GetDouble("t_s", AtLeast(0.0));
     if (i > 0 && waypoint.t_s <= trajectory.back().t_s) {
       std::ostringstream message;

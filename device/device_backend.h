@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 
 #include "core/virtual_coupling.h"
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 
 namespace hapsim::device {
 

@@ -23,7 +23,7 @@
 #include "contact/visual_frame.h"
 #include "device/haptic_mode.h"
 #include "device/haptic_step.h"
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 
 namespace hapsim::device {
 

@@ -26,7 +26,7 @@
 #include "config/simulation_builder.h"
 #include "contact/visual_frame.h"
 #include "device/haptic_step.h"
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 
 namespace hapsim {
 namespace {
@@ -57,7 +57,7 @@ const Frames& GetFrames() {
                              f.scene.tool->model, options);
   fem::State body_state = fem::MakeRestState(body.model);
   ToolState tool = f.scene.tool->initial_state;
-  const device::ScriptedTrajectory script(f.scene.trajectory);
+  const ScriptedTrajectory script(f.scene.trajectory);
   const int peak_frame = static_cast<int>(std::lround(kPeakTime_s / f.scene.dt_s));
   for (int k = 0; k <= peak_frame; ++k) {
     f.device_at_peak = script.Sample(k * f.scene.dt_s);

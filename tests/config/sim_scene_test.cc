@@ -12,7 +12,7 @@
 
 #include "config/scene.h"
 #include "core/error.h"
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 #include "tests/config/scene_test_support.h"
 
 namespace hapsim::config {
@@ -115,7 +115,7 @@ TEST(SimSceneTest, FullSimulationSceneGivesEveryValue) {
   EXPECT_EQ(scene.trajectory[1].q_WD.coeffs(), Eigen::Quaterniond::Identity().coeffs());
   EXPECT_EQ(scene.trajectory[2].t_s, 2.0);
   // What the loader accepts, the trajectory accepts.
-  EXPECT_EQ(device::ScriptedTrajectory(scene.trajectory).duration_s(), 2.0);
+  EXPECT_EQ(ScriptedTrajectory(scene.trajectory).duration_s(), 2.0);
 }
 
 TEST(SimSceneTest, OptionalSectionsTakeDefaults) {
@@ -395,7 +395,7 @@ TEST(SimSceneTest, BlockPressMatchesItsDescription) {
 
   // The script: starts at the tool, presses the bottom face 4 mm below the top, slides 8 mm,
   // lifts back, and the scene runs exactly as long as the script.
-  const device::ScriptedTrajectory script(scene.trajectory);
+  const ScriptedTrajectory script(scene.trajectory);
   EXPECT_EQ(script.Sample(0.0).x_W_m, tool.initial_state.x_W_m);
   EXPECT_EQ(script.Sample(0.2).x_W_m, tool.initial_state.x_W_m);
   EXPECT_NEAR(script.Sample(1.0).x_W_m.z() - half_length_m - top_m, -0.004, kRoundOff_m);

@@ -1,9 +1,9 @@
-// Tests of device/scripted_trajectory.h: waypoints hit exactly, velocities are the exact time
+// Tests of core/scripted_trajectory.h: waypoints hit exactly, velocities are the exact time
 // derivatives of the interpolation (against central differences), zero velocity at waypoints,
 // hold before and after, the slerp takes the shorter arc, bad input throws, Sample allocates
 // nothing.
 
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@
 #include "core/virtual_coupling.h"
 #include "tests/allocation_counter.h"
 
-namespace hapsim::device {
+namespace hapsim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -203,4 +203,4 @@ TEST(ScriptedTrajectoryTest, SampleAllocatesNothing) {
 }
 
 }  // namespace
-}  // namespace hapsim::device
+}  // namespace hapsim

@@ -1,7 +1,8 @@
 #pragma once
-// Scripted device trajectories (DESIGN.md §5): the device handle follows a list of waypoints
-// (press, slide, release, …), so a run is repeatable and every haptic mode can be measured
-// against the reference on the same motion.
+// Scripted trajectories (DESIGN.md §5): a pose follows a list of waypoints (press, slide,
+// release, …), so a run is repeatable and every haptic mode can be measured against the
+// reference on the same motion. The device handle follows one (device.trajectory), and so does a
+// rigid object moved by a script (objects[].rigid.trajectory, contact/rigid_objects.h).
 //
 // Between waypoints i and i + 1 (times t_i < t_{i+1}, T = t_{i+1} − t_i), with the smoothstep
 //   u = (t − t_i)/T,   s = 3u² − 2u³,   ṡ = 6u(1 − u)/T        (s(0) = 0, s(1) = 1, ṡ = 0 at both)
@@ -20,7 +21,7 @@
 
 #include "core/virtual_coupling.h"
 
-namespace hapsim::device {
+namespace hapsim {
 
 struct Waypoint {
   double t_s = 0.0;                                          // time, s
@@ -52,4 +53,4 @@ class ScriptedTrajectory {
   std::vector<Eigen::Vector3d> theta_W_rad_;  // (num waypoints − 1) θ_i = log(q_{i+1} q_i⁻¹), rad
 };
 
-}  // namespace hapsim::device
+}  // namespace hapsim

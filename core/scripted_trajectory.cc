@@ -1,4 +1,4 @@
-#include "device/scripted_trajectory.h"
+#include "core/scripted_trajectory.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "core/rigid_tool.h"
 
-namespace hapsim::device {
+namespace hapsim {
 namespace {
 
 void Require(bool condition, int waypoint, const std::string& message) {
@@ -72,4 +72,4 @@ DeviceState ScriptedTrajectory::Sample(double t_s) const {
   return state;
 }
 
-}  // namespace hapsim::device
+}  // namespace hapsim
