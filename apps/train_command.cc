@@ -101,9 +101,9 @@ class MouseDevice {
       device.v_W_m_s = step_m / dt_s_;
       x_W_m_ += step_m;
       device.x_W_m = x_W_m_;
+      device.buttons = buttons;
       hapsim_lcm::device_state_t msg = messages::ToMessage(device, WallMicros(), sequence++);
       msg.run_id = run_id_;
-      msg.buttons = buttons;
       lcm_->publish(messages::kDeviceStateChannel, &msg);
       deadline_ns += period_ns;
       // Held off the CPU for more than a period: start again from now, rather than publish
@@ -187,8 +187,9 @@ void TakeInput(const std::vector<WindowEvent>& events, ViewWindow& window, doubl
 void PrintTargetHints(const config::Scene& scene, const Eigen::Vector3d& start_W_m,
                       ViewWindow& window) {
   // How far below its centre the upright tool reaches: the bottom of its bounding box.
-  const double tip_m =
-      -contact::CalcWorldBox({"", scene.tool->model.shape, Eigen::Isometry3d::Identity()}).min().z();
+  contact::RigidObject upright_tool;
+  upright_tool.shape = scene.tool->model.shape;
+  const double tip_m = -contact::CalcWorldBox(upright_tool).min().z();
   for (const config::PalpationTarget& target : scene.task->targets) {
     const Eigen::Vector3d above(target.position_m.x(), target.position_m.y(), start_W_m.z());
     const cv::Point2d pixel = PixelOf(window.renderer(), above);

@@ -134,7 +134,7 @@ ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
 
 RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
                                  const std::string& base_dir) {
-  map.CheckKeys({"shape", "position_m", "rotation_vector_rad"});
+  map.CheckKeys({"shape", "position_m", "rotation_vector_rad", "trajectory", "grabbable"});
   RigidObjectScene rigid;
   rigid.location = LocationOf(map);
   rigid.object.name = name;
@@ -149,6 +149,17 @@ RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
   rigid.object.X_WO.linear() =
       CalcQuaternionExp(map.GetVector3Or("rotation_vector_rad", Eigen::Vector3d::Zero()))
           .toRotationMatrix();
+  rigid.object.grabbable = map.GetBoolOr("grabbable", false);
+  if (map.Has("trajectory")) {
+    for (const char* key : {"position_m", "rotation_vector_rad"})
+      if (map.Has(key))
+        map.FailKey(key, "give either a fixed pose (position_m, rotation_vector_rad) or a "
+                         "trajectory, not both");
+    if (rigid.object.grabbable)
+      map.FailKey("grabbable", "an object moved by a script cannot be grabbed");
+    rigid.object.script.emplace(ReadWaypoints(map, "trajectory", /*with_button=*/false));
+    rigid.object.X_WO = contact::CalcScriptedPose(rigid.object, 0.0);
+  }
   return rigid;
 }
 
@@ -243,16 +254,21 @@ device::HandParams ReadHand(const YamlMap& map) {
   return hand;
 }
 
-std::vector<Waypoint> ReadTrajectory(const YamlMap& device) {
-  device.CheckKeys({"trajectory", "hand"});
-  if (!device.Has("trajectory")) device.FailKey("trajectory", "missing required key");
-  const std::vector<YamlMap> items = device.GetMapList("trajectory");
-  if (items.empty()) device.FailKey("trajectory", "must hold at least one waypoint");
+}  // namespace
+
+std::vector<Waypoint> ReadWaypoints(const YamlMap& map, const std::string& key, bool with_button) {
+  if (!map.Has(key)) map.FailKey(key, "missing required key");
+  const std::vector<YamlMap> items = map.GetMapList(key);
+  if (items.empty()) map.FailKey(key, "must hold at least one waypoint");
   std::vector<Waypoint> trajectory;
   for (std::size_t i = 0; i < items.size(); ++i) {
     const YamlMap& item = items[i];
-    item.CheckKeys({"t_s", "position_m", "rotation_vector_rad"});
+    if (with_button)
+      item.CheckKeys({"t_s", "position_m", "rotation_vector_rad", "button"});
+    else
+      item.CheckKeys({"t_s", "position_m", "rotation_vector_rad"});
     Waypoint waypoint;
+    if (with_button) waypoint.buttons = item.GetBoolOr("button", false) ? 1 : 0;
     waypoint.t_s = item.GetDouble("t_s", AtLeast(0.0));
     if (i > 0 && waypoint.t_s <= trajectory.back().t_s) {
       std::ostringstream message;
@@ -267,6 +283,8 @@ std::vector<Waypoint> ReadTrajectory(const YamlMap& device) {
   }
   return trajectory;
 }
+
+namespace {
 
 TaskScene ReadTask(const YamlMap& map, double duration_s) {
   map.CheckKeys({"targets", "force_band_N", "hold_s", "force_limit_N", "time_limit_s"});
@@ -322,7 +340,8 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
   }
   scene->haptic = ReadHaptic(root.FindMap("haptic"), time, scene->contact.law);
   const YamlMap device = root.GetMap("device");
-  scene->trajectory = ReadTrajectory(device);
+  device.CheckKeys({"trajectory", "hand"});
+  scene->trajectory = ReadWaypoints(device, "trajectory", /*with_button=*/true);
   if (const std::optional<YamlMap> hand = device.FindMap("hand")) scene->hand = ReadHand(*hand);
   if (const std::optional<YamlMap> task = root.FindMap("task"))
     scene->task = ReadTask(*task, scene->num_steps * scene->dt_s);

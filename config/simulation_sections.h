@@ -3,6 +3,7 @@
 // (schema in config/scene.h). Internal to the scene loader (config/scene.cc).
 
 #include <string>
+#include <vector>
 
 #include "config/scene.h"
 #include "config/yaml_reader.h"
@@ -16,6 +17,11 @@ namespace hapsim::config {
 // One `rigid` entry of `objects` (config/scene.h), named `name`.
 RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
                                  const std::string& base_dir);
+
+// The waypoint list `key` of `map` (≥ 1 waypoint, times ≥ 0 and strictly increasing): t_s,
+// position_m, rotation_vector_rad (default 0) and, with_button, button (true | false, default
+// false: the device button held from this waypoint to the next).
+std::vector<Waypoint> ReadWaypoints(const YamlMap& map, const std::string& key, bool with_button);
 
 void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std::string& base_dir,
                             Scene* scene);

@@ -83,6 +83,9 @@ class YamlMap {
   double GetDoubleOr(const std::string& key, double default_value,
                      const Bounds& bounds = Any()) const;
   int GetIntOr(const std::string& key, int default_value, const Bounds& bounds = Any()) const;
+  bool GetBoolOr(const std::string& key, bool default_value) const {  // true | false
+    return GetEnumOr<bool>(key, {{"true", true}, {"false", false}}, default_value);
+  }
   std::optional<YamlMap> FindMap(const std::string& key) const;
   // A list of mappings (empty when absent); item i has path "key[i]" and its own line.
   std::vector<YamlMap> GetMapList(const std::string& key) const;

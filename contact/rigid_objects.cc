@@ -78,7 +78,24 @@ Eigen::AlignedBox3d TransformBox(const Eigen::AlignedBox3d& box_O, const Eigen::
   return box_W;
 }
 
+// The sweep bound of a body turning by the rotation from R_start to R_end and moving by Δx:
+// |Δx| + θ R, R its farthest point from the origin of the motion.
+double CalcSweep(const Eigen::Isometry3d& X_start, const Eigen::Isometry3d& X_end,
+                 double reach_m) {
+  const double angle_rad = Eigen::AngleAxisd(X_start.linear().transpose() * X_end.linear()).angle();
+  return (X_end.translation() - X_start.translation()).norm() + angle_rad * reach_m;
+}
+
 }  // namespace
+
+Eigen::Isometry3d CalcScriptedPose(const RigidObject& object, double t_s) {
+  if (!object.script) return object.X_WO;
+  const DeviceState pose = object.script->Sample(t_s);
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  X_WO.linear() = pose.q_WD.toRotationMatrix();
+  X_WO.translation() = pose.x_W_m;
+  return X_WO;
+}
 
 Eigen::AlignedBox3d CalcWorldBox(const RigidObject& object) {
   return TransformBox(CalcLocalBox(object.shape), object.X_WO);
@@ -120,37 +137,81 @@ void RigidObjectContacts::AddPointContact(int i, const Eigen::Vector3d& p_W_m, d
   contacts->push_back(contact);
 }
 
+void RigidObjectContacts::SetPose(int i, const Eigen::Isometry3d& X_WO) {
+  Placed& placed = objects_[i];
+  placed.object.X_WO = X_WO;
+  placed.box_W_m = CalcWorldBox(placed.object);
+  placed.sweep_m = 0.0;
+}
+
+void RigidObjectContacts::SetMotion(int i, const Eigen::Isometry3d& X_WO_start,
+                                    const Eigen::Isometry3d& X_WO_end) {
+  SetPose(i, X_WO_start);
+  Placed& placed = objects_[i];
+  placed.sweep_m = CalcSweep(X_WO_start, X_WO_end, placed.field.bounding_radius_m());
+}
+
+void RigidObjectContacts::SetGrabbed(int i, const Eigen::Isometry3d& X_TO) {
+  grabbed_ = i;
+  grabbed_reach_m_ = 0.0;
+  if (i < 0) return;
+  const Eigen::AlignedBox3d box_O = CalcLocalBox(objects_[i].object.shape);
+  for (int corner = 0; corner < 8; ++corner)
+    grabbed_reach_m_ = std::max(
+        grabbed_reach_m_,
+        (X_TO * box_O.corner(static_cast<Eigen::AlignedBox3d::CornerType>(corner))).norm());
+}
+
+double RigidObjectContacts::CalcGrabbedSweep(const Eigen::Isometry3d& X_WT_start,
+                                             const Eigen::Isometry3d& X_WT_end) const {
+  return CalcSweep(X_WT_start, X_WT_end, grabbed_reach_m_);
+}
+
+void RigidObjectContacts::AddMovingBodyContacts(const ToolDistanceField& field,
+                                                const Matrix3Xd& points_M_m, double point_radius_m,
+                                                const Eigen::Isometry3d& X_WM, int i,
+                                                double threshold_m,
+                                                std::vector<Contact>* contacts) const {
+  // The moving body's sample points against the object.
+  for (int k = 0; k < points_M_m.cols(); ++k)
+    AddPointContact(i, X_WM * points_M_m.col(k), point_radius_m, threshold_m, contacts);
+  // The object's sample points against the moving body.
+  const Placed& placed = objects_[i];
+  const Eigen::Isometry3d X_MW = X_WM.inverse();
+  const double reach_m = field.bounding_radius_m() + threshold_m + placed.point_radius_m;
+  for (int k = 0; k < placed.points_O_m.cols(); ++k) {
+    const Eigen::Vector3d s_W = placed.object.X_WO * placed.points_O_m.col(k);
+    const Eigen::Vector3d s_M = X_MW * s_W;
+    if (s_M.norm() > reach_m) continue;  // beyond the body's bounding sphere: no contact
+    const ToolDistance d = field.Calc(s_M);
+    const double gap_m = d.distance_m - placed.point_radius_m;
+    if (gap_m > threshold_m) continue;
+    Contact contact;
+    contact.n_W = X_WM.linear() * d.normal_T;  // out of the moving body
+    contact.p_tool_W_m = X_WM * d.closest_T_m;
+    contact.p_body_W_m = s_W - placed.point_radius_m * contact.n_W;
+    contact.gap_m = gap_m;
+    contact.rigid_object = i;
+    contacts->push_back(contact);
+  }
+}
+
 void RigidObjectContacts::AddToolContacts(const Eigen::Isometry3d& X_WT_start,
                                           const Eigen::Isometry3d& X_WT_end,
                                           std::vector<Contact>* contacts) const {
-  const double angle_rad =
-      Eigen::AngleAxisd(X_WT_start.linear().transpose() * X_WT_end.linear()).angle();
-  const double threshold_m = margin_m_ +
-                             (X_WT_end.translation() - X_WT_start.translation()).norm() +
-                             angle_rad * tool_field_.bounding_radius_m();
-  const Eigen::Isometry3d X_TW = X_WT_start.inverse();
+  const double tool_threshold_m =
+      margin_m_ + CalcSweep(X_WT_start, X_WT_end, tool_field_.bounding_radius_m());
+  const double grabbed_threshold_m = margin_m_ + CalcGrabbedSweep(X_WT_start, X_WT_end);
   for (int i = 0; i < num_objects(); ++i) {
-    // The tool's sample points against the object.
-    for (int k = 0; k < tool_points_T_m_.cols(); ++k)
-      AddPointContact(i, X_WT_start * tool_points_T_m_.col(k), tool_point_radius_m_, threshold_m,
-                      contacts);
-    // The object's sample points against the tool.
-    const Placed& placed = objects_[i];
-    const double reach_m = tool_field_.bounding_radius_m() + threshold_m + placed.point_radius_m;
-    for (int k = 0; k < placed.points_O_m.cols(); ++k) {
-      const Eigen::Vector3d s_W = placed.object.X_WO * placed.points_O_m.col(k);
-      const Eigen::Vector3d s_T = X_TW * s_W;
-      if (s_T.norm() > reach_m) continue;  // beyond the tool's bounding sphere: no contact
-      const ToolDistance d = tool_field_.Calc(s_T);
-      const double gap_m = d.distance_m - placed.point_radius_m;
-      if (gap_m > threshold_m) continue;
-      Contact contact;
-      contact.n_W = X_WT_start.linear() * d.normal_T;  // out of the tool
-      contact.p_tool_W_m = X_WT_start * d.closest_T_m;
-      contact.p_body_W_m = s_W - placed.point_radius_m * contact.n_W;
-      contact.gap_m = gap_m;
-      contact.rigid_object = i;
-      contacts->push_back(contact);
+    if (i == grabbed_) continue;  // attached to the tool: no contact between them
+    const double object_sweep_m = objects_[i].sweep_m;
+    AddMovingBodyContacts(tool_field_, tool_points_T_m_, tool_point_radius_m_, X_WT_start, i,
+                          tool_threshold_m + object_sweep_m, contacts);
+    if (grabbed_ >= 0) {
+      const Placed& grabbed = objects_[grabbed_];
+      AddMovingBodyContacts(grabbed.field, grabbed.points_O_m, grabbed.point_radius_m,
+                            grabbed.object.X_WO, i, grabbed_threshold_m + object_sweep_m,
+                            contacts);
     }
   }
 }
@@ -158,20 +219,26 @@ void RigidObjectContacts::AddToolContacts(const Eigen::Isometry3d& X_WT_start,
 void RigidObjectContacts::AddBodyContacts(const std::vector<int>& surface_nodes,
                                           const Eigen::VectorXd& x_start_m,
                                           const Eigen::VectorXd& x_end_m,
+                                          const Eigen::Isometry3d& X_WT_start,
+                                          const Eigen::Isometry3d& X_WT_end,
                                           std::vector<Contact>* contacts) const {
   for (int i = 0; i < num_objects(); ++i) {
     const Placed& placed = objects_[i];
     const Eigen::Isometry3d X_OW = placed.object.X_WO.inverse();
+    const bool grabbed = i == grabbed_;
+    const double object_sweep_m =
+        grabbed ? CalcGrabbedSweep(X_WT_start, X_WT_end) : placed.sweep_m;
     for (const int node : surface_nodes) {
       const Eigen::Vector3d x_W = x_start_m.segment<3>(3 * node);
-      const double threshold_m = margin_m_ + (x_end_m.segment<3>(3 * node) - x_W).norm();
+      const double threshold_m =
+          margin_m_ + (x_end_m.segment<3>(3 * node) - x_W).norm() + object_sweep_m;
       if (placed.box_W_m.exteriorDistance(x_W) > threshold_m) continue;
       const ToolDistance d = placed.field.Calc(X_OW * x_W);
       if (d.distance_m > threshold_m) continue;
       Contact contact;
-      contact.on_tool = false;
+      contact.on_tool = grabbed;  // the grabbed object is part of the tool
       contact.rigid_object = i;
-      contact.n_W = placed.object.X_WO.linear() * d.normal_T;  // out of the object
+      contact.n_W = placed.object.X_WO.linear() * d.normal_T;  // out of the object (and tool)
       contact.p_tool_W_m = placed.object.X_WO * d.closest_T_m;
       contact.p_body_W_m = x_W;
       contact.gap_m = d.distance_m;
@@ -186,10 +253,12 @@ RigidObjectContacts::Penetration RigidObjectContacts::CalcDeepest(
     const Eigen::Vector3d& p_W_m) const {
   Penetration deepest;
   deepest.distance_m = std::numeric_limits<double>::infinity();
-  for (const Placed& placed : objects_) {
+  for (int i = 0; i < num_objects(); ++i) {
+    const Placed& placed = objects_[i];
     if (placed.box_W_m.exteriorDistance(p_W_m) > 0.0) continue;  // outside: d > 0
     const ToolDistance d = placed.field.Calc(placed.object.X_WO.inverse() * p_W_m);
     if (d.distance_m >= deepest.distance_m) continue;
+    deepest.object = i;
     deepest.distance_m = d.distance_m;
     deepest.closest_W_m = placed.object.X_WO * d.closest_T_m;
     deepest.normal_W = placed.object.X_WO.linear() * d.normal_T;

@@ -75,7 +75,9 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   // 3. Collision-free FEM update.
   if (stepper_) stats.fem = stepper_->CalcFreeVelocityChange(*body, &du_body_);
   stats.free_fem_s = stage.Lap();
-  // 4. Collision detection, swept from the start to the free configuration.
+  // 4. Collision detection, swept from the start to the free configuration, with the rigid
+  //    objects placed for the frame.
+  MoveRigidObjects(device, *tool);
   DetectContacts(*body, *tool);
   stats.num_candidates = static_cast<int>(contacts_.size());
   for (const Contact& contact : contacts_) stats.num_rigid_contacts += contact.rigid_object >= 0;
@@ -86,6 +88,7 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   const Eigen::Isometry3d X_WT_start = CalcPose(*tool);
   AdvanceTool(tool_, options_.dt_s, dv_tool_, dL_tool_, tool);
   if (stepper_) stepper_->Advance(du_body_, body);
+  FinishRigidObjects(*tool);
   stats.num_contacts = static_cast<int>(contacts_.size());
   for (int row = 0; row < lambda_.size(); row += rows_per_contact_)
     stats.num_active += lambda_[row] > 0.0;
@@ -98,6 +101,7 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
       RunSanityPass(*tool, body, &stats.max_penetration_m, &stats.max_object_penetration_m);
   stats.sanity_s = stage.Lap();
   stats.total_s = total.Elapsed();
+  ++frame_index_;
   return stats;
 }
 
@@ -114,7 +118,8 @@ void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) 
   }
   rigid_contacts_.AddToolContacts(CalcPose(tool), CalcPose(tool_end), &contacts_);
   if (body_ != nullptr)
-    rigid_contacts_.AddBodyContacts(surface_nodes_, body.x_m, x_end_m, &contacts_);
+    rigid_contacts_.AddBodyContacts(surface_nodes_, body.x_m, x_end_m, CalcPose(tool),
+                                    CalcPose(tool_end), &contacts_);
 }
 
 ContactJacobian VisualFrame::CalcJacobian(const std::vector<Contact>& contacts,
@@ -131,6 +136,8 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
   const Eigen::VectorXd u_free = body.v_m_s + du_body_;
   jacobian_ = CalcJacobian(contacts_, tool.x_W_m);
   Eigen::VectorXd c_free = CalcSeparatingVelocity(jacobian_, v_free, w_free, u_free);
+  // Rigid objects refuse the equality law (config/scene.cc), so its selection never meets a
+  // moving object: c_object is zero there.
   if (options_.response.solve.law == ContactLaw::kEquality) {
     std::vector<Contact> colliding;
     for (int i : SelectCollidingContacts(contacts_, c_free, rows_per_contact_, dt, 0.0))
@@ -139,8 +146,12 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     jacobian_ = CalcJacobian(contacts_, tool.x_W_m);
     c_free = CalcSeparatingVelocity(jacobian_, v_free, w_free, u_free);
   }
-  const Eigen::VectorXd c_pre = CalcSeparatingVelocity(
-      jacobian_, tool.v_W_m_s, tool_system_.M_inv_W * tool.L_W_kg_m2_s, body.v_m_s);
+  c_object_ = CalcObjectSeparatingVelocity();
+  c_free += c_object_;
+  const Eigen::VectorXd c_pre =
+      CalcSeparatingVelocity(jacobian_, tool.v_W_m_s, tool_system_.M_inv_W * tool.L_W_kg_m2_s,
+                             body.v_m_s) +
+      c_object_;
   b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
   const int num_rows = jacobian_.num_rows();
   if (!stepper_)

@@ -8,6 +8,17 @@
 // A scene without a deformable body (DESIGN.md §9: rigid objects only) builds no FEM: stage 3 does
 // nothing, the body state is empty (no dofs), and every contact row is the tool against a rigid
 // object.
+//
+// Rigid objects that move (visual_frame_objects.cc), placed at the start of stage 4:
+//   scripted: at the script's pose at the frame's start t_k = k Δt, moving to the pose at t_k + Δt
+//     with the mean velocity of that motion. The velocity enters each of its rows as a constant
+//     separating velocity, c = J_v v + J_ω ω + J_u u̇ + c_object (the gap's rate is the relative
+//     velocity of the two sides along the row), so a moving constraint is held at velocity
+//     level like a fixed one, with no lag of a penetration behind the object.
+//   grabbed (paper 003): the object the tool last touched is selected; a press of the device's
+//     button 0 attaches it to the tool at its pose relative to the tool then (X_TO), and it moves
+//     as part of the tool until the button is released, where it stays. Frames count from 0 at
+//     construction: Step k is the frame [k Δt, (k + 1) Δt].
 
 #include <Eigen/Core>
 #include <memory>
@@ -102,9 +113,25 @@ class VisualFrame {
   Eigen::Vector3d contact_torque_N_m() const;
   const ToolModel& tool_model() const { return tool_; }
   bool has_body() const { return body_ != nullptr; }
+  // The rigid objects after the last Step (scripted ones at the frame's end, a grabbed one with
+  // the tool), and the grabbable object the tool touches (selected) or holds (grabbed); −1: none.
+  int num_objects() const { return rigid_contacts_.num_objects(); }
+  const Eigen::Isometry3d& object_pose(int i) const { return rigid_contacts_.pose(i); }
+  int selected_object() const { return selected_object_; }
+  int grabbed_object() const { return rigid_contacts_.grabbed(); }
   const VisualFrameOptions& options() const { return options_; }
 
  private:
+  // Stage 4's first part: scripted objects placed at the frame's start with their velocity over
+  // the frame; the device button applied to grabbing.
+  void MoveRigidObjects(const DeviceState& device, const ToolState& tool);
+  // Per row, the separating velocity the objects' own motion adds (c_object above).
+  Eigen::VectorXd CalcObjectSeparatingVelocity() const;
+  // End of stage 5: objects at their end-of-frame poses; the touched grabbable object selected.
+  void FinishRigidObjects(const ToolState& tool);
+  // Velocity of object i's material point at p_W_m, world (the tool's motion for a grabbed one).
+  Eigen::Vector3d CalcObjectPointVelocity(int i, const Eigen::Vector3d& p_W_m,
+                                          const ToolState& tool) const;
   void DetectContacts(const fem::State& body, const ToolState& tool);
   // CalcContactJacobian over the body's dofs (none without a body).
   ContactJacobian CalcJacobian(const std::vector<Contact>& contacts,
@@ -123,6 +150,13 @@ class VisualFrame {
   int RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,
                     double* max_object_penetration_m) const;
 
+  // A scripted object's mean velocity over the frame, about its origin at the frame's start.
+  struct ObjectMotion {
+    Eigen::Vector3d x_W_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d v_W_m_s = Eigen::Vector3d::Zero();
+    Eigen::Vector3d w_W_rad_s = Eigen::Vector3d::Zero();
+  };
+
   const fem::Model* body_;  // null: no deformable body
   ToolModel tool_;
   VisualFrameOptions options_;
@@ -131,6 +165,12 @@ class VisualFrame {
   std::unique_ptr<fem::WarpedCompliance> warped_compliance_;  // with a body, kWarped only
   std::unique_ptr<CollisionDetector> detector_;               // with a body
   RigidObjectContacts rigid_contacts_;
+  // Rigid objects' state: motion this frame (zero for a still one), selection and grabbing.
+  std::vector<ObjectMotion> object_motion_;
+  long frame_index_ = 0;
+  int selected_object_ = -1;
+  bool button_was_down_ = false;
+  Eigen::Isometry3d X_TO_grabbed_ = Eigen::Isometry3d::Identity();
   std::vector<int> surface_nodes_;  // the body's surface nodes (body–object contacts)
   // Frame data, in stage order.
   CouplingWrench wrench_;
@@ -141,7 +181,8 @@ class VisualFrame {
   ContactJacobian jacobian_;
   Eigen::MatrixXd W_body_;  // J_u A_u⁻¹ J_uᵀ at the visual step, kept for the linear model
   Eigen::VectorXd b_, lambda_;
-  Eigen::VectorXd c_post_;  // separating velocity of each row after the response
+  Eigen::VectorXd c_object_;  // c_object of each row (zero without moving objects)
+  Eigen::VectorXd c_post_;    // separating velocity of each row after the response
   ContactSolveReport last_solve_;
   LinearContactModel linear_model_;
   ContactRows contact_rows_;

@@ -33,6 +33,9 @@ void VisualFrame::MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start,
     }  // a body node on a rigid object: neither moves with the tool
     const double fraction = contact.gap_m >= 0.0 ? 1.0 : options_.response.stabilization_beta;
     (*b)[row] = -fraction * contact.gap_m / options_.dt_s;
+    // A moving object is taken to keep its velocity over the next frame: the rows hold
+    // J v + c_object ≥ b, i.e. J v ≥ b − c_object.
+    for (int d = 0; d < rows_per_contact_; ++d) (*b)[row + d] -= c_object_[row + d];
   }
 }
 
@@ -98,10 +101,10 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
       if (node < 0 || body_->dof_is_fixed[3 * node]) continue;
       const Eigen::Vector3d p_W = body->x_m.segment<3>(3 * node);
       // The surface point the node must not pass, its outward normal there, and that surface's
-      // velocity at the node: the tool's, or zero for a fixed rigid object.
+      // velocity at the node: the tool's, or the rigid object's (zero for a fixed one).
       double distance_m;
-      Eigen::Vector3d closest_W_m, n_W, v_surface_W = Eigen::Vector3d::Zero();
-      if (contact.on_tool) {
+      Eigen::Vector3d closest_W_m, n_W, v_surface_W;
+      if (contact.rigid_object < 0) {
         const ToolDistance d = detector_->tool_distance().Calc(X_TW * p_W);
         distance_m = d.distance_m;
         closest_W_m = X_WT * d.closest_T_m;
@@ -113,6 +116,7 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
         distance_m = d.distance_m;
         closest_W_m = d.closest_W_m;
         n_W = d.normal_W;
+        v_surface_W = CalcObjectPointVelocity(d.object, p_W, tool);
         *max_object_penetration_m = std::max(*max_object_penetration_m, -distance_m);
       }
       if (distance_m >= -options_.sanity_tolerance_m) continue;

@@ -44,6 +44,7 @@ DeviceState ScriptedTrajectory::Hold(int waypoint) const {
   DeviceState state;  // zero velocities
   state.x_W_m = waypoints_[waypoint].x_W_m;
   state.q_WD = waypoints_[waypoint].q_WD;
+  state.buttons = waypoints_[waypoint].buttons;
   return state;
 }
 
@@ -69,6 +70,7 @@ DeviceState ScriptedTrajectory::Sample(double t_s) const {
   state.v_W_m_s = s_dot_1_s * (to.x_W_m - from.x_W_m);
   state.q_WD = CalcQuaternionExp(s * theta_W_rad_[i]) * from.q_WD;
   state.w_W_rad_s = s_dot_1_s * theta_W_rad_[i];
+  state.buttons = from.buttons;
   return state;
 }
 

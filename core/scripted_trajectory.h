@@ -13,7 +13,8 @@
 // of more than π between two waypoints goes the other way round: split it). Since exp(s θ_i)
 // turns about a fixed axis, dR/dt = [ṡ θ_i]× R, so ω = ṡ θ_i exactly.
 // The motion is C¹ with zero velocity at every waypoint: the handle comes to rest at each one.
-// Before the first and after the last waypoint it holds still there.
+// Before the first and after the last waypoint it holds still there. The buttons are held
+// piecewise constant: those of waypoint i from t_i up to t_{i+1}.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -27,6 +28,7 @@ struct Waypoint {
   double t_s = 0.0;                                          // time, s
   Eigen::Vector3d x_W_m = Eigen::Vector3d::Zero();           // device position, world, m
   Eigen::Quaterniond q_WD = Eigen::Quaterniond::Identity();  // device orientation (normalised)
+  int buttons = 0;  // DeviceState::buttons from this waypoint to the next
 };
 
 class ScriptedTrajectory {

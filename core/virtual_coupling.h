@@ -36,6 +36,8 @@ struct DeviceState {
   Eigen::Vector3d v_W_m_s = Eigen::Vector3d::Zero();
   Eigen::Vector3d w_W_rad_s = Eigen::Vector3d::Zero();
   Eigen::Quaterniond q_WD = Eigen::Quaterniond::Identity();
+  // Bit i set while button i is pressed (bit 0 the primary button: it grabs, paper 003).
+  int buttons = 0;
 };
 
 // Wrench on the tool (world) and its Jacobians with respect to the tool's x, v, rotation δ

@@ -182,7 +182,7 @@ bool CheckContactRowRanges(const hapsim_lcm::contact_model_t& msg, std::string* 
 }  // namespace
 
 hapsim_lcm::device_state_t ToMessage(const DeviceState& device, std::int64_t utime,
-                                     std::int64_t sequence, std::int32_t buttons) {
+                                     std::int64_t sequence) {
   hapsim_lcm::device_state_t msg;
   msg.utime = utime;
   msg.sequence = sequence;
@@ -190,7 +190,7 @@ hapsim_lcm::device_state_t ToMessage(const DeviceState& device, std::int64_t uti
   QuaternionToArray(device.q_WD, msg.q_WD);
   VectorToArray(device.v_W_m_s, msg.v_W_m_s);
   VectorToArray(device.w_W_rad_s, msg.w_W_rad_s);
-  msg.buttons = buttons;
+  msg.buttons = device.buttons;
   return msg;
 }
 
@@ -205,6 +205,7 @@ bool FromMessage(const hapsim_lcm::device_state_t& msg, DeviceState* device, std
   device->q_WD = q_WD;
   device->v_W_m_s = ArrayToVector(msg.v_W_m_s);
   device->w_W_rad_s = ArrayToVector(msg.w_W_rad_s);
+  device->buttons = msg.buttons;
   return true;
 }
 

@@ -53,9 +53,9 @@ inline constexpr double kQuaternionRoundOff = 1e-12;
 // ---- device_state_t (DEVICE_STATE) ----
 
 hapsim_lcm::device_state_t ToMessage(const DeviceState& device, std::int64_t utime,
-                                     std::int64_t sequence, std::int32_t buttons = 0);
+                                     std::int64_t sequence);
 
-// Copies pose and velocities (utime, sequence and buttons are read from msg directly). Does NOT
+// Copies pose, velocities and buttons (utime and sequence are read from msg directly). Does NOT
 // reject non-finite values: a NaN device state must reach the haptic loop, whose safety layer
 // answers it with zero force (DESIGN.md §5), so NaN/Inf pass through unchanged. Rejects only a
 // finite quaternion whose norm is off by more than kQuaternionNormTolerance (field q_WD).

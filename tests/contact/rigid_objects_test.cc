@@ -252,7 +252,7 @@ TEST(RigidObjects, ContactsHaveTheAnalyticGapsAndNormals) {
   Eigen::VectorXd x_m(6);
   x_m << side_W, 0.0, 0.0, 0.5;  // node 1 far away
   found.clear();
-  contacts.AddBodyContacts({0, 1}, x_m, x_m, &found);
+  contacts.AddBodyContacts({0, 1}, x_m, x_m, X_WT, X_WT, &found);
   ASSERT_EQ(found.size(), 1u);
   EXPECT_FALSE(found[0].on_tool);
   EXPECT_EQ(found[0].nodes[0], 0);

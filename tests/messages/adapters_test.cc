@@ -70,7 +70,8 @@ TEST(DeviceStateMessage, RoundTripIsBitIdentical) {
   device.q_WD = random.Rotation();
   device.v_W_m_s = random.Vector();
   device.w_W_rad_s = random.Vector();
-  const auto msg = EncodeDecode(ToMessage(device, 1717000000123456, 42, 0b101));
+  device.buttons = 0b101;
+  const auto msg = EncodeDecode(ToMessage(device, 1717000000123456, 42));
   EXPECT_EQ(msg.utime, 1717000000123456);
   EXPECT_EQ(msg.sequence, 42);
   EXPECT_EQ(msg.buttons, 0b101);
@@ -81,6 +82,7 @@ TEST(DeviceStateMessage, RoundTripIsBitIdentical) {
   ExpectBitIdentical(out.q_WD, device.q_WD, "q_WD");
   ExpectBitIdentical(out.v_W_m_s, device.v_W_m_s, "v_W_m_s");
   ExpectBitIdentical(out.w_W_rad_s, device.w_W_rad_s, "w_W_rad_s");
+  EXPECT_EQ(out.buttons, device.buttons);
 }
 
 // The safety layer, not the adapter, answers a NaN device state (with zero force).
