@@ -153,8 +153,9 @@ RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
   if (map.Has("trajectory")) {
     for (const char* key : {"position_m", "rotation_vector_rad"})
       if (map.Has(key))
-        map.FailKey(key, "give either a fixed pose (position_m, rotation_vector_rad) or a "
-                         "trajectory, not both");
+        map.FailKey(key,
+                    "give either a fixed pose (position_m, rotation_vector_rad) or a "
+                    "trajectory, not both");
     if (rigid.object.grabbable)
       map.FailKey("grabbable", "an object moved by a script cannot be grabbed");
     rigid.object.script.emplace(ReadWaypoints(map, "trajectory", /*with_button=*/false));

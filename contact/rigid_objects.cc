@@ -80,8 +80,7 @@ Eigen::AlignedBox3d TransformBox(const Eigen::AlignedBox3d& box_O, const Eigen::
 
 // The sweep bound of a body turning by the rotation from R_start to R_end and moving by Δx:
 // |Δx| + θ R, R its farthest point from the origin of the motion.
-double CalcSweep(const Eigen::Isometry3d& X_start, const Eigen::Isometry3d& X_end,
-                 double reach_m) {
+double CalcSweep(const Eigen::Isometry3d& X_start, const Eigen::Isometry3d& X_end, double reach_m) {
   const double angle_rad = Eigen::AngleAxisd(X_start.linear().transpose() * X_end.linear()).angle();
   return (X_end.translation() - X_start.translation()).norm() + angle_rad * reach_m;
 }
@@ -210,8 +209,7 @@ void RigidObjectContacts::AddToolContacts(const Eigen::Isometry3d& X_WT_start,
     if (grabbed_ >= 0) {
       const Placed& grabbed = objects_[grabbed_];
       AddMovingBodyContacts(grabbed.field, grabbed.points_O_m, grabbed.point_radius_m,
-                            grabbed.object.X_WO, i, grabbed_threshold_m + object_sweep_m,
-                            contacts);
+                            grabbed.object.X_WO, i, grabbed_threshold_m + object_sweep_m, contacts);
     }
   }
 }
@@ -226,8 +224,7 @@ void RigidObjectContacts::AddBodyContacts(const std::vector<int>& surface_nodes,
     const Placed& placed = objects_[i];
     const Eigen::Isometry3d X_OW = placed.object.X_WO.inverse();
     const bool grabbed = i == grabbed_;
-    const double object_sweep_m =
-        grabbed ? CalcGrabbedSweep(X_WT_start, X_WT_end) : placed.sweep_m;
+    const double object_sweep_m = grabbed ? CalcGrabbedSweep(X_WT_start, X_WT_end) : placed.sweep_m;
     for (const int node : surface_nodes) {
       const Eigen::Vector3d x_W = x_start_m.segment<3>(3 * node);
       const double threshold_m =

@@ -12,9 +12,10 @@
 // tool at the relative pose X_TO it had when grabbed, so it is part of the tool. Its contacts
 // with the body and with the other objects are tool contacts (on_tool = true, with the tool's
 // J_v and J_ω about the tool's centre of mass), so the trainee feels what the grabbed object
-// touches, through the tool's virtual coupling to the device; the tool makes no contacts with it. Both kinds enter the one response with the
-// tool–body contacts (unilateral, friction or equality, as the scene's law), so a tissue resting
-// on a tray stiffens the tissue under the tool in the linear contact model.
+// touches, through the tool's virtual coupling to the device; the tool makes no contacts with it.
+// Both kinds enter the one response with the tool–body contacts (unilateral, friction or equality,
+// as the scene's law), so a tissue resting on a tray stiffens the tissue under the tool in the
+// linear contact model.
 //
 // Contacts, each measured at the start of the frame with the exact signed distance d of the
 // object (contact/tool_distance.h), and reported when d ≤ τ = margin + sweep bound:

@@ -69,9 +69,9 @@ struct VisualFrameOptions {
 struct VisualFrameStats {
   double coupling_s = 0.0, free_tool_s = 0.0, free_fem_s = 0.0, detection_s = 0.0;
   double response_s = 0.0, model_s = 0.0, sanity_s = 0.0, total_s = 0.0;
-  int num_candidates = 0;  // contacts detected
-  int num_contacts = 0;    // contacts made constraints
-  int num_active = 0;      // constraints with λ > 0
+  int num_candidates = 0;      // contacts detected
+  int num_contacts = 0;        // contacts made constraints
+  int num_active = 0;          // constraints with λ > 0
   int num_rigid_contacts = 0;  // of the candidates: tool or body against a rigid object
   int num_sanity_corrections = 0;
   double max_penetration_m = 0.0;  // deepest contact node inside the tool after the step, ≥ 0

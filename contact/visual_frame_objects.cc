@@ -20,9 +20,9 @@ void VisualFrame::MoveRigidObjects(const DeviceState& device, const ToolState& t
     ObjectMotion& motion = object_motion_[i];
     motion.x_W_m = X_start.translation();
     motion.v_W_m_s = (X_end.translation() - X_start.translation()) / options_.dt_s;
-    motion.w_W_rad_s = CalcRotationVector(Eigen::Quaterniond(
-                           X_end.linear() * X_start.linear().transpose())) /
-                       options_.dt_s;
+    motion.w_W_rad_s =
+        CalcRotationVector(Eigen::Quaterniond(X_end.linear() * X_start.linear().transpose())) /
+        options_.dt_s;
     rigid_contacts_.SetMotion(i, X_start, X_end);
   }
   // Grabbing acts on a press (the button going down), so holding it while touching an object
@@ -51,8 +51,7 @@ Eigen::VectorXd VisualFrame::CalcObjectSeparatingVelocity() const {
     const ObjectMotion& motion = object_motion_[object];
     if (motion.v_W_m_s.isZero(0.0) && motion.w_W_rad_s.isZero(0.0)) continue;
     const Eigen::Vector3d& p_W_m = contact.on_tool ? contact.p_body_W_m : contact.p_tool_W_m;
-    const Eigen::Vector3d v_point =
-        motion.v_W_m_s + motion.w_W_rad_s.cross(p_W_m - motion.x_W_m);
+    const Eigen::Vector3d v_point = motion.v_W_m_s + motion.w_W_rad_s.cross(p_W_m - motion.x_W_m);
     const double sign = contact.on_tool ? 1.0 : -1.0;
     Eigen::Vector3d directions[3] = {contact.n_W, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
     if (rows_per_contact_ == 3) CalcTangents(contact.n_W, &directions[1], &directions[2]);

@@ -71,6 +71,33 @@ TEST(ObjectsSceneTest, RigidAndDeformableObjectsParse) {
   EXPECT_EQ(options.rigid_objects[1].name, "wall");
 }
 
+// A rigid object moved by a script starts at the script's first pose; a grabbable one is marked;
+// the device's waypoints carry the button.
+TEST(ObjectsSceneTest, ScriptedAndGrabbableObjectsAndTheDeviceButtonParse) {
+  std::string text = Replace(kObjectsScene, "      position_m: [0, 0, -0.005]              #  7\n",
+                             "      trajectory: [{t_s: 1, position_m: [0, 0, -0.005]},\n"
+                             "                   {t_s: 2, position_m: [0, 0, 0.01]}]\n");
+  text = Replace(text, "      position_m: [0.05, 0, 0.02]             # 11\n",
+                 "      position_m: [0.05, 0, 0.02]\n      grabbable: true\n");
+  text = Replace(text, "{t_s: 0, position_m: [0, 0, 0.05]}]",
+                 "{t_s: 0, position_m: [0, 0, 0.05]}, {t_s: 1, position_m: [0, 0, 0.05], "
+                 "button: true}, {t_s: 2, position_m: [0, 0, 0.05], button: false}]");
+  const Scene scene = ParseScene(text, kLabel, "");
+  const contact::RigidObject& tray = scene.rigid_objects[0].object;
+  ASSERT_TRUE(tray.script.has_value());
+  EXPECT_EQ(tray.script->waypoints().size(), 2u);
+  EXPECT_FALSE(tray.grabbable);
+  EXPECT_TRUE(tray.X_WO.translation().isApprox(Eigen::Vector3d(0, 0, -0.005)));
+  EXPECT_TRUE(
+      contact::CalcScriptedPose(tray, 2.5).translation().isApprox(Eigen::Vector3d(0, 0, 0.01)));
+  EXPECT_TRUE(scene.rigid_objects[1].object.grabbable);
+  EXPECT_FALSE(scene.rigid_objects[1].object.script.has_value());
+  ASSERT_EQ(scene.trajectory.size(), 3u);
+  EXPECT_EQ(scene.trajectory[0].buttons, 0);
+  EXPECT_EQ(scene.trajectory[1].buttons, 1);
+  EXPECT_EQ(scene.trajectory[2].buttons, 0);
+}
+
 TEST(ObjectsSceneTest, ARigidOnlySceneHasNoBody) {
   const Scene scene = ParseScene(Replace(kObjectsScene, kOrganLines, ""), kLabel, "");
   EXPECT_FALSE(scene.body.has_value());
@@ -100,7 +127,22 @@ const BadCase kBadCases[] = {
      "duplicate object name 'tray' (first given on line 4)"},
     {"EmptyName", "  - name: wall", "  - name: ''", 8, "objects[1].name", "must not be empty"},
     {"UnknownRigidKey", "      position_m: [0, 0, -0.005]", "      offset_m: [0, 0, -0.005]", 7,
-     "objects[0].rigid.offset_m", "allowed keys here: shape, position_m, rotation_vector_rad"},
+     "objects[0].rigid.offset_m",
+     "allowed keys here: shape, position_m, rotation_vector_rad, trajectory, grabbable"},
+    {"PoseAndTrajectory", "      position_m: [0, 0, -0.005]              #  7\n",
+     "      position_m: [0, 0, -0.005]\n      trajectory: [{t_s: 0, position_m: [0, 0, 0]}]\n", 7,
+     "objects[0].rigid.position_m", "give either a fixed pose"},
+    {"ScriptedAndGrabbable", "      position_m: [0, 0, -0.005]              #  7\n",
+     "      trajectory: [{t_s: 0, position_m: [0, 0, 0]}]\n      grabbable: true\n", 8,
+     "objects[0].rigid.grabbable", "an object moved by a script cannot be grabbed"},
+    {"GrabbableNotABool", "      position_m: [0, 0, -0.005]              #  7\n",
+     "      grabbable: yes\n", 7, "objects[0].rigid.grabbable", "true, false"},
+    {"ButtonOnAnObjectWaypoint", "      position_m: [0, 0, -0.005]              #  7\n",
+     "      trajectory: [{t_s: 0, position_m: [0, 0, 0], button: true}]\n", 7,
+     "objects[0].rigid.trajectory[0].button", "allowed keys here: t_s, position_m"},
+    {"ObjectWaypointsOutOfOrder", "      position_m: [0, 0, -0.005]              #  7\n",
+     "      trajectory: [{t_s: 1, position_m: [0, 0, 0]}, {t_s: 1, position_m: [0, 0, 1]}]\n", 7,
+     "objects[0].rigid.trajectory[1].t_s", "must be later than the waypoint before it"},
     {"BadRigidShape", "{box: {half_extents_m: [0.1, 0.08, 0.005]}}",
      "{box: {half_extents_m: [0.1, 0, 0.005]}}", 6, "objects[0].rigid.shape.box.half_extents_m",
      "must be > 0"},

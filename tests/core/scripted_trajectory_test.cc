@@ -34,12 +34,12 @@ Eigen::Quaterniond Rotation(double angle_rad, const Eigen::Vector3d& axis) {
 // Press, slide with a twist, release; uneven segment lengths.
 std::vector<Waypoint> PressSlideRelease() {
   return {
-      {0.0, Eigen::Vector3d(0.0, 0.0, 0.071), Eigen::Quaterniond::Identity()},
-      {0.2, Eigen::Vector3d(0.0, 0.0, 0.071), Eigen::Quaterniond::Identity()},
-      {1.0, Eigen::Vector3d(0.0, 0.0, 0.066), Rotation(0.3, Eigen::Vector3d(1, 0, 0))},
-      {2.0, Eigen::Vector3d(0.02, 0.0, 0.066), Rotation(-0.5, Eigen::Vector3d(1, 2, 3))},
-      {2.8, Eigen::Vector3d(0.02, 0.01, 0.071), Rotation(2.5, Eigen::Vector3d(0, 1, 1))},
-      {3.0, Eigen::Vector3d(0.02, 0.01, 0.071), Rotation(2.5, Eigen::Vector3d(0, 1, 1))},
+      {0.0, Eigen::Vector3d(0.0, 0.0, 0.071), Eigen::Quaterniond::Identity(), 0},
+      {0.2, Eigen::Vector3d(0.0, 0.0, 0.071), Eigen::Quaterniond::Identity(), 0},
+      {1.0, Eigen::Vector3d(0.0, 0.0, 0.066), Rotation(0.3, Eigen::Vector3d(1, 0, 0)), 1},
+      {2.0, Eigen::Vector3d(0.02, 0.0, 0.066), Rotation(-0.5, Eigen::Vector3d(1, 2, 3)), 1},
+      {2.8, Eigen::Vector3d(0.02, 0.01, 0.071), Rotation(2.5, Eigen::Vector3d(0, 1, 1)), 0},
+      {3.0, Eigen::Vector3d(0.02, 0.01, 0.071), Rotation(2.5, Eigen::Vector3d(0, 1, 1)), 0},
   };
 }
 
@@ -48,6 +48,14 @@ void ExpectAtRest(const DeviceState& state, const Waypoint& waypoint) {
   EXPECT_EQ(state.q_WD.coeffs(), waypoint.q_WD.coeffs());
   EXPECT_EQ(state.v_W_m_s, Eigen::Vector3d::Zero());
   EXPECT_EQ(state.w_W_rad_s, Eigen::Vector3d::Zero());
+}
+
+// The button is held from a waypoint up to the next: pressed on [1.0, 2.8) here, released at 2.8.
+TEST(ScriptedTrajectoryTest, ButtonsHoldFromEachWaypointToTheNext) {
+  const ScriptedTrajectory trajectory(PressSlideRelease());
+  for (const double t_s : {-1.0, 0.0, 0.5, 0.999999}) EXPECT_EQ(trajectory.Sample(t_s).buttons, 0);
+  for (const double t_s : {1.0, 1.5, 2.0, 2.799999}) EXPECT_EQ(trajectory.Sample(t_s).buttons, 1);
+  for (const double t_s : {2.8, 2.9, 3.0, 10.0}) EXPECT_EQ(trajectory.Sample(t_s).buttons, 0);
 }
 
 TEST(ScriptedTrajectoryTest, WaypointsAreHitExactlyAtRest) {
