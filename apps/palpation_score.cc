@@ -6,8 +6,12 @@
 namespace hapsim::apps {
 
 PalpationScorer::PalpationScorer(const config::TaskScene& task, const ToolShape& tool,
-                                 double haptic_dt_s)
-    : task_(task), tool_(tool), haptic_dt_s_(haptic_dt_s), targets_(task.targets.size()) {}
+                                 const Eigen::Vector3d& tool_weight_N, double haptic_dt_s)
+    : task_(task),
+      tool_(tool),
+      tool_weight_N_(tool_weight_N),
+      haptic_dt_s_(haptic_dt_s),
+      targets_(task.targets.size()) {}
 
 void PalpationScorer::Add(const hapsim_lcm::haptic_state_t& state) {
   if (state.step <= last_step_) return;  // a repeat or an older step
@@ -17,7 +21,8 @@ void PalpationScorer::Add(const hapsim_lcm::haptic_state_t& state) {
   const double t_s = (state.step + 1) * haptic_dt_s_;  // the end of this step
   const Eigen::Vector3d x_W_m(state.x_W_m[0], state.x_W_m[1], state.x_W_m[2]);
   const Eigen::Quaterniond q_WT(state.q_WT[0], state.q_WT[1], state.q_WT[2], state.q_WT[3]);
-  const double force_N = Eigen::Map<const Eigen::Vector3d>(state.force_device_W_N).norm();
+  const double force_N =
+      (Eigen::Map<const Eigen::Vector3d>(state.force_device_W_N) - tool_weight_N_).norm();
   // The path on 10 ms samples: the haptic tool's 1 kHz jitter (tens of micrometres a step)
   // would otherwise add up to metres over a session.
   if (state.step % kPathSampleSteps == 0) {
@@ -27,6 +32,7 @@ void PalpationScorer::Add(const hapsim_lcm::haptic_state_t& state) {
   }
   last_step_ = state.step;
   peak_force_N_ = std::max(peak_force_N_, force_N);
+  last_force_N_ = force_N;
   over_limit_ = force_N > task_.force_limit_N;
   if (over_limit_) time_over_limit_s_ += (consecutive ? gap_steps : 1) * haptic_dt_s_;
   const bool in_band = force_N >= task_.force_band_min_N && force_N <= task_.force_band_max_N;
@@ -53,13 +59,13 @@ std::vector<bool> PalpationScorer::reached() const {
   return reached;
 }
 
-std::string PalpationScorer::StatusLine(double force_N) const {
+std::string PalpationScorer::StatusLine() const {
   char text[256];
-  std::snprintf(text, sizeof(text), "task: %d of %zu targets  %.1f / %.0f s  band %.1f-%.1f N%s%s",
-                num_reached_, targets_.size(), elapsed_s(), task_.time_limit_s,
+  std::snprintf(text, sizeof(text),
+                "task: %d of %zu targets  %.1f / %.0f s  tissue %.2f N (band %.2f-%.2f N)%s%s",
+                num_reached_, targets_.size(), elapsed_s(), task_.time_limit_s, last_force_N_,
                 task_.force_band_min_N, task_.force_band_max_N,
-                force_N > task_.force_limit_N ? "   OVER THE FORCE LIMIT" : "",
-                completed() ? "   DONE" : "");
+                over_limit_ ? "   OVER THE FORCE LIMIT" : "", completed() ? "   DONE" : "");
   return text;
 }
 

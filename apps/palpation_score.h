@@ -5,9 +5,15 @@
 //
 // A target is touched while the haptic tool (the one the trainee feels) reaches into the target's
 // ball: the tool's signed distance at the ball's centre is at most its radius. It is reached once
-// it has been touched with the device force inside the band for hold_s without a break. Also
-// counted: the time to reach every target, the peak device force, the time above the force limit
-// and the haptic tool's path length (on samples every 10 haptic steps).
+// it has been touched with the tissue force inside the band for hold_s without a break. Also
+// counted: the time to reach every target, the peak tissue force, the time above the (tissue)
+// force limit and the haptic tool's path length (on samples every 10 haptic steps).
+//
+// The tissue force is what the tool presses on what it touches, F_device − m g: at rest the
+// coupling holds the tool against its weight and the contact (F_device = F_contact + m g, where
+// F_device is the coupling's pull on the device and F_contact the tissue's push back). It is
+// measured the same way in every haptic mode, coupling included (which renders no contact force
+// of its own), and a tool resting in free space presses with zero, whatever its weight.
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -21,7 +27,9 @@ namespace hapsim::apps {
 
 class PalpationScorer {
  public:
-  PalpationScorer(const config::TaskScene& task, const ToolShape& tool, double haptic_dt_s);
+  // tool_weight_N: m g of the tool, world (the scene's tool mass and gravity).
+  PalpationScorer(const config::TaskScene& task, const ToolShape& tool,
+                  const Eigen::Vector3d& tool_weight_N, double haptic_dt_s);
 
   // The next haptic state of the run (steps in order). Up to kMaxGapSteps missing steps (lost
   // datagrams) count as the state that follows them; a longer gap breaks a hold.
@@ -32,8 +40,8 @@ class PalpationScorer {
   bool completed() const { return num_reached_ == static_cast<int>(task_.targets.size()); }
   bool over_limit() const { return over_limit_; }  // at the last step
   std::vector<bool> reached() const;
-  // One line for the screen: targets, force, warnings.
-  std::string StatusLine(double force_N) const;
+  // One line for the screen: targets, the tissue force, warnings (at the last state).
+  std::string StatusLine() const;
   nlohmann::json ToJson() const;
 
  private:
@@ -44,12 +52,14 @@ class PalpationScorer {
   };
   config::TaskScene task_;
   contact::ToolDistanceField tool_;
+  Eigen::Vector3d tool_weight_N_;
   double haptic_dt_s_;
   std::vector<Target> targets_;
   int num_reached_ = 0;
   std::int64_t last_step_ = -1;
   double completed_at_s_ = 0.0;
   double peak_force_N_ = 0.0;
+  double last_force_N_ = 0.0;
   double time_over_limit_s_ = 0.0;
   bool over_limit_ = false;
   static constexpr std::int64_t kPathSampleSteps = 10;

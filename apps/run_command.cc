@@ -187,6 +187,21 @@ hapsim_lcm::sim_frame_t MakeSimFrame(const fem::State& body, const Matrix3Xi& su
   msg.time_model_s = stats.model_s;
   msg.time_sanity_s = stats.sanity_s;
   msg.time_total_s = stats.total_s;
+  msg.contact_kind.resize(msg.num_contacts);
+  for (int i = 0; i < msg.num_contacts; ++i)
+    msg.contact_kind[i] = static_cast<int8_t>(contact::KindOf(contacts[i]));
+  msg.num_objects = frame.num_objects();
+  msg.object_x_W_m.assign(msg.num_objects, std::vector<double>(3));
+  msg.object_q_WO.assign(msg.num_objects, std::vector<double>(4));
+  for (int i = 0; i < msg.num_objects; ++i) {
+    const Eigen::Isometry3d& X_WO = frame.object_pose(i);
+    const Eigen::Quaterniond q_WO(X_WO.linear());
+    for (int d = 0; d < 3; ++d) msg.object_x_W_m[i][d] = X_WO.translation()[d];
+    const double q[4] = {q_WO.w(), q_WO.x(), q_WO.y(), q_WO.z()};
+    for (int d = 0; d < 4; ++d) msg.object_q_WO[i][d] = q[d];
+  }
+  msg.selected_object = frame.selected_object();
+  msg.grabbed_object = frame.grabbed_object();
   return msg;
 }
 

@@ -81,6 +81,22 @@ bool IsDrawableFrame(const hapsim_lcm::sim_frame_t& frame, std::string* error) {
       }
     }
   }
+  for (int i = 0; i < frame.num_objects; ++i) {
+    for (int d = 0; d < 4; ++d) {
+      if ((d < 3 && !std::isfinite(frame.object_x_W_m[i][d])) ||
+          !std::isfinite(frame.object_q_WO[i][d])) {
+        *error = "a rigid object's pose is not finite";
+        return false;
+      }
+    }
+  }
+  for (const int32_t object : {frame.selected_object, frame.grabbed_object}) {
+    if (object < -1 || object >= frame.num_objects) {
+      *error = "a selected or grabbed object " + std::to_string(object) + " of " +
+               std::to_string(frame.num_objects);
+      return false;
+    }
+  }
   for (const double x : {frame.x_W_m[0], frame.x_W_m[1], frame.x_W_m[2], frame.q_WT[0],
                          frame.q_WT[1], frame.q_WT[2], frame.q_WT[3], frame.t_s}) {
     if (!std::isfinite(x)) {

@@ -13,6 +13,8 @@ namespace {
 const cv::viz::Color kTissue(170, 170, 235);  // BGR: a pale flesh tone at zero displacement
 const cv::viz::Color kDeepRed(30, 30, 190);   // at the displacement scale and beyond
 const cv::viz::Color kRigid(150, 150, 150);
+const cv::viz::Color kSelected(120, 220, 240);  // a grabbable object the tool touches
+const cv::viz::Color kGrabbed(90, 200, 90);     // the object the tool holds
 const cv::viz::Color kTool(230, 200, 120);
 const cv::viz::Color kGhost(255, 255, 255);
 const cv::viz::Color kContact(0, 230, 255);
@@ -272,10 +274,25 @@ void ScenePainter::Hide(const std::string& name) {
   if (shown_.erase(name) > 0) window_->removeWidget(name);  // viz asserts on an unknown name
 }
 
+void ScenePainter::DrawObjects(const hapsim_lcm::sim_frame_t& frame) {
+  // A frame of another scene (or of an older run without objects) leaves them where they are.
+  if (frame.num_objects != static_cast<int>(scene_.rigid_objects.size())) return;
+  for (int i = 0; i < frame.num_objects; ++i) {
+    const std::string name = "rigid_" + scene_.rigid_objects[i].object.name;
+    window_->setWidgetPose(name,
+                           ToAffine(frame.object_x_W_m[i].data(), frame.object_q_WO[i].data()));
+    const cv::viz::Color color = i == frame.grabbed_object    ? kGrabbed
+                                 : i == frame.selected_object ? kSelected
+                                                              : kRigid;
+    window_->getWidget(name).cast<cv::viz::Widget3D>().setColor(color);
+  }
+}
+
 void ScenePainter::Draw(const ViewState& state) {
   if (state.has_frame) {
     const hapsim_lcm::sim_frame_t& frame = state.frame;
     DrawBody(frame);
+    DrawObjects(frame);
     if (scene_.tool) Place("tool", ToAffine(frame.x_W_m, frame.q_WT));
     if (frame.num_contacts > 0) {
       cv::Mat points(1, frame.num_contacts, CV_64FC3);

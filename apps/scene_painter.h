@@ -51,6 +51,8 @@ class ScenePainter {
 
  private:
   void DrawBody(const hapsim_lcm::sim_frame_t& frame);
+  // The rigid objects where the frame has them, coloured when selected or grabbed.
+  void DrawObjects(const hapsim_lcm::sim_frame_t& frame);
   void DrawGauge(const ViewState& state);
   // showWidget / removeWidget, remembering what is shown (viz asserts on removing an unknown name).
   void Show(const std::string& name, const cv::viz::Widget& widget,

@@ -298,7 +298,8 @@ void RunTrain(TrainOptions options) {
       task.force_band_min_N, task.force_band_max_N, task.hold_s, task.force_limit_N,
       task.time_limit_s);
   PrintTargetHints(scene, start_W_m, window);
-  PalpationScorer scorer(task, scene.tool->model.shape, haptic_dt_s);
+  PalpationScorer scorer(task, scene.tool->model.shape,
+                         scene.tool->model.mass_kg * scene.gravity_m_s2, haptic_dt_s);
   TraineeInput input;
   input.pointer_W_m = start_W_m;
   int screenshots = 0, child_code = 0;
@@ -336,10 +337,7 @@ void RunTrain(TrainOptions options) {
         timeline->Forget(5.0);
       }
       state.targets_reached = scorer.reached();
-      const double force_N =
-          state.has_haptic ? Eigen::Map<const Eigen::Vector3d>(state.haptic.force_device_W_N).norm()
-                           : 0.0;
-      state.status = scorer.StatusLine(force_N) + (input.buttons ? "   [button]" : "");
+      state.status = scorer.StatusLine() + (input.buttons ? "   [button]" : "");
       window.Show(state);
       if (scorer.completed() && done_at_s < 0.0) done_at_s = scorer.elapsed_s();
       // Done: every target reached (a second more to see it), or the run ended (the time limit).

@@ -93,7 +93,8 @@ std::string Describe(const ViewState& state) {
 // The task's score over the whole logged run, and when each target was reached (never: +inf).
 nlohmann::json ScoreLoggedRun(const config::Scene& scene, const RunTimeline& timeline,
                               double haptic_dt_s, std::vector<double>* reached_at_s) {
-  PalpationScorer scorer(*scene.task, scene.tool->model.shape, haptic_dt_s);
+  PalpationScorer scorer(*scene.task, scene.tool->model.shape,
+                         scene.tool->model.mass_kg * scene.gravity_m_s2, haptic_dt_s);
   for (const hapsim_lcm::haptic_state_t& state : timeline.HapticStatesAfter(-1)) scorer.Add(state);
   const nlohmann::json score = scorer.ToJson();
   for (const nlohmann::json& target : score["targets"])

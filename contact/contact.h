@@ -11,10 +11,13 @@
 // A contact that touches no tool (a body node on a rigid object) has on_tool = false: its rows
 // have no tool terms, and "tool" below then means the rigid object (p_tool_W_m is the object's
 // point, n_W points out of the object). A contact with a rigid object has no body nodes on that
-// side: the object does not move.
+// side: the object has no degrees of freedom. An object the tool holds (grabbed) is part of the
+// tool: its contacts have on_tool = true, rigid_object its index, and body nodes if they are
+// with the body.
 
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 
 namespace hapsim::contact {
 
@@ -28,5 +31,19 @@ struct Contact {
   bool on_tool = true;    // false: a body node against a rigid object
   int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none
 };
+
+// What a contact touches (sim_frame_t.contact_kind).
+enum class ContactKind : std::int8_t {
+  kToolBody = 0,        // the tool and the deformable body
+  kToolObject = 1,      // the tool, or the object it holds, and a rigid object
+  kBodyObject = 2,      // a body node and a rigid object
+  kHeldObjectBody = 3,  // a body node and the object the tool holds
+};
+
+inline ContactKind KindOf(const Contact& contact) {
+  if (!contact.on_tool) return ContactKind::kBodyObject;
+  if (contact.rigid_object < 0) return ContactKind::kToolBody;
+  return contact.nodes[0] >= 0 ? ContactKind::kHeldObjectBody : ContactKind::kToolObject;
+}
 
 }  // namespace hapsim::contact

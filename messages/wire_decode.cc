@@ -76,7 +76,7 @@ class WireCursor {
   std::string error_;
 };
 
-constexpr int kDouble = 8, kInt64 = 8, kInt32 = 4, kFloat = 4, kBoolean = 1;
+constexpr int kDouble = 8, kInt64 = 8, kInt32 = 4, kFloat = 4, kInt8 = 1, kBoolean = 1;
 
 }  // namespace
 
@@ -151,6 +151,10 @@ bool CheckWireLayout<hapsim_lcm::sim_frame_t>(const void* data, int size, std::s
   const std::int64_t contacts = wire.ReadCount("num_contacts");
   wire.Skip(contacts * (3 + 3 + 1), kDouble, "p_W_m, n_W, lambda_N");
   wire.Skip(8, kDouble, "time_coupling_s ... time_total_s");
+  wire.Skip(contacts, kInt8, "contact_kind");
+  const std::int64_t objects = wire.ReadCount("num_objects");
+  wire.Skip(objects * (3 + 4), kDouble, "object_x_W_m, object_q_WO");
+  wire.Skip(2, kInt32, "selected_object, grabbed_object");
   return wire.Finish(error);
 }
 

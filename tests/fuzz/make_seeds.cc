@@ -130,6 +130,7 @@ hapsim_lcm::sim_frame_t TinyFrame(hapsim_lcm::sim_frame_t msg) {
   msg.p_W_m = {{0.002, 0.002, 0.0}};
   msg.n_W = {{0, 0, -1}};
   msg.lambda_N = {0.5};
+  msg.contact_kind = {0};
   return msg;
 }
 

@@ -159,6 +159,12 @@ TEST(ToolPoseMessage, RoundTripThroughHapticStateAndSimFrame) {
   frame.p_W_m = {{0.01, 0.02, 0.03}};
   frame.n_W = {{0.0, 0.0, -1.0}};
   frame.lambda_N = {2.5};
+  frame.contact_kind = {2};
+  frame.num_objects = 1;
+  frame.object_x_W_m = {{0.0, 0.0, -0.005}};
+  frame.object_q_WO = {{1.0, 0.0, 0.0, 0.0}};
+  frame.selected_object = -1;
+  frame.grabbed_object = 0;
 
   const auto haptic_out = EncodeDecode(haptic);
   const auto frame_out = EncodeDecode(frame);
@@ -166,6 +172,10 @@ TEST(ToolPoseMessage, RoundTripThroughHapticStateAndSimFrame) {
   EXPECT_EQ(frame_out.positions_W_m, frame.positions_W_m);
   EXPECT_EQ(frame_out.triangles, frame.triangles);
   EXPECT_EQ(frame_out.lambda_N, frame.lambda_N);
+  EXPECT_EQ(frame_out.contact_kind, frame.contact_kind);
+  EXPECT_EQ(frame_out.object_x_W_m, frame.object_x_W_m);
+  EXPECT_EQ(frame_out.object_q_WO, frame.object_q_WO);
+  EXPECT_EQ(frame_out.grabbed_object, 0);
   const auto expect_pose = [&](const double x_W_m[3], const double q_WT[4], const char* what) {
     ToolState out;
     out.v_W_m_s = Eigen::Vector3d(1.0, 2.0, 3.0);

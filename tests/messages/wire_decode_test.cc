@@ -61,6 +61,11 @@ hapsim_lcm::sim_frame_t MakeSimFrame() {
   msg.p_W_m.assign(3, {0.0, 0.0, 0.0});
   msg.n_W.assign(3, {0.0, 0.0, 1.0});
   msg.lambda_N.assign(3, 1.0);
+  msg.contact_kind.assign(3, 0);
+  msg.num_objects = 2;
+  msg.object_x_W_m.assign(2, {0.0, 0.0, 0.0});
+  msg.object_q_WO.assign(2, {1.0, 0.0, 0.0, 0.0});
+  msg.selected_object = msg.grabbed_object = -1;
   return msg;
 }
 
