@@ -160,6 +160,19 @@ ScenePainter::ScenePainter(cv::viz::Viz3d* window, const config::Scene& scene,
     box.extend(scene.tool->initial_state.x_W_m - Eigen::Vector3d::Constant(radius_m));
   }
   window_->setViewerPose(MakeCameraPose(box));
+  if (!(options_.displacement_scale_m > 0.0)) {
+    options_.displacement_scale_m = 0.005;
+    if (rest_positions_m_.cols() > 0) {
+      const Eigen::Vector3d extent_m =
+          rest_positions_m_.rowwise().maxCoeff() - rest_positions_m_.rowwise().minCoeff();
+      options_.displacement_scale_m = std::min(0.005, 0.25 * extent_m.minCoeff());
+    }
+  }
+  if (!(options_.force_gauge_N > 0.0))
+    options_.force_gauge_N =
+        scene.task ? 1.5 * scene.task->force_limit_N : scene.haptic.safety.max_force_N;
+  if (!(options_.force_scale_m_N > 0.0))
+    options_.force_scale_m_N = 0.25 * box.diagonal().norm() / options_.force_gauge_N;
   // The widgets that only move are made once (a merged cylinder costs milliseconds) and placed
   // by Place() when first seen.
   if (scene.tool) {

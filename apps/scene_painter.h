@@ -31,10 +31,15 @@ struct ViewState {
   std::string status;  // an extra line under the gauge (the trainer's task), may be empty
 };
 
+// Each 0 (the default) is chosen from the scene, so that a 8 mm polyp and a 16 cm liver both
+// show their touch: the displacement in the deepest red is 5 mm, or a quarter of the body's
+// smallest rest extent if that is less; the gauge's full scale is 1.5 times the task's force
+// limit, or the haptic safety limit without a task; the force arrow at full scale is a quarter of
+// the scene's size.
 struct PainterOptions {
-  double displacement_scale_m = 0.005;  // displacement drawn in the deepest red
-  double force_scale_m_N = 0.01;        // length of the force arrow per newton
-  double force_gauge_N = 10.0;          // full scale of the on-screen gauge
+  double displacement_scale_m = 0.0;  // displacement drawn in the deepest red, m
+  double force_scale_m_N = 0.0;       // length of the force arrow per newton, m/N
+  double force_gauge_N = 0.0;         // full scale of the on-screen gauge, N
 };
 
 class ScenePainter {

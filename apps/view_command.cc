@@ -80,14 +80,25 @@ struct Player {
   }
 };
 
-// Which messages a picture shows, e.g. "frame 50, haptic step 1500, device sample 1502".
-std::string Describe(const ViewState& state) {
+// Which messages a picture shows, e.g. "frame 50, haptic step 1500, device sample 1502", and
+// the rigid object the tool holds or touches, e.g. ", cube grabbed".
+std::string Describe(const ViewState& state, const config::Scene& scene) {
   char text[160];
   std::snprintf(text, sizeof(text), "frame %lld, haptic step %lld, device sample %lld",
                 state.has_frame ? static_cast<long long>(state.frame.sequence) : -1LL,
                 state.has_haptic ? static_cast<long long>(state.haptic.step) : -1LL,
                 state.has_device ? static_cast<long long>(state.device.sequence) : -1LL);
-  return text;
+  std::string description = text;
+  const auto name_of = [&](int i) {
+    return i >= 0 && i < static_cast<int>(scene.rigid_objects.size())
+               ? scene.rigid_objects[i].object.name
+               : std::string("object ") + std::to_string(i);
+  };
+  if (state.has_frame && state.frame.grabbed_object >= 0)
+    description += ", " + name_of(state.frame.grabbed_object) + " grabbed";
+  else if (state.has_frame && state.frame.selected_object >= 0)
+    description += ", " + name_of(state.frame.selected_object) + " selected";
+  return description;
 }
 
 // The task's score over the whole logged run, and when each target was reached (never: +inf).
@@ -147,7 +158,7 @@ void ViewLog(const ViewOptions& options) {
     window.Show(state);
     window.SaveScreenshot(options.screenshot_path);
     std::printf("hapsim view: %s at %.3f s (%s) -> %s\n", options.log_path.c_str(), t_s,
-                Describe(state).c_str(), options.screenshot_path.c_str());
+                Describe(state, scene).c_str(), options.screenshot_path.c_str());
     return;
   }
   if (!options.video_path.empty()) {
@@ -225,7 +236,7 @@ void ViewLive(const ViewOptions& options) {
     const ViewState state = timeline.StateAt(at_s);
     window.Show(state);
     window.SaveScreenshot(options.screenshot_path);
-    std::printf("hapsim view: live at %.3f s (%s) -> %s\n", at_s, Describe(state).c_str(),
+    std::printf("hapsim view: live at %.3f s (%s) -> %s\n", at_s, Describe(state, scene).c_str(),
                 options.screenshot_path.c_str());
     return;
   }
@@ -299,9 +310,9 @@ void AddViewCommand(CLI::App* app) {
       ->check(CLI::Range(0.001, 86400.0))
       ->capture_default_str();
   view->add_option("--displacement-scale", options->painter.displacement_scale_m,
-                   "Displacement drawn in the deepest red, m")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+                   "Displacement drawn in the deepest red, m (default: 5 mm, or a quarter of the "
+                   "body's smallest size if less)")
+      ->check(CLI::PositiveNumber);
   view->add_option("--score", options->score_path,
                    "Score the logged run's task (as `hapsim train` does), write FILE.json, exit");
   view->add_option("--displacement-from", options->displacement_from_s,

@@ -17,7 +17,7 @@ import sys
 
 INNER_RADIUS_M = 0.015
 OUTER_RADIUS_M = 0.018
-LENGTH_M = 0.05
+LENGTH_M = 0.03
 HALF_ANGLE_RAD = math.radians(70.0)
 SEGMENTS = 16  # around the arc: a chord's sagitta is R (1 - cos(dphi/2)) = 0.04 mm inside
 

@@ -10,7 +10,11 @@
 #  3. --video writes an AVI of one picture per 1/fps s of the log (its header's frame count);
 #     the playback window takes keys typed by xdotool (space, period, bracketright, q);
 #  4. bad input: a missing log and a bad --size exit 2 naming them, writing nothing;
-#  5. `hapsim inspect` of a rigid-only scene builds no FEM (0 DOFs, fem_built false).
+#  5. `hapsim inspect` of a rigid-only scene builds no FEM (0 DOFs, fem_built false);
+#  6. grabbing across the two processes (scenes/pick_and_place.yaml): the scripted device's button
+#     travels in DEVICE_STATE to the visual process, whose SIM_FRAMEs say the cube is selected when
+#     touched (1.2 s), grabbed while the button is down (3.0 s, 5.0 s: the picture shows it in the
+#     grabbed colour, carried 55 mm across) and let go after (6.0 s).
 # Traffic stays on this machine: a private network namespace when root, else a unique port.
 # Usage: view_test.sh HAPSIM
 set -euo pipefail
@@ -138,5 +142,32 @@ r = json.load(open(sys.argv[1]))
 assert r["fem_built"] is False, r
 assert [o["kind"] for o in r["objects"]] == ["rigid"] and r["objects"][0]["dofs"] == 0, r
 assert r["frame_cost"]["frames_run"] == 5, r
+PY
+
+# 6. Selection and grabbing over LCM.
+"$hapsim" run scenes/pick_and_place.yaml --lcm-url "$url" --duration 6.2 --log "$work/pick.lcm" \
+  > "$work/pick.out" 2>&1 || fail "hapsim run pick_and_place: $(cat "$work/pick.out")"
+for t in 1.2 3.0 5.0 6.0; do
+  "$hapsim" view "$work/pick.lcm" --screenshot "$work/pick_$t.png" --at "$t" --size 800x600 \
+    > "$work/pick_$t.out" 2>&1 || fail "view pick at $t: $(cat "$work/pick_$t.out")"
+done
+grep -q "cube selected" "$work/pick_1.2.out" || fail "not selected at 1.2 s: $(cat "$work/pick_1.2.out")"
+grep -q "cube grabbed" "$work/pick_3.0.out" && grep -q "cube grabbed" "$work/pick_5.0.out" ||
+  fail "not grabbed at 3 or 5 s: $(cat "$work/pick_3.0.out" "$work/pick_5.0.out")"
+grep -q "grabbed\|selected" "$work/pick_6.0.out" && fail "still held at 6 s: $(cat "$work/pick_6.0.out")"
+/usr/bin/python3 - "$work/pick_1.2.png" "$work/pick_3.0.png" "$work/pick_5.0.png" <<'PY'
+import sys
+import matplotlib.image as image
+import numpy as np
+touched, carried, pressed = (image.imread(p)[:, :, :3] for p in sys.argv[1:4])
+# The grabbed colour (RGB 90, 200, 90 lit): green well above red and blue.
+green = lambda img: (img[:, :, 1] > img[:, :, 0] + 0.15) & (img[:, :, 1] > img[:, :, 2] + 0.15)
+print(f"grabbed-green pixels: {green(touched).sum()} touched, {green(carried).sum()} carried, "
+      f"{green(pressed).sum()} pressed")
+assert green(touched).sum() == 0
+assert green(carried).sum() > 300 and green(pressed).sum() > 300
+# Carried from x = -30 mm to +25 mm: the cube's pixels move right across the picture.
+cols = lambda img: np.nonzero(green(img).any(axis=0))[0].mean()
+assert cols(pressed) > cols(carried) + 50, (cols(carried), cols(pressed))
 PY
 echo "view and inspect: all checks passed"
