@@ -39,13 +39,18 @@
 //   objects:                           # optional: the scene's objects (DESIGN.md §9), each
 //                                      # exactly one of deformable / rigid
 //     - name: tray                     # required, unique among the objects
-//       rigid:                         # a fixed rigid object: builds no FEM; needs a tool (its
+//       rigid:                         # a rigid object: builds no FEM; needs a tool (its
 //                                      # contacts are solved in the visual frame) and the
 //                                      # unilateral or friction law (not equality)
 //         shape: {box: {half_extents_m: [0.1, 0.1, 0.005]}}   # as tool.shape (a mesh file:
 //                                      # closed OBJ/STL in metres, kept in its own frame)
 //         position_m: [0, 0, -0.005]   # origin of the shape's frame, world; default 0
 //         rotation_vector_rad: [0, 0, 0]   # default 0
+//         trajectory:                  # optional, instead of position_m / rotation_vector_rad:
+//           - {t_s: 0, position_m: [..], rotation_vector_rad: [..]}   # moved by a script, as
+//                                      # device.trajectory (without button)
+//         grabbable: false             # true: touching it with the tool selects it, the device
+//                                      # button grabs it (paper 003); not with a trajectory
 //     - name: liver
 //       deformable: {mesh: …, material: …}   # the keys of `body`; `body` is the shorthand for
 //                                      # one deformable object named "body". At most one
@@ -89,13 +94,14 @@
 //        blend_time_s: 0.01}           # > 0 each; any subset, the rest as shown
 //   device:                            # required with a tool
 //     trajectory:                      # scripted device motion (core/scripted_trajectory.h)
-//       - {t_s: 0.0, position_m: [0, 0, 0.09], rotation_vector_rad: [0, 0, 0]}
+//       - {t_s: 0.0, position_m: [0, 0, 0.09], rotation_vector_rad: [0, 0, 0], button: false}
 //                                      # ≥ 1 waypoint; t_s ≥ 0 and strictly increasing;
-//                                      # rotation_vector_rad optional, default 0
+//                                      # rotation_vector_rad optional, default 0; button
+//                                      # (true | false, default false) held until the next
 //     hand: {mass_kg: 0.3, k_N_m: 300, b_N_s_m: 10}   # optional: the simulated hand of
 //                                      # `hapsim haptic --device hand`; mass > 0, k, b ≥ 0
 //   task:                              # optional (with a tool): the trainee's task (`hapsim
-//                                      # train`): touch every target with the device force
+//                                      # train`): touch every target with the tissue force
 //                                      # inside the band for hold_s in one go
 //     targets:                         # ≥ 1; names unique
 //       - {name: left_lobe, position_m: [0.02, 0, 0.03], radius_m: 0.008}   # radius > 0
@@ -174,7 +180,7 @@ struct BodyScene {
   std::vector<Probe> probes;
 };
 
-// A fixed rigid object of `objects`, resolved: a mesh file read.
+// A rigid object of `objects`, resolved: a mesh file read.
 struct RigidObjectScene {
   contact::RigidObject object;  // name, shape (in its own frame O), X_WO
   std::string mesh_file;        // ToolShape::Kind::kMesh: the file read (resolved path)
