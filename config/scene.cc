@@ -288,6 +288,12 @@ Scene ParseScene(const std::string& yaml_text, const std::string& file_label,
         "law",
         "equality holds bodies together, and a body resting on a rigid object could not "
         "lift off it: use unilateral or friction with rigid objects");
+  for (const RigidObjectScene& rigid : scene.rigid_objects) {
+    const SourceLocation& where = rigid.friction_location;
+    if (rigid.object.friction_coefficient && scene.contact.law != ContactLaw::kFriction)
+      throw InputError(where.file, where.line, where.key,
+                       "an object's own friction coefficient needs contact.law: friction");
+  }
   return scene;
 }
 

@@ -51,6 +51,8 @@
 //                                      # device.trajectory (without button)
 //         grabbable: false             # true: touching it with the tool selects it, the device
 //                                      # button grabs it (paper 003); not with a trajectory
+//         friction_coefficient: 0.1    # optional, ≥ 0: μ of every contact with it (friction law
+//                                      # only); default contact.friction_coefficient
 //     - name: liver
 //       deformable: {mesh: …, material: …}   # the keys of `body`; `body` is the shorthand for
 //                                      # one deformable object named "body". At most one
@@ -185,6 +187,7 @@ struct RigidObjectScene {
   contact::RigidObject object;  // name, shape (in its own frame O), X_WO
   std::string mesh_file;        // ToolShape::Kind::kMesh: the file read (resolved path)
   SourceLocation location;      // the `objects[i]` entry
+  SourceLocation friction_location;  // its friction_coefficient key, if given
 };
 
 // The rigid tool, resolved: a mesh file read, mass properties computed.

@@ -134,7 +134,8 @@ ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
 
 RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
                                  const std::string& base_dir) {
-  map.CheckKeys({"shape", "position_m", "rotation_vector_rad", "trajectory", "grabbable"});
+  map.CheckKeys({"shape", "position_m", "rotation_vector_rad", "trajectory", "grabbable",
+                 "friction_coefficient"});
   RigidObjectScene rigid;
   rigid.location = LocationOf(map);
   rigid.object.name = name;
@@ -150,6 +151,11 @@ RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
       CalcQuaternionExp(map.GetVector3Or("rotation_vector_rad", Eigen::Vector3d::Zero()))
           .toRotationMatrix();
   rigid.object.grabbable = map.GetBoolOr("grabbable", false);
+  if (map.Has("friction_coefficient")) {
+    rigid.object.friction_coefficient = map.GetDouble("friction_coefficient", AtLeast(0.0));
+    rigid.friction_location = {map.file(), map.LineOf("friction_coefficient"),
+                               map.KeyPath("friction_coefficient")};
+  }
   if (map.Has("trajectory")) {
     for (const char* key : {"position_m", "rotation_vector_rad"})
       if (map.Has(key))

@@ -40,6 +40,7 @@ double CalcNormalResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, 
 // radius μ λ_n (Jean & Moreau's non-smooth contact dynamics, in its simplest blocked form).
 ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
                                              double dt_s, int stride, double mu,
+                                             const Eigen::VectorXd* mu_per_contact,
                                              const ContactSolveOptions& options,
                                              Eigen::VectorXd* lambda) {
   ContactSolveReport report;
@@ -54,7 +55,8 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
       }
       (*lambda)[normal] = std::max(0.0, (*lambda)[normal]);
       if (stride == 3) {
-        const double limit = mu * (*lambda)[normal];
+        const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
+        const double limit = mu_contact * (*lambda)[normal];
         const double tangential = std::hypot((*lambda)[normal + 1], (*lambda)[normal + 2]);
         if (tangential > limit) {
           const double scale = tangential > 0.0 ? limit / tangential : 0.0;
@@ -161,10 +163,12 @@ const char* ToString(ContactLaw law) {
 
 ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
                                         double dt_s, int rows_per_contact,
-                                        const ContactSolveOptions& options,
-                                        Eigen::VectorXd* lambda) {
+                                        const ContactSolveOptions& options, Eigen::VectorXd* lambda,
+                                        const Eigen::VectorXd* friction_per_contact) {
   if (W.rows() != rhs.size() || W.cols() != rhs.size())
     throw std::invalid_argument("W must be square with one row per constraint row");
+  if (friction_per_contact && friction_per_contact->size() * rows_per_contact != rhs.size())
+    throw std::invalid_argument("friction_per_contact needs one μ per contact");
   if (lambda->size() != rhs.size()) lambda->setZero(rhs.size());
   if (rhs.size() == 0) return ContactSolveReport{0, 0.0, true};
   switch (options.law) {
@@ -176,8 +180,8 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
       return SolveActiveSet(W, rhs, dt_s, options, lambda);
     case ContactLaw::kFriction:
       if (rows_per_contact != 3) throw std::invalid_argument("friction needs 3 rows per contact");
-      return SolveProjectedGaussSeidel(W, rhs, dt_s, 3, options.friction_coefficient, options,
-                                       lambda);
+      return SolveProjectedGaussSeidel(W, rhs, dt_s, 3, options.friction_coefficient,
+                                       friction_per_contact, options, lambda);
   }
   throw std::invalid_argument("unknown contact law");
 }

@@ -10,8 +10,8 @@
 //
 // W is (rows x rows) with W = J_v A_v⁻¹ J_vᵀ + J_ω M⁻¹ A_L⁻¹ J_ωᵀ + J_u A_u⁻¹ J_uᵀ. It is symmetric
 // only when the coupling's torque Jacobian is (zero rotation error), and singular when contacts are
-// redundant, so the equality solve uses a complete orthogonal decomposition rather than LDLᵀ. `rhs` = b − c_free, with b the position stabilisation
-// −β φ/Δt plus any restitution target.
+// redundant, so the equality solve uses a complete orthogonal decomposition rather than LDLᵀ. `rhs`
+// = b − c_free, with b the position stabilisation −β φ/Δt plus any restitution target.
 
 #include <Eigen/Core>
 
@@ -37,9 +37,11 @@ struct ContactSolveReport {
 
 // Solves for the impulses λ (rows). On entry *lambda is the initial guess for Gauss–Seidel
 // (warm start; resized and zeroed if its size is wrong). rows_per_contact must be 3 for kFriction.
+// friction_per_contact, if given (kFriction; one μ ≥ 0 per contact), replaces
+// options.friction_coefficient contact by contact (a rigid object's own μ).
 ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
                                         double dt_s, int rows_per_contact,
-                                        const ContactSolveOptions& options,
-                                        Eigen::VectorXd* lambda);
+                                        const ContactSolveOptions& options, Eigen::VectorXd* lambda,
+                                        const Eigen::VectorXd* friction_per_contact = nullptr);
 
 }  // namespace hapsim::contact

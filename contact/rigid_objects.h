@@ -58,6 +58,9 @@ struct RigidObject {
   std::optional<ScriptedTrajectory> script;
   // Touching it with the tool selects it; pressing the device button grabs it (VisualFrame).
   bool grabbable = false;
+  // Its own Coulomb μ under the friction law, for every contact with it (the tool's, the body's,
+  // a grabbed object's); none: the scene's μ.
+  std::optional<double> friction_coefficient;
 };
 
 // The object's pose at time t_s: the script's, or X_WO for an object without one.

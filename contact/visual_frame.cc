@@ -162,8 +162,26 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     W_body_ = stepper_->CalcCompliance(jacobian_.J_u);
   const Eigen::MatrixXd W = CalcToolDelassus(jacobian_, tool_system_) + W_body_;
   lambda_.setZero(jacobian_.num_rows());
+  const bool own_friction =
+      options_.response.solve.law == ContactLaw::kFriction &&
+      std::any_of(
+          options_.rigid_objects.begin(), options_.rigid_objects.end(),
+          [](const RigidObject& object) { return object.friction_coefficient.has_value(); });
+  Eigen::VectorXd mu_per_contact;
+  if (own_friction) {
+    // μ of a contact with an object is that object's (its own or the scene's); the grabbed object
+    // pressing another takes the other's, as the tool touching it would.
+    mu_per_contact.setConstant(static_cast<Eigen::Index>(contacts_.size()),
+                               options_.response.solve.friction_coefficient);
+    for (size_t i = 0; i < contacts_.size(); ++i) {
+      const int object = contacts_[i].rigid_object;
+      if (object >= 0 && options_.rigid_objects[object].friction_coefficient)
+        mu_per_contact[static_cast<Eigen::Index>(i)] =
+            *options_.rigid_objects[object].friction_coefficient;
+    }
+  }
   last_solve_ = SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve,
-                                     &lambda_);
+                                     &lambda_, own_friction ? &mu_per_contact : nullptr);
   // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.
   dv_tool_ += tool_system_.A_v.inverse() * (dt * jacobian_.J_v.transpose() * lambda_);
   dL_tool_ += tool_system_.A_L.inverse() * (dt * jacobian_.J_w.transpose() * lambda_);

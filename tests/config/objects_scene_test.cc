@@ -91,11 +91,23 @@ TEST(ObjectsSceneTest, ScriptedAndGrabbableObjectsAndTheDeviceButtonParse) {
   EXPECT_TRUE(
       contact::CalcScriptedPose(tray, 2.5).translation().isApprox(Eigen::Vector3d(0, 0, 0.01)));
   EXPECT_TRUE(scene.rigid_objects[1].object.grabbable);
+  EXPECT_FALSE(tray.friction_coefficient.has_value());
   EXPECT_FALSE(scene.rigid_objects[1].object.script.has_value());
   ASSERT_EQ(scene.trajectory.size(), 3u);
   EXPECT_EQ(scene.trajectory[0].buttons, 0);
   EXPECT_EQ(scene.trajectory[1].buttons, 1);
   EXPECT_EQ(scene.trajectory[2].buttons, 0);
+}
+
+TEST(ObjectsSceneTest, AnObjectsOwnFrictionCoefficientParsesUnderTheFrictionLaw) {
+  const std::string text =
+      Replace(kObjectsScene, "      position_m: [0, 0, -0.005]              #  7\n",
+              "      position_m: [0, 0, -0.005]\n      friction_coefficient: 0.1\n") +
+      "contact: {law: friction, friction_coefficient: 0.3}\n";
+  const Scene scene = ParseScene(text, kLabel, "");
+  EXPECT_EQ(scene.rigid_objects[0].object.friction_coefficient, 0.1);
+  EXPECT_FALSE(scene.rigid_objects[1].object.friction_coefficient.has_value());
+  EXPECT_EQ(MakeVisualFrameOptions(scene).rigid_objects[0].friction_coefficient, 0.1);
 }
 
 TEST(ObjectsSceneTest, ARigidOnlySceneHasNoBody) {
@@ -128,7 +140,13 @@ const BadCase kBadCases[] = {
     {"EmptyName", "  - name: wall", "  - name: ''", 8, "objects[1].name", "must not be empty"},
     {"UnknownRigidKey", "      position_m: [0, 0, -0.005]", "      offset_m: [0, 0, -0.005]", 7,
      "objects[0].rigid.offset_m",
-     "allowed keys here: shape, position_m, rotation_vector_rad, trajectory, grabbable"},
+     "allowed keys here: shape, position_m, rotation_vector_rad, trajectory, grabbable, "
+     "friction_coefficient"},
+    {"OwnFrictionWithoutTheFrictionLaw", "      position_m: [0, 0, -0.005]              #  7\n",
+     "      position_m: [0, 0, -0.005]\n      friction_coefficient: 0.2\n", 8,
+     "objects[0].rigid.friction_coefficient", "needs contact.law: friction"},
+    {"NegativeOwnFriction", "      position_m: [0, 0, -0.005]              #  7\n",
+     "      friction_coefficient: -0.2\n", 7, "objects[0].rigid.friction_coefficient", ">= 0"},
     {"PoseAndTrajectory", "      position_m: [0, 0, -0.005]              #  7\n",
      "      position_m: [0, 0, -0.005]\n      trajectory: [{t_s: 0, position_m: [0, 0, 0]}]\n", 7,
      "objects[0].rigid.position_m", "give either a fixed pose"},

@@ -144,8 +144,8 @@ TEST(RigidObjects, FixedNodesOnAnObjectMakeNoContactRows) {
   fem::Material material;
   material.youngs_modulus_Pa = 50e3;
   material.poisson_ratio = 0.45;
-  const fem::Model block = fem::MakeModel(
-      mesh, material, fem::FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0.0));
+  const fem::Model block =
+      fem::MakeModel(mesh, material, fem::FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0.0));
   ToolState tool;
   const ToolModel tool_model = MakeParkedTool(&tool);
   VisualFrameOptions options = MakeOptions(CouplingParams{2000.0, 20.0, 2.0, 0.02});
@@ -217,6 +217,49 @@ TEST(RigidObjects, ToolPressingTheBlockAddsItsForceToThePlates) {
               CalcObjectForceOnBody_N(frame), expected_N);
   EXPECT_NEAR(CalcObjectForceOnBody_N(frame), expected_N, 5e-3 * expected_N);
   EXPECT_LE(CalcDeepestNodeInPlate_m(body), 1e-4);
+}
+
+// Each object's own friction coefficient: a sphere pressed with load N and dragged at constant
+// speed across two plates side by side slides on each with the tangential force μ N of that plate
+// (Coulomb), not the scene's μ.
+TEST(RigidObjects, EachObjectsOwnFrictionCoefficientHoldsTheSlidingTool) {
+  const double mu_scene = 0.3, mu_left = 0.1, mu_right = 0.6;
+  const double mass_kg = 0.05, k_N_m = 200.0, depth_m = 0.005, speed_m_s = 0.02;
+  RigidObject left = MakePlate(), right = MakePlate();
+  left.shape.half_extents_m.x() = right.shape.half_extents_m.x() = 0.05;
+  left.X_WO.translation().x() = -0.05;
+  right.X_WO.translation().x() = 0.05;
+  left.friction_coefficient = mu_left;
+  right.friction_coefficient = mu_right;
+  VisualFrameOptions options = MakeOptions(CouplingParams{k_N_m, 5.0, 2.0, 0.02});
+  options.rigid_objects = {left, right};
+  options.response.solve.law = ContactLaw::kFriction;
+  options.response.solve.friction_coefficient = mu_scene;
+  const ToolShape sphere = MakeShape(ToolShape::Kind::kSphere);
+  VisualFrame frame(nullptr, nullptr, Eigen::VectorXd(), MakeToolModelWithMass(sphere, mass_kg),
+                    options);
+  ToolState tool;
+  tool.x_W_m = Eigen::Vector3d(-0.09, 0.0, sphere.radius_m);
+  DeviceState device;
+  device.x_W_m = Eigen::Vector3d(-0.09, 0.0, sphere.radius_m - depth_m);
+  fem::State no_body;
+  for (int k = 0; k < 60; ++k) frame.Step(device, &no_body, &tool);  // settle, pressed
+  device.v_W_m_s.x() = speed_m_s;
+  const double load_N = mass_kg * kGravity_m_s2 + k_N_m * depth_m;
+  for (int k = 0; k < 9 * 60; ++k) {  // 9 s: x from −90 to +90 mm
+    device.x_W_m.x() += speed_m_s / 60.0;
+    frame.Step(device, &no_body, &tool);
+    // Sliding in steady state over the middle of each plate.
+    const double x_m = tool.x_W_m.x();
+    if (std::abs(std::abs(x_m) - 0.05) > 0.02) continue;
+    const double mu = x_m < 0.0 ? mu_left : mu_right;
+    SCOPED_TRACE(x_m);
+    EXPECT_NEAR(frame.contact_force_N().z(), load_N, 5e-3 * load_N);
+    EXPECT_NEAR(-frame.contact_force_N().x(), mu * frame.contact_force_N().z(), 5e-3 * mu * load_N);
+    EXPECT_NEAR(tool.v_W_m_s.x(), speed_m_s, 1e-3 * speed_m_s);
+  }
+  std::printf("sphere dragged over plates of mu %.1f and %.1f: F_t/F_n %.4f at the end\n", mu_left,
+              mu_right, -frame.contact_force_N().x() / frame.contact_force_N().z());
 }
 
 // Contacts of a sphere tool and a box object against the analytic gaps, and their orientation.
