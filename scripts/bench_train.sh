@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The figures of the surgical scene for docs/BENCHMARKS.md (issue 10):
-#  - its visual frame on one core: `hapsim sim scenes/liver_palpation.yaml` (linear mode, the
-#    scripted palpation), median and 95th percentile over the frames, contacts;
+# The figures of the surgical scenes for docs/BENCHMARKS.md (issue 10):
+#  - the visual frame of each on one core: `hapsim sim scenes/<scene>.yaml` (linear mode, its
+#    scripted device), median and 95th percentile over the frames, contacts;
 #  - the haptic loop during a trainer session: tests/apps/train_test.sh (Xvfb, xdotool palpating
 #    both targets) keeps the session, whose haptic process wrote its summary.
 # Prints a Markdown table. Usage: scripts/bench_train.sh
@@ -11,23 +11,25 @@ hapsim=build/apps/hapsim
 [ -x "$hapsim" ] || scripts/setup.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-"$hapsim" sim scenes/liver_palpation.yaml --out "$work/sim" > /dev/null
+scenes="liver_palpation polyp"
+for scene in $scenes; do "$hapsim" sim "scenes/$scene.yaml" --out "$work/$scene" > /dev/null; done
 HAPSIM_TRAIN_KEEP="$work/train" tests/apps/train_test.sh "$hapsim" > "$work/train.log" 2>&1 ||
   { cat "$work/train.log"; exit 1; }
-/usr/bin/python3 - "$work" <<'PY'
+/usr/bin/python3 - "$work" $scenes <<'PY'
 import csv, json, platform, statistics, subprocess, sys
 work = sys.argv[1]
-frames = list(csv.DictReader(open(f"{work}/sim/frames.csv")))
-total = sorted(float(f["total_ms"]) for f in frames)
-contacts = max(int(f["contacts"]) for f in frames)
 summary = json.load(open(f"{work}/train/haptic_summary.json"))
 score = json.load(open(f"{work}/train/score.json"))
 cpu = [l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")][0]
 print(f"machine: {cpu}, {subprocess.run(['date', '-I'], capture_output=True, text=True).stdout.strip()}")
 print("| figure | value |\n|---|---|")
-print(f"| liver_palpation visual frame, median (in-process, {len(total)} frames) | {statistics.median(total):.2f} ms ({1000 / statistics.median(total):.0f} Hz) |")
-print(f"| ... 95th percentile | {total[int(0.95 * len(total))]:.2f} ms |")
-print(f"| ... most contacts in a frame | {contacts} |")
+for scene in sys.argv[2:]:
+    frames = list(csv.DictReader(open(f"{work}/{scene}/frames.csv")))
+    total = sorted(float(f["total_ms"]) for f in frames)
+    contacts = max(int(f["contacts"]) for f in frames)
+    print(f"| {scene} visual frame, median (in-process, {len(total)} frames) | {statistics.median(total):.2f} ms ({1000 / statistics.median(total):.0f} Hz) |")
+    print(f"| ... 95th percentile | {total[int(0.95 * len(total))]:.2f} ms |")
+    print(f"| ... most contacts in a frame | {contacts} |")
 pe = summary["period_error"]
 print(f"| trainer session: haptic period error p50 / p99 / max | {pe['p50_us']:.1f} / {pe['p99_us']:.1f} / {pe['max_us']:.0f} us |")
 print(f"| ... overruns, zeroed steps, steps | {summary['overruns']}, {summary['zeroed_steps']}, {summary['steps']} |")
