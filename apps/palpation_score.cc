@@ -21,8 +21,11 @@ void PalpationScorer::Add(const hapsim_lcm::haptic_state_t& state) {
   const double t_s = (state.step + 1) * haptic_dt_s_;  // the end of this step
   const Eigen::Vector3d x_W_m(state.x_W_m[0], state.x_W_m[1], state.x_W_m[2]);
   const Eigen::Quaterniond q_WT(state.q_WT[0], state.q_WT[1], state.q_WT[2], state.q_WT[3]);
+  // A zeroed step (the safety layer's) presses nothing: its device force is 0, not −m g.
   const double force_N =
-      (Eigen::Map<const Eigen::Vector3d>(state.force_device_W_N) - tool_weight_N_).norm();
+      state.zeroed
+          ? 0.0
+          : (Eigen::Map<const Eigen::Vector3d>(state.force_device_W_N) - tool_weight_N_).norm();
   // The path on 10 ms samples: the haptic tool's 1 kHz jitter (tens of micrometres a step)
   // would otherwise add up to metres over a session.
   if (state.step % kPathSampleSteps == 0) {

@@ -13,7 +13,8 @@
 // coupling holds the tool against its weight and the contact (F_device = F_contact + m g, where
 // F_device is the coupling's pull on the device and F_contact the tissue's push back). It is
 // measured the same way in every haptic mode, coupling included (which renders no contact force
-// of its own), and a tool resting in free space presses with zero, whatever its weight.
+// of its own), and a tool resting in free space presses with zero, whatever its weight. A step
+// the safety layer zeroed presses with zero too.
 
 #include <nlohmann/json.hpp>
 #include <string>

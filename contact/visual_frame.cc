@@ -146,7 +146,8 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     jacobian_ = CalcJacobian(contacts_, tool.x_W_m);
     c_free = CalcSeparatingVelocity(jacobian_, v_free, w_free, u_free);
   }
-  c_object_ = CalcObjectSeparatingVelocity();
+  CalcObjectVelocities();
+  c_object_ = CalcObjectSeparatingVelocity(contacts_);
   c_free += c_object_;
   const Eigen::VectorXd c_pre =
       CalcSeparatingVelocity(jacobian_, tool.v_W_m_s, tool_system_.M_inv_W * tool.L_W_kg_m2_s,

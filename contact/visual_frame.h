@@ -15,9 +15,11 @@
 //     separating velocity, c = J_v v + J_ω ω + J_u u̇ + c_object (the gap's rate is the relative
 //     velocity of the two sides along the row), so a moving constraint is held at velocity
 //     level like a fixed one, with no lag of a penetration behind the object.
-//   grabbed (paper 003): the object the tool last touched is selected; a press of the device's
-//     button 0 attaches it to the tool at its pose relative to the tool then (X_TO), and it moves
-//     as part of the tool until the button is released, where it stays. Frames count from 0 at
+//   grabbed (paper 003): a grabbable object is selected while the tool touches it (a contact
+//     within the detection margin at a frame's end); a press of the device's button 0 attaches
+//     the selected object to the tool at its pose relative to the tool then (X_TO), and it moves
+//     as part of the tool until the button is released, where it stays. The button is read once
+//     a frame: a press shorter than a frame may be missed. Frames count from 0 at
 //     construction: Step k is the frame [k Δt, (k + 1) Δt].
 
 #include <Eigen/Core>
@@ -125,8 +127,10 @@ class VisualFrame {
   // Stage 4's first part: scripted objects placed at the frame's start with their velocity over
   // the frame; the device button applied to grabbing.
   void MoveRigidObjects(const DeviceState& device, const ToolState& tool);
-  // Per row, the separating velocity the objects' own motion adds (c_object above).
-  Eigen::VectorXd CalcObjectSeparatingVelocity() const;
+  // Per contact, the velocity the objects' own motion adds to the gap's rate along a direction d,
+  // as a vector w with c_object = d·w (zero without a moving object); then c_object per row.
+  void CalcObjectVelocities();
+  Eigen::VectorXd CalcObjectSeparatingVelocity(const std::vector<Contact>& contacts) const;
   // End of stage 5: objects at their end-of-frame poses; the touched grabbable object selected.
   void FinishRigidObjects(const ToolState& tool);
   // Velocity of object i's material point at p_W_m, world (the tool's motion for a grabbed one).
@@ -181,6 +185,7 @@ class VisualFrame {
   ContactJacobian jacobian_;
   Eigen::MatrixXd W_body_;  // J_u A_u⁻¹ J_uᵀ at the visual step, kept for the linear model
   Eigen::VectorXd b_, lambda_;
+  std::vector<Eigen::Vector3d> object_velocity_;  // w of each contact (CalcObjectVelocities)
   Eigen::VectorXd c_object_;  // c_object of each row (zero without moving objects)
   Eigen::VectorXd c_post_;    // separating velocity of each row after the response
   ContactSolveReport last_solve_;

@@ -33,10 +33,10 @@ void VisualFrame::MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start,
     }  // a body node on a rigid object: neither moves with the tool
     const double fraction = contact.gap_m >= 0.0 ? 1.0 : options_.response.stabilization_beta;
     (*b)[row] = -fraction * contact.gap_m / options_.dt_s;
-    // A moving object is taken to keep its velocity over the next frame: the rows hold
-    // J v + c_object ≥ b, i.e. J v ≥ b − c_object.
-    for (int d = 0; d < rows_per_contact_; ++d) (*b)[row + d] -= c_object_[row + d];
   }
+  // A moving object is taken to keep its velocity over the next frame: the rows hold
+  // J v + c_object ≥ b, i.e. J v ≥ b − c_object, along the moved contacts' own directions.
+  *b -= CalcObjectSeparatingVelocity(*moved);
 }
 
 // The model is linearised at the post-collision state, for the haptic step: the tool matrices

@@ -41,22 +41,34 @@ void VisualFrame::MoveRigidObjects(const DeviceState& device, const ToolState& t
 
 // A row measures (velocity of the body side − velocity of the tool side)·direction
 // (contact/contact_jacobian.h). A moving object is the body side of a tool contact and the tool
-// side of a body-node contact. The grabbed object moves with the tool, through J_v and J_ω.
-Eigen::VectorXd VisualFrame::CalcObjectSeparatingVelocity() const {
-  Eigen::VectorXd c = Eigen::VectorXd::Zero(jacobian_.num_rows());
+// side of a body-node contact: w = ±v_O(p). The grabbed object moves with the tool, through J_v
+// and J_ω.
+void VisualFrame::CalcObjectVelocities() {
+  object_velocity_.assign(contacts_.size(), Eigen::Vector3d::Zero());
   for (size_t i = 0; i < contacts_.size(); ++i) {
     const Contact& contact = contacts_[i];
     const int object = contact.rigid_object;
     if (object < 0 || object == grabbed_object()) continue;
     const ObjectMotion& motion = object_motion_[object];
-    if (motion.v_W_m_s.isZero(0.0) && motion.w_W_rad_s.isZero(0.0)) continue;
     const Eigen::Vector3d& p_W_m = contact.on_tool ? contact.p_body_W_m : contact.p_tool_W_m;
     const Eigen::Vector3d v_point = motion.v_W_m_s + motion.w_W_rad_s.cross(p_W_m - motion.x_W_m);
-    const double sign = contact.on_tool ? 1.0 : -1.0;
-    Eigen::Vector3d directions[3] = {contact.n_W, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
-    if (rows_per_contact_ == 3) CalcTangents(contact.n_W, &directions[1], &directions[2]);
+    object_velocity_[i] = contact.on_tool ? v_point : Eigen::Vector3d(-v_point);
+  }
+}
+
+// The rows' directions are those of each contact's own normal (its tangents from CalcTangents),
+// so the linear model's contacts, whose normals turned with the haptic tool, get theirs.
+Eigen::VectorXd VisualFrame::CalcObjectSeparatingVelocity(
+    const std::vector<Contact>& contacts) const {
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(rows_per_contact_ * static_cast<int>(contacts.size()));
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    const Eigen::Vector3d& w = object_velocity_[i];
+    if (w.isZero(0.0)) continue;
+    Eigen::Vector3d directions[3] = {contacts[i].n_W, Eigen::Vector3d::Zero(),
+                                     Eigen::Vector3d::Zero()};
+    if (rows_per_contact_ == 3) CalcTangents(contacts[i].n_W, &directions[1], &directions[2]);
     for (int d = 0; d < rows_per_contact_; ++d)
-      c[rows_per_contact_ * static_cast<int>(i) + d] = sign * directions[d].dot(v_point);
+      c[rows_per_contact_ * static_cast<int>(i) + d] = directions[d].dot(w);
   }
   return c;
 }
@@ -93,8 +105,9 @@ Eigen::Vector3d VisualFrame::CalcObjectPointVelocity(int i, const Eigen::Vector3
   if (i == grabbed_object())
     return tool.v_W_m_s + CalcAngularVelocity(tool_, tool).cross(p_W_m - tool.x_W_m);
   if (i < 0 || i >= static_cast<int>(object_motion_.size())) return Eigen::Vector3d::Zero();
+  // About where the object is now (the sanity pass runs at the frame's end).
   const ObjectMotion& motion = object_motion_[i];
-  return motion.v_W_m_s + motion.w_W_rad_s.cross(p_W_m - motion.x_W_m);
+  return motion.v_W_m_s + motion.w_W_rad_s.cross(p_W_m - rigid_contacts_.pose(i).translation());
 }
 
 }  // namespace hapsim::contact

@@ -2,7 +2,7 @@
 """Writes scenes/meshes/cavity_wall.obj, the rigid cavity wall of scenes/polyp.yaml.
 
 The wall is a curved shell: the part of a thick-walled tube (axis x, inner radius 15 mm, 3 mm
-thick, 50 mm long) within 70 degrees either side of straight down, like the floor of a uterine
+thick, 30 mm long) within 70 degrees either side of straight down, like the floor of a uterine
 cavity seen through a hysteroscope. It is a closed, outward-oriented triangle mesh in metres
 (hapsim reads rigid meshes with the pseudonormal signed distance, exact for such a mesh, concave
 or not), its frame on the tube's axis: the inner surface's lowest line is at z = -15 mm.

@@ -171,6 +171,49 @@ TEST(MovingObjects, DeformableBlockOnARisingPlateRisesWithItAndKeepsItsWeightOnI
   EXPECT_NEAR(CalcObjectForceOnBody_N(frame), weight_N, 5e-3 * weight_N);
 }
 
+// Friction with a plate sliding under the tool: the linear contact model takes the plate's motion
+// along each contact's own tangents. Linearised at a haptic tool turned by 1 µrad (which swaps
+// the tangents CalcTangents picks for an axis-aligned normal), the model must barely change:
+// before the fix, the visual frame's tangential offsets were applied to the swapped rows and the
+// force offset pointed sideways.
+TEST(MovingObjects, ALinearModelOnASlidingPlateDoesNotDependOnTheTangentsChosen) {
+  RigidObject plate = MakeRisingPlate(0.0);
+  Waypoint start = plate.script->waypoints().front(), end = plate.script->waypoints().back();
+  end.x_W_m.x() += 0.04;  // slides 40 mm along x between 0.5 and 1.5 s
+  plate.script.emplace(std::vector<Waypoint>{start, end});
+  VisualFrameOptions options = MakeOptions(200.0, {plate});
+  options.response.solve.law = ContactLaw::kFriction;
+  options.response.solve.friction_coefficient = 0.5;
+  VisualFrame upright(nullptr, nullptr, Eigen::VectorXd(), MakeSphereTool(), options);
+  VisualFrame turned(nullptr, nullptr, Eigen::VectorXd(), MakeSphereTool(), options);
+  ToolState tool_a, tool_b;
+  tool_a.x_W_m = tool_b.x_W_m = Eigen::Vector3d(0.0, 0.0, kToolRadius_m);
+  DeviceState device;
+  device.x_W_m = Eigen::Vector3d(0.0, 0.0, kToolRadius_m - 0.005);
+  fem::State no_body;
+  for (int k = 0; k < 59; ++k) {  // to 0.98 s: the plate near its fastest
+    upright.Step(device, &no_body, &tool_a);
+    turned.Step(device, &no_body, &tool_b);
+  }
+  ToolState haptic_turned = tool_b;
+  haptic_turned.q_WT =
+      Eigen::Quaterniond(Eigen::AngleAxisd(1e-6, Eigen::Vector3d::UnitY())) * tool_b.q_WT;
+  upright.Step(device, &no_body, &tool_a, &tool_a);
+  turned.Step(device, &no_body, &tool_b, &haptic_turned);
+  const Eigen::Vector3d a_N = upright.linear_model().F_c0_N, b_N = turned.linear_model().F_c0_N;
+  std::printf(
+      "linear model on a sliding plate: F_c0 (%.6f, %.6f, %.6f) N upright, "
+      "(%.6f, %.6f, %.6f) N turned by 1 urad\n",
+      a_N.x(), a_N.y(), a_N.z(), b_N.x(), b_N.y(), b_N.z());
+  ASSERT_GT(upright.linear_model().num_contacts, 0);
+  // The plate drags the tool along its own motion, +x; nothing sideways (before the fix the
+  // offset pointed along y: the round-off of turning the normals by the identity had swapped the
+  // tangents already).
+  EXPECT_GT(a_N.x(), 0.0);
+  EXPECT_LT(std::abs(a_N.y()), 1e-6 * a_N.norm());
+  EXPECT_LT((a_N - b_N).norm(), 1e-4 * a_N.norm());
+}
+
 // Drives the frame for `frames` frames with the device at x_W_m and the button as given.
 void Drive(VisualFrame* frame, fem::State* body, ToolState* tool, const Eigen::Vector3d& x_W_m,
            int buttons, int frames) {
