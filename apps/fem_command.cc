@@ -38,6 +38,11 @@ config::Scene LoadBodyScene(const std::string& path) {
     throw InputError(path, scene.rigid_objects.front().location.line, "objects",
                      "the scene has rigid objects, which `hapsim fem` does not simulate; run it "
                      "with `hapsim sim` or `hapsim run`");
+  if (!scene.more_bodies.empty())
+    throw InputError(path, scene.more_bodies.front().location.line, "objects",
+                     "`hapsim fem` steps one deformable object; this scene has " +
+                         std::to_string(1 + scene.more_bodies.size()) +
+                         " (run it with `hapsim sim` or `hapsim run`)");
   return scene;
 }
 

@@ -22,9 +22,9 @@
 #include "contact/visual_frame.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/scripted_trajectory.h"
 #include "core/statistics.h"
 #include "core/stopwatch.h"
-#include "core/scripted_trajectory.h"
 #include "fem/time_stepper.h"
 
 namespace hapsim::apps {
@@ -77,18 +77,28 @@ nlohmann::json DescribeShape(const ToolShape& shape) {
 // The scene's objects and tool as they will be simulated (the body built).
 nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* body) {
   nlohmann::json objects = nlohmann::json::array();
-  if (body != nullptr) {
-    const fem::FemOptions& fem = scene.body->options;
-    objects.push_back({{"name", scene.body_name},
+  const auto describe_deformable = [&](const std::string& name, const config::BodyScene& source,
+                                       const fem::Model& model) {
+    const fem::FemOptions& fem = source.options;
+    objects.push_back({{"name", name},
                        {"kind", "deformable"},
-                       {"nodes", body->model.num_nodes()},
-                       {"tets", body->model.num_tets()},
-                       {"dofs", body->model.num_dofs()},
-                       {"fixed_nodes", body->model.num_fixed_nodes()},
+                       {"nodes", model.num_nodes()},
+                       {"tets", model.num_tets()},
+                       {"dofs", model.num_dofs()},
+                       {"fixed_nodes", model.num_fixed_nodes()},
                        {"elasticity", fem::ToString(fem.elasticity)},
                        {"integrator", fem::ToString(fem.integrator)},
                        {"solver", fem::ToString(fem.solver.kind)},
-                       {"youngs_modulus_Pa", scene.body->material.youngs_modulus_Pa}});
+                       {"youngs_modulus_Pa", source.material.youngs_modulus_Pa}});
+  };
+  if (body != nullptr && scene.more_bodies.empty()) {
+    describe_deformable(scene.body_name, *scene.body, body->model);
+  } else if (body != nullptr) {  // several, solved as one system: each built alone to count it
+    describe_deformable(scene.body_name, *scene.body,
+                        config::MakeBody(*scene.body, scene.gravity_m_s2).model);
+    for (const config::DeformableObjectScene& more : scene.more_bodies)
+      describe_deformable(more.name, more.body,
+                          config::MakeBody(more.body, scene.gravity_m_s2).model);
   }
   for (const config::RigidObjectScene& rigid : scene.rigid_objects) {
     nlohmann::json object{{"name", rigid.object.name}, {"kind", "rigid"}, {"dofs", 0}};
@@ -99,6 +109,8 @@ nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* bod
                       {"visual_dt_s", scene.dt_s},
                       {"num_frames", scene.num_steps},
                       {"fem_built", body != nullptr},
+                      {"fem_dofs", body != nullptr ? body->model.num_dofs() : 0},
+                      {"deformable_objects", body != nullptr ? 1 + scene.more_bodies.size() : 0},
                       {"objects", objects}};
   if (scene.tool) {
     nlohmann::json tool = DescribeShape(scene.tool->model.shape);
@@ -169,6 +181,9 @@ void PrintReport(const nlohmann::json& report) {
     }
   }
   if (!report["fem_built"].get<bool>()) std::printf("  FEM: none built (no deformable object)\n");
+  if (report["fem_dofs"].get<int>() > 0 && report["deformable_objects"].get<int>() > 1)
+    std::printf("  FEM: one system of the %d deformable objects, %d DOFs\n",
+                report["deformable_objects"].get<int>(), report["fem_dofs"].get<int>());
   if (report.contains("tool")) {
     std::printf(
         "  tool: %s, %.4g kg; contact %s, compliance %s; haptic %s at %.4g Hz\n",

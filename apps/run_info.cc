@@ -1,5 +1,6 @@
 #include "apps/run_info.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -13,8 +14,12 @@ namespace fs = std::filesystem;
 
 std::vector<std::string> SceneInputFiles(const config::Scene& scene) {
   std::vector<std::string> files;
-  if (scene.body && scene.body->mesh.kind == config::MeshSource::Kind::kFile) {
-    const fs::path mesh = fs::absolute(scene.body->mesh.file);
+  std::vector<const config::BodyScene*> bodies;
+  if (scene.body) bodies.push_back(&*scene.body);
+  for (const config::DeformableObjectScene& more : scene.more_bodies) bodies.push_back(&more.body);
+  for (const config::BodyScene* body : bodies) {
+    if (body->mesh.kind != config::MeshSource::Kind::kFile) continue;
+    const fs::path mesh = fs::absolute(body->mesh.file);
     std::string extension = mesh.extension().string();
     for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (extension == ".msh") {
@@ -32,7 +37,11 @@ std::vector<std::string> SceneInputFiles(const config::Scene& scene) {
     if (!rigid.mesh_file.empty())
       files.push_back(fs::absolute(rigid.mesh_file).lexically_normal().string());
   }
-  return files;
+  // Objects may share a file: each is listed (and hashed) once, in first-use order.
+  std::vector<std::string> unique;
+  for (const std::string& file : files)
+    if (std::find(unique.begin(), unique.end(), file) == unique.end()) unique.push_back(file);
+  return unique;
 }
 
 hapsim_lcm::run_info_t MakeRunInfo(const config::Scene& scene, const std::string& mode,

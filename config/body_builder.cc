@@ -72,7 +72,30 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
 
 std::optional<Body> MakeSceneBody(const Scene& scene) {
   if (!scene.body) return std::nullopt;
-  return MakeBody(*scene.body, scene.gravity_m_s2);
+  Body first = MakeBody(*scene.body, scene.gravity_m_s2);
+  if (scene.more_bodies.empty()) return first;
+  // One system of all the deformable objects: models side by side, forces stacked, probes moved
+  // to their tets' new indices.
+  std::vector<Body> bodies;
+  bodies.push_back(std::move(first));
+  for (const DeformableObjectScene& more : scene.more_bodies)
+    bodies.push_back(MakeBody(more.body, scene.gravity_m_s2));
+  std::vector<fem::Model> models;
+  for (const Body& body : bodies) models.push_back(body.model);
+  Body merged;
+  merged.model = fem::MergeModels(models);  // damping checked equal when the scene was read
+  merged.external_force_N.resize(merged.model.num_dofs());
+  int dof = 0, tet = 0;
+  for (const Body& body : bodies) {
+    merged.external_force_N.segment(dof, body.model.num_dofs()) = body.external_force_N;
+    for (BoundProbe probe : body.probes) {
+      probe.binding.tet += tet;
+      merged.probes.push_back(probe);
+    }
+    dof += body.model.num_dofs();
+    tet += body.model.num_tets();
+  }
+  return merged;
 }
 
 }  // namespace hapsim::config

@@ -28,7 +28,8 @@ struct Body {
 // Builds the mesh (lattice, cut lattice or file), the model, the loads and the probes.
 Body MakeBody(const BodyScene& body, const Eigen::Vector3d& gravity_m_s2);
 
-// The scene's deformable object built, or none: a scene of rigid objects builds no FEM.
+// The scene's deformable objects built as one body (one FEM system, fem::MergeModels; the
+// objects' nodes and tets in scene order), or none: a scene of rigid objects builds no FEM.
 std::optional<Body> MakeSceneBody(const Scene& scene);
 
 }  // namespace hapsim::config

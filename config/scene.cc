@@ -224,10 +224,29 @@ BodyScene ReadBody(const YamlMap& map, const std::string& base_dir) {
   return body;
 }
 
-// `objects`: names unique; one deformable object at most, counting `body`.
+// A deformable object after the first: it joins the first's FEM system (config/scene.h).
+DeformableObjectScene ReadMoreBody(const YamlMap& map, const std::string& name,
+                                   const BodyScene& first, const std::string& base_dir) {
+  for (const char* key : {"elasticity", "integrator", "solver"}) {
+    if (map.Has(key))
+      map.FailKey(key,
+                  "the deformable objects are solved as one system with the first one's FEM "
+                  "options: give elasticity, integrator and solver there");
+  }
+  DeformableObjectScene more{name, ReadBody(map, base_dir), LocationOf(map)};
+  more.body.options = first.options;
+  if (more.body.material.rayleigh_alpha_1_s != first.material.rayleigh_alpha_1_s ||
+      more.body.material.rayleigh_beta_s != first.material.rayleigh_beta_s)
+    map.FailKey("material",
+                "the deformable objects must share the first one's Rayleigh damping "
+                "(rayleigh_alpha_1_s, rayleigh_beta_s): one damping serves the implicit step");
+  return more;
+}
+
+// `objects`: names unique; the first deformable object (`body` counts, first) is scene.body.
 void ReadObjects(const YamlMap& root, const std::string& base_dir, Scene* scene) {
   std::vector<std::pair<std::string, int>> names;  // name, line
-  int deformable_line = root.Has("body") ? root.LineOf("body") : 0;
+  if (scene->body) names.emplace_back(scene->body_name, root.LineOf("body"));
   for (const YamlMap& item : root.GetMapList("objects")) {
     item.CheckKeys({"name", "deformable", "rigid"});
     const std::string name = item.GetString("name");
@@ -241,12 +260,12 @@ void ReadObjects(const YamlMap& root, const std::string& base_dir, Scene* scene)
     if (item.Has("deformable") == item.Has("rigid"))
       item.Fail("must give exactly one of deformable, rigid");
     if (const std::optional<YamlMap> deformable = item.FindMap("deformable")) {
-      if (deformable_line > 0)
-        item.FailKey("deformable", "one deformable object per scene for now; line " +
-                                       std::to_string(deformable_line) + " gives one already");
-      deformable_line = item.LineOf("deformable");
-      scene->body = ReadBody(*deformable, base_dir);
-      scene->body_name = name;
+      if (scene->body) {
+        scene->more_bodies.push_back(ReadMoreBody(*deformable, name, *scene->body, base_dir));
+      } else {
+        scene->body = ReadBody(*deformable, base_dir);
+        scene->body_name = name;
+      }
     } else {
       scene->rigid_objects.push_back(ReadRigidObject(item.GetMap("rigid"), name, base_dir));
     }

@@ -55,8 +55,13 @@
 //                                      # only); default contact.friction_coefficient
 //     - name: liver
 //       deformable: {mesh: …, material: …}   # the keys of `body`; `body` is the shorthand for
-//                                      # one deformable object named "body". At most one
-//                                      # deformable object in a scene for now.
+//                                      # one deformable object named "body" (the first). Several
+//                                      # deformable objects are solved as one FEM system: the
+//                                      # later ones take the first one's elasticity, integrator
+//                                      # and solver (giving them is an error) and must share its
+//                                      # Rayleigh damping; each has its own mesh, E, ν, density,
+//                                      # fixed region, loads and probes. They do not collide
+//                                      # with each other (only with the tool and rigid objects).
 //   tool:                              # optional: the rigid tool (DESIGN.md §3); needs coupling
 //                                      # and device
 //     shape:                           # exactly one of (tool frame T: origin at the COM, z the
@@ -120,11 +125,11 @@
 #include "contact/contact_solver.h"
 #include "contact/visual_frame.h"
 #include "core/rigid_tool.h"
+#include "core/scripted_trajectory.h"
 #include "core/virtual_coupling.h"
 #include "device/device_backend.h"
 #include "device/haptic_mode.h"
 #include "device/haptic_safety.h"
-#include "core/scripted_trajectory.h"
 #include "fem/fem_options.h"
 #include "fem/material.h"
 
@@ -182,11 +187,18 @@ struct BodyScene {
   std::vector<Probe> probes;
 };
 
+// A deformable object of `objects` after the first (Scene::more_bodies).
+struct DeformableObjectScene {
+  std::string name;
+  BodyScene body;
+  SourceLocation location;  // its `deformable` entry
+};
+
 // A rigid object of `objects`, resolved: a mesh file read.
 struct RigidObjectScene {
-  contact::RigidObject object;  // name, shape (in its own frame O), X_WO
-  std::string mesh_file;        // ToolShape::Kind::kMesh: the file read (resolved path)
-  SourceLocation location;      // the `objects[i]` entry
+  contact::RigidObject object;       // name, shape (in its own frame O), X_WO
+  std::string mesh_file;             // ToolShape::Kind::kMesh: the file read (resolved path)
+  SourceLocation location;           // the `objects[i]` entry
   SourceLocation friction_location;  // its friction_coefficient key, if given
 };
 
@@ -251,8 +263,11 @@ struct Scene {
   Eigen::Vector3d gravity_m_s2{0.0, 0.0, -9.81};
   double dt_s = 0.0;
   int num_steps = 0;
-  std::optional<BodyScene> body;  // `body`, or the deformable entry of `objects`
-  std::string body_name = "body";
+  std::optional<BodyScene> body;   // the first deformable object: `body`, or the first entry of
+  std::string body_name = "body";  // `objects` that is deformable
+  // The other deformable objects, in order. config::MakeSceneBody builds them and the first as
+  // one FEM body (fem::MergeModels), with the first object's FEM options and damping.
+  std::vector<DeformableObjectScene> more_bodies;
   std::vector<RigidObjectScene> rigid_objects;  // the rigid entries of `objects`, in order
   // The simulation sections. All of them need a tool; with a tool, coupling and a device
   // trajectory are required and contact and haptic take their defaults when absent.
@@ -261,8 +276,8 @@ struct Scene {
   ContactScene contact;
   HapticScene haptic;
   std::vector<Waypoint> trajectory;  // device.trajectory, times strictly increasing
-  device::HandParams hand;                   // device.hand: `hapsim haptic --device hand`
-  std::optional<TaskScene> task;             // `hapsim train`
+  device::HandParams hand;           // device.hand: `hapsim haptic --device hand`
+  std::optional<TaskScene> task;     // `hapsim train`
 };
 
 // Loads and validates a scene file. Throws hapsim::InputError naming file, line and key.

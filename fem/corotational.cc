@@ -35,14 +35,13 @@ void CalcElementRotations(const Model& model, const Eigen::VectorXd& x_m, Elasti
 
 void CalcElasticForce(const Model& model, const Eigen::VectorXd& x_m,
                       const std::vector<Eigen::Matrix3d>& rotations, Eigen::VectorXd* force_N) {
-  const double mu_Pa = model.material.lame_mu_Pa();
-  const double lambda_Pa = model.material.lame_lambda_Pa();
   force_N->setZero(model.num_dofs());
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
     const Eigen::Matrix3d& R = rotations[t];
     const Eigen::Matrix3d F = CalcDeformationGradient(model, x_m, t);
-    const Eigen::Matrix3d sigma_Pa = CalcStress(CalcRotatedStrain(F, R), mu_Pa, lambda_Pa);
+    const Eigen::Matrix3d sigma_Pa =
+        CalcStress(CalcRotatedStrain(F, R), rest.lame_mu_Pa, rest.lame_lambda_Pa);
     // Columns are f_0..f_3 = −V R σ b_i.
     const Eigen::Matrix<double, 3, 4> f_local_N =
         -rest.volume_m3 * (R * sigma_Pa) * rest.shape_gradients_1_m;
@@ -52,14 +51,13 @@ void CalcElasticForce(const Model& model, const Eigen::VectorXd& x_m,
 
 double CalcElasticEnergy(const Model& model, const Eigen::VectorXd& x_m,
                          const std::vector<Eigen::Matrix3d>& rotations) {
-  const double mu_Pa = model.material.lame_mu_Pa();
-  const double lambda_Pa = model.material.lame_lambda_Pa();
   double energy_J = 0.0;
   for (int t = 0; t < model.num_tets(); ++t) {
+    const TetRestData& rest = model.tet_rest[t];
     const Eigen::Matrix3d strain =
         CalcRotatedStrain(CalcDeformationGradient(model, x_m, t), rotations[t]);
-    energy_J += model.tet_rest[t].volume_m3 *
-                (mu_Pa * strain.squaredNorm() + 0.5 * lambda_Pa * strain.trace() * strain.trace());
+    energy_J += rest.volume_m3 * (rest.lame_mu_Pa * strain.squaredNorm() +
+                                  0.5 * rest.lame_lambda_Pa * strain.trace() * strain.trace());
   }
   return energy_J;
 }
@@ -67,7 +65,7 @@ double CalcElasticEnergy(const Model& model, const Eigen::VectorXd& x_m,
 Eigen::Matrix3d CalcElementStress(const Model& model, const Eigen::VectorXd& x_m,
                                   const Eigen::Matrix3d& rotation, int tet) {
   return CalcStress(CalcRotatedStrain(CalcDeformationGradient(model, x_m, tet), rotation),
-                    model.material.lame_mu_Pa(), model.material.lame_lambda_Pa());
+                    model.tet_rest[tet].lame_mu_Pa, model.tet_rest[tet].lame_lambda_Pa);
 }
 
 }  // namespace hapsim::fem

@@ -34,6 +34,8 @@ Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& 
     rest.shape_gradients_1_m.rightCols<3>() = inverse_1_m.transpose();
     rest.shape_gradients_1_m.col(0) = -inverse_1_m.transpose().rowwise().sum();
     rest.volume_m3 = rest_edges_m.determinant() / 6.0;
+    rest.lame_mu_Pa = material.lame_mu_Pa();
+    rest.lame_lambda_Pa = material.lame_lambda_Pa();
     for (int a = 0; a < 4; ++a)
       model.node_mass_kg[tet[a]] += material.density_kg_m3 * rest.volume_m3 / 4.0;
   }
@@ -45,6 +47,45 @@ Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& 
     for (int a = 0; a < 3; ++a) model.dof_is_fixed[3 * n + a] = 1;
   }
   return model;
+}
+
+Model MergeModels(const std::vector<Model>& models) {
+  if (models.empty()) throw std::invalid_argument("MergeModels: no model");
+  Model merged;
+  merged.material = models.front().material;
+  int num_nodes = 0, num_tets = 0, num_faces = 0;
+  for (const Model& model : models) {
+    if (model.material.rayleigh_alpha_1_s != merged.material.rayleigh_alpha_1_s ||
+        model.material.rayleigh_beta_s != merged.material.rayleigh_beta_s)
+      throw std::invalid_argument(
+          "the deformable objects must share their Rayleigh damping (rayleigh_alpha_1_s, "
+          "rayleigh_beta_s): one damping serves the implicit step's matrix");
+    num_nodes += model.num_nodes();
+    num_tets += model.num_tets();
+    num_faces += static_cast<int>(model.surface_triangles.cols());
+  }
+  merged.mesh.rest_positions_m.resize(3, num_nodes);
+  merged.mesh.tets.resize(4, num_tets);
+  merged.surface_triangles.resize(3, num_faces);
+  merged.node_mass_kg.resize(num_nodes);
+  int node = 0, tet = 0, face = 0;
+  for (const Model& model : models) {
+    merged.mesh.rest_positions_m.middleCols(node, model.num_nodes()) = model.mesh.rest_positions_m;
+    merged.mesh.tets.middleCols(tet, model.num_tets()) = model.mesh.tets.array() + node;
+    merged.surface_triangles.middleCols(face, model.surface_triangles.cols()) =
+        model.surface_triangles.array() + node;
+    merged.node_mass_kg.segment(node, model.num_nodes()) = model.node_mass_kg;
+    merged.tet_rest.insert(merged.tet_rest.end(), model.tet_rest.begin(), model.tet_rest.end());
+    merged.dof_is_fixed.insert(merged.dof_is_fixed.end(), model.dof_is_fixed.begin(),
+                               model.dof_is_fixed.end());
+    node += model.num_nodes();
+    tet += model.num_tets();
+    face += static_cast<int>(model.surface_triangles.cols());
+  }
+  merged.dof_mass_kg = merged.node_mass_kg.replicate(1, 3).transpose().reshaped();
+  merged.rest_positions_m =
+      Eigen::Map<const Eigen::VectorXd>(merged.mesh.rest_positions_m.data(), 3 * num_nodes);
+  return merged;
 }
 
 std::vector<int> FindNodesInBox(const TetMesh& mesh, const Eigen::Vector3d& min_m,

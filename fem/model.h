@@ -21,11 +21,17 @@ namespace hapsim::fem {
 struct TetRestData {
   Eigen::Matrix<double, 3, 4> shape_gradients_1_m;  // columns b_0..b_3, 1/m
   double volume_m3 = 0.0;                           // V > 0
+  // Lamé constants of the tet's material (one body may hold several objects, each its own).
+  double lame_mu_Pa = 0.0;
+  double lame_lambda_Pa = 0.0;
 };
 
 struct Model {
   TetMesh mesh;
   Matrix3Xi surface_triangles;  // (3 x F) outward-oriented boundary faces
+  // The material: its Rayleigh damping (α, β) holds for every tet; its elastic constants and
+  // density are the tets' for a body of one material (a merged body's tets keep their own, in
+  // tet_rest and node_mass_kg; this is the first object's).
   Material material;
   std::vector<TetRestData> tet_rest;       // one per tet
   Eigen::VectorXd node_mass_kg;            // (N) lumped mass: ρV/4 from each incident tet
@@ -42,6 +48,13 @@ struct Model {
 // Builds the model. `fixed_nodes` lists nodes whose three dofs are fixed.
 // Throws std::invalid_argument if the mesh fails FindRestMeshProblem or a node index is bad.
 Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& fixed_nodes);
+
+// Several bodies as one (a scene's deformable objects): meshes side by side (nodes and tets of
+// model k after those of models 0..k−1), each tet with its own Lamé constants, each node its mass
+// and fixity. The objects do not touch each other through the FEM (their stiffness blocks are
+// disjoint); they meet only through contacts. Throws std::invalid_argument if `models` is empty
+// or their Rayleigh damping differs (one damping serves the implicit step's matrix).
+Model MergeModels(const std::vector<Model>& models);
 
 // Nodes whose rest position lies in the axis-aligned box [min_m − tol, max_m + tol].
 std::vector<int> FindNodesInBox(const TetMesh& mesh, const Eigen::Vector3d& min_m,

@@ -43,12 +43,12 @@ StiffnessAssembler::StiffnessAssembler(const Model& model) {
 
 void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::Matrix3d>& rotations,
                                   Eigen::SparseMatrix<double>* K) const {
-  const double mu_Pa = model.material.lame_mu_Pa();
-  const double lambda_Pa = model.material.lame_lambda_Pa();
   double* values = K->valuePtr();
   std::fill(values, values + K->nonZeros(), 0.0);
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
+    const double mu_Pa = rest.lame_mu_Pa;
+    const double lambda_Pa = rest.lame_lambda_Pa;
     const Eigen::Matrix<double, 3, 4>& b = rest.shape_gradients_1_m;
     const Eigen::Matrix<double, 3, 4> c = rotations[t] * b;
     const Eigen::Matrix4d gram = b.transpose() * b;  // b_a · b_b

@@ -54,4 +54,26 @@ set -e
 grep -q "liver_palpation.yaml:[0-9]*: key 'objects'" "$work/rigid.err" ||
   fail "message: $(cat "$work/rigid.err")"
 [ ! -e "$work/rigid_out" ] || fail "a refused scene must write nothing"
+# Two deformable objects: `fem` steps one, so it refuses, naming the second one's line.
+cat > "$work/two.yaml" <<'YAML'
+name: two
+time: {dt_s: 0.01, num_steps: 2}
+objects:
+  - name: a
+    deformable:
+      mesh: {box: {min_m: [0, 0, 0], max_m: [0.01, 0.01, 0.01], cells: [1, 1, 1]}}
+      material: {youngs_modulus_Pa: 5000, poisson_ratio: 0.3, density_kg_m3: 1000}
+  - name: b
+    deformable:
+      mesh: {box: {min_m: [0.02, 0, 0], max_m: [0.03, 0.01, 0.01], cells: [1, 1, 1]}}
+      material: {youngs_modulus_Pa: 5000, poisson_ratio: 0.3, density_kg_m3: 1000}
+YAML
+set +e
+"$hapsim" fem "$work/two.yaml" --out "$work/two_out" > /dev/null 2> "$work/two.err"
+status=$?
+set -e
+[ "$status" -eq 2 ] || fail "a scene of two deformable objects should exit 2, got $status"
+grep -q "two.yaml:9: key 'objects'.*steps one deformable object" "$work/two.err" ||
+  fail "message: $(cat "$work/two.err")"
+[ ! -e "$work/two_out" ] || fail "a refused scene must write nothing"
 echo "fem_command_test: all checks passed"

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <string>
 
+#include "config/body_builder.h"
 #include "config/scene.h"
 #include "config/simulation_builder.h"
 #include "tests/config/scene_test_support.h"
@@ -123,9 +124,86 @@ TEST(ObjectsSceneTest, BodyIsTheShorthandForOneDeformableObject) {
   const Scene scene = ParseScene(Replace(kObjectsScene, kOrganLines, "") + body, kLabel, "");
   ASSERT_TRUE(scene.body.has_value());
   EXPECT_EQ(scene.body_name, "body");
-  // `body` and a deformable object: two deformable objects, not supported yet.
-  test::ExpectError(std::string(kObjectsScene) + body, kLabel, 14, "objects[2].deformable",
-                    "one deformable object per scene for now; line 20 gives one already");
+  EXPECT_TRUE(scene.more_bodies.empty());
+  // `body` and a deformable object: two deformable objects, `body` the first.
+  const Scene two = ParseScene(std::string(kObjectsScene) + body, kLabel, "");
+  EXPECT_EQ(two.body_name, "body");
+  ASSERT_EQ(two.more_bodies.size(), 1u);
+  EXPECT_EQ(two.more_bodies[0].name, "organ");
+  EXPECT_EQ(two.more_bodies[0].body.material.youngs_modulus_Pa, 5000.0);
+}
+
+// Two free soft blocks of their own materials on a frictionless tray, solved as one system: each
+// rests on the tray with its own weight ρ V g (statics; 0.5%), so each object's nodes, masses and
+// contact rows are its own in the merged body.
+TEST(ObjectsSceneTest, TwoDeformableObjectsOnATrayEachCarryTheirOwnWeight) {
+  const Scene scene = ParseScene(R"(name: two_blocks
+time: {dt_s: 0.02, num_steps: 150}
+objects:
+  - name: tray
+    rigid: {shape: {box: {half_extents_m: [0.1, 0.1, 0.005]}}, position_m: [0, 0, -0.005]}
+  - name: light
+    deformable:
+      mesh: {box: {min_m: [-0.05, -0.02, 0], max_m: [-0.01, 0.02, 0.02], cells: [4, 4, 2]}}
+      material: {youngs_modulus_Pa: 20000, poisson_ratio: 0.45, density_kg_m3: 1000,
+                 rayleigh_alpha_1_s: 5}
+  - name: heavy
+    deformable:
+      mesh: {box: {min_m: [0.01, -0.02, 0], max_m: [0.05, 0.02, 0.02], cells: [4, 4, 2]}}
+      material: {youngs_modulus_Pa: 80000, poisson_ratio: 0.45, density_kg_m3: 1500,
+                 rayleigh_alpha_1_s: 5}
+tool: {shape: {sphere: {radius_m: 0.01}}, mass_kg: 0.05, position_m: [0, 0, 0.5]}
+coupling: {k_lin_N_m: 2000, b_lin_N_s_m: 20, k_ang_N_m_rad: 2, b_ang_N_m_s_rad: 0.02}
+contact: {law: unilateral}
+device: {trajectory: [{t_s: 0, position_m: [0, 0, 0.5]}]}
+)",
+                                 "two_blocks.yaml", "");
+  const std::optional<Body> body = MakeSceneBody(scene);
+  ASSERT_TRUE(body.has_value());
+  const int light_nodes = 5 * 5 * 3;  // the lattice's nodes: the light block's come first
+  ASSERT_EQ(body->model.num_nodes(), 2 * light_nodes);
+  contact::VisualFrameOptions options = MakeVisualFrameOptions(scene);
+  options.response.solve.max_iterations = 5000;
+  contact::VisualFrame frame = MakeVisualFrame(scene, body, options);
+  fem::State state = fem::MakeRestState(body->model);
+  ToolState tool = scene.tool->initial_state;
+  DeviceState device;
+  device.x_W_m = tool.x_W_m;
+  for (int k = 0; k < scene.num_steps; ++k) frame.Step(device, &state, &tool);
+  double light_N = 0.0, heavy_N = 0.0;
+  for (size_t i = 0; i < frame.contacts().size(); ++i) {
+    const contact::Contact& contact = frame.contacts()[i];
+    if (contact.on_tool) continue;
+    (contact.nodes[0] < light_nodes ? light_N : heavy_N) +=
+        frame.impulses()[static_cast<Eigen::Index>(i)];
+  }
+  const double volume_m3 = 0.04 * 0.04 * 0.02, g = 9.81;
+  std::printf("two blocks on a tray: %.6f N (light, m g %.6f N), %.6f N (heavy, m g %.6f N)\n",
+              light_N, 1000.0 * volume_m3 * g, heavy_N, 1500.0 * volume_m3 * g);
+  EXPECT_NEAR(light_N, 1000.0 * volume_m3 * g, 5e-3 * 1000.0 * volume_m3 * g);
+  EXPECT_NEAR(heavy_N, 1500.0 * volume_m3 * g, 5e-3 * 1500.0 * volume_m3 * g);
+}
+
+// A second deformable object joins the first one's FEM system: it may not give FEM options of
+// its own, and must share the first one's damping.
+TEST(ObjectsSceneTest, LaterDeformableObjectsShareTheFirstOnesSystem) {
+  const std::string second =
+      "  - name: second\n"
+      "    deformable:\n"
+      "      mesh: {box: {min_m: [0.05, -0.02, 0], max_m: [0.09, 0.02, 0.02], cells: [2, 2, 1]}}\n"
+      "      material: {youngs_modulus_Pa: 50000, poisson_ratio: 0.3, density_kg_m3: 1200}\n";
+  const std::string with_second = Replace(kObjectsScene, "tool: {", second + "tool: {");
+  const Scene scene = ParseScene(with_second, kLabel, "");
+  ASSERT_EQ(scene.more_bodies.size(), 1u);
+  EXPECT_EQ(scene.more_bodies[0].body.material.youngs_modulus_Pa, 50000.0);
+  test::ExpectError(Replace(with_second, "density_kg_m3: 1200}\n",
+                            "density_kg_m3: 1200}\n      solver: {type: cholmod}\n"),
+                    kLabel, 21, "objects[3].deformable.solver", "one system with the first one's");
+  test::ExpectError(
+      Replace(with_second, "density_kg_m3: 1200}", "density_kg_m3: 1200, rayleigh_alpha_1_s: 1}"),
+      kLabel, 20, "objects[3].deformable.material", "share the first one's");
+  test::ExpectError(Replace(with_second, "  - name: second", "  - name: organ"), kLabel, 17,
+                    "objects[3].name", "duplicate object name 'organ'");
 }
 
 const BadCase kBadCases[] = {
