@@ -262,6 +262,18 @@ void ReadObjects(const YamlMap& root, const std::string& base_dir, Scene* scene)
     if (const std::optional<YamlMap> deformable = item.FindMap("deformable")) {
       if (scene->body) {
         scene->more_bodies.push_back(ReadMoreBody(*deformable, name, *scene->body, base_dir));
+        // Probes report by name from the one merged body: names unique across the objects.
+        std::vector<const Probe*> earlier;
+        for (const Probe& probe : scene->body->probes) earlier.push_back(&probe);
+        for (size_t k = 0; k + 1 < scene->more_bodies.size(); ++k)
+          for (const Probe& probe : scene->more_bodies[k].body.probes) earlier.push_back(&probe);
+        for (const Probe& probe : scene->more_bodies.back().body.probes)
+          for (const Probe* other : earlier)
+            if (other->name == probe.name)
+              throw InputError(probe.location.file, probe.location.line,
+                               probe.location.key + ".name",
+                               "duplicate probe name '" + probe.name + "' (first given on line " +
+                                   std::to_string(other->location.line) + ")");
       } else {
         scene->body = ReadBody(*deformable, base_dir);
         scene->body_name = name;

@@ -204,6 +204,15 @@ TEST(ObjectsSceneTest, LaterDeformableObjectsShareTheFirstOnesSystem) {
       kLabel, 20, "objects[3].deformable.material", "share the first one's");
   test::ExpectError(Replace(with_second, "  - name: second", "  - name: organ"), kLabel, 17,
                     "objects[3].name", "duplicate object name 'organ'");
+  // Probes are reported by name from the merged body: one name, one probe.
+  std::string probed =
+      Replace(with_second, "density_kg_m3: 1000}   # 16\n",
+              "density_kg_m3: 1000}\n      probes: [{name: top, position_m: [0, 0, 0.02]}]\n");
+  probed =
+      Replace(probed, "density_kg_m3: 1200}\n",
+              "density_kg_m3: 1200}\n      probes: [{name: top, position_m: [0.07, 0, 0.02]}]\n");
+  test::ExpectError(probed, kLabel, 22, "objects[3].deformable.probes[0].name",
+                    "duplicate probe name 'top' (first given on line 17)");
 }
 
 const BadCase kBadCases[] = {
