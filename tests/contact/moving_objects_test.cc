@@ -15,11 +15,16 @@
 #include "contact/visual_frame.h"
 #include "fem/lattice_mesher.h"
 #include "fem/time_stepper.h"
+#include "tests/contact/rigid_object_fixtures.h"
 
 namespace hapsim::contact {
 namespace {
 
-constexpr double kGravity_m_s2 = 9.81;
+using fixtures::CalcObjectForceOnBody_N;
+using fixtures::FreeBlock;
+using fixtures::kGravity_m_s2;
+using fixtures::MakeFreeBlock;
+
 constexpr double kDt_s = 1.0 / 60.0;
 constexpr double kToolMass_kg = 0.05;
 constexpr double kToolRadius_m = 0.01;
@@ -79,35 +84,6 @@ ToolModel MakeSphereTool() {
 // The plate's top face at time t_s, from its script alone.
 double PlateTop_m(const RigidObject& plate, double t_s) {
   return CalcScriptedPose(plate, t_s).translation().z() + plate.shape.half_extents_m.z();
-}
-
-// A free 4 x 4 x 2 cm soft block (no fixed node) standing on z = 0, and its mass ρ V.
-struct FreeBlock {
-  fem::Model model;
-  Eigen::VectorXd gravity_N;
-  double mass_kg = 0.0;
-};
-
-FreeBlock MakeFreeBlock() {
-  const fem::TetMesh mesh = fem::MakeBoxTetMesh({-0.02, -0.02, 0.0}, {0.02, 0.02, 0.02}, {4, 4, 2});
-  fem::Material material;
-  material.youngs_modulus_Pa = 50e3;
-  material.poisson_ratio = 0.45;
-  material.density_kg_m3 = 1000.0;
-  material.rayleigh_alpha_1_s = 5.0;  // settles the block within the run
-  FreeBlock block{fem::MakeModel(mesh, material, {}), {}, 0.0};
-  block.gravity_N = fem::CalcGravityForce(block.model, {0, 0, -kGravity_m_s2});
-  block.mass_kg = material.density_kg_m3 * 0.04 * 0.04 * 0.02;
-  return block;
-}
-
-// Sum of λ over the rows that touch no tool: the objects' force on the body along their
-// normals, N.
-double CalcObjectForceOnBody_N(const VisualFrame& frame) {
-  double total_N = 0.0;
-  for (size_t i = 0; i < frame.contacts().size(); ++i)
-    if (!frame.contacts()[i].on_tool) total_N += frame.impulses()[static_cast<Eigen::Index>(i)];
-  return total_N;
 }
 
 TEST(MovingObjects, ToolRestingOnARisingPlateRisesWithItOnItsSurface) {

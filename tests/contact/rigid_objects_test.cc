@@ -15,11 +15,15 @@
 #include "contact/visual_frame.h"
 #include "fem/lattice_mesher.h"
 #include "fem/time_stepper.h"
+#include "tests/contact/rigid_object_fixtures.h"
 
 namespace hapsim::contact {
 namespace {
 
-constexpr double kGravity_m_s2 = 9.81;
+using fixtures::CalcObjectForceOnBody_N;
+using fixtures::FreeBlock;
+using fixtures::kGravity_m_s2;
+using fixtures::MakeFreeBlock;
 
 // A 20 x 20 cm plate 1 cm thick, top face at z = 0.
 RigidObject MakePlate() {
@@ -69,16 +73,6 @@ VisualFrameOptions MakeOptions(const CouplingParams& coupling) {
   return options;
 }
 
-// Sum of λ over the rows of contacts that touch no tool: the force the rigid objects put on the
-// body, along their normals, N.
-double CalcObjectForceOnBody_N(const VisualFrame& frame) {
-  double total_N = 0.0;
-  for (size_t i = 0; i < frame.contacts().size(); ++i) {
-    if (!frame.contacts()[i].on_tool) total_N += frame.impulses()[static_cast<Eigen::Index>(i)];
-  }
-  return total_N;
-}
-
 // Largest depth of a node of `body` inside the plate (≤ 0 when none is inside), m.
 double CalcDeepestNodeInPlate_m(const fem::State& body) {
   const ToolDistanceField plate(MakePlate().shape);
@@ -88,26 +82,6 @@ double CalcDeepestNodeInPlate_m(const fem::State& body) {
     deepest_m = std::max(
         deepest_m, -plate.Calc(X_OW * Eigen::Vector3d(body.x_m.segment<3>(3 * n))).distance_m);
   return deepest_m;
-}
-
-// A free 4 x 4 x 2 cm soft block (no fixed node), its bottom face on the plate's top face.
-struct FreeBlock {
-  fem::Model model;
-  Eigen::VectorXd gravity_N;
-  double mass_kg = 0.0;
-};
-
-FreeBlock MakeFreeBlock() {
-  const fem::TetMesh mesh = fem::MakeBoxTetMesh({-0.02, -0.02, 0.0}, {0.02, 0.02, 0.02}, {4, 4, 2});
-  fem::Material material;
-  material.youngs_modulus_Pa = 50e3;
-  material.poisson_ratio = 0.45;
-  material.density_kg_m3 = 1000.0;
-  material.rayleigh_alpha_1_s = 5.0;  // settles the block within the run
-  FreeBlock block{fem::MakeModel(mesh, material, {}), {}, 0.0};
-  block.gravity_N = fem::CalcGravityForce(block.model, {0, 0, -kGravity_m_s2});
-  block.mass_kg = material.density_kg_m3 * 0.04 * 0.04 * 0.02;  // ρ V, independent of the mesh
-  return block;
 }
 
 // A tool parked far above everything, held there by its coupling.
