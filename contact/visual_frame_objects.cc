@@ -102,9 +102,9 @@ void VisualFrame::FinishRigidObjects(const ToolState& tool) {
 
 Eigen::Vector3d VisualFrame::CalcObjectPointVelocity(int i, const Eigen::Vector3d& p_W_m,
                                                      const ToolState& tool) const {
+  if (i < 0 || i >= static_cast<int>(object_motion_.size())) return Eigen::Vector3d::Zero();
   if (i == grabbed_object())
     return tool.v_W_m_s + CalcAngularVelocity(tool_, tool).cross(p_W_m - tool.x_W_m);
-  if (i < 0 || i >= static_cast<int>(object_motion_.size())) return Eigen::Vector3d::Zero();
   // About where the object is now (the sanity pass runs at the frame's end).
   const ObjectMotion& motion = object_motion_[i];
   return motion.v_W_m_s + motion.w_W_rad_s.cross(p_W_m - rigid_contacts_.pose(i).translation());
