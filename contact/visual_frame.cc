@@ -35,6 +35,10 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
       tool_(std::move(tool)),
       options_(options),
       rows_per_contact_(options.response.solve.law == ContactLaw::kFriction ? 3 : 1),
+      objects_have_own_friction_(
+          options.response.solve.law == ContactLaw::kFriction &&
+          std::any_of(options.rigid_objects.begin(), options.rigid_objects.end(),
+                      [](const RigidObject& o) { return o.friction_coefficient.has_value(); })),
       rigid_contacts_(options.rigid_objects, tool_.shape, options.detection.margin_m) {
   if ((body == nullptr) != (fem_options == nullptr))
     throw std::invalid_argument("VisualFrame: give both the body and its FEM options, or neither");
@@ -147,12 +151,12 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     c_free = CalcSeparatingVelocity(jacobian_, v_free, w_free, u_free);
   }
   CalcObjectVelocities();
-  c_object_ = CalcObjectSeparatingVelocity(contacts_);
-  c_free += c_object_;
+  const Eigen::VectorXd c_object = CalcObjectSeparatingVelocity(contacts_);
+  c_free += c_object;
   const Eigen::VectorXd c_pre =
       CalcSeparatingVelocity(jacobian_, tool.v_W_m_s, tool_system_.M_inv_W * tool.L_W_kg_m2_s,
                              body.v_m_s) +
-      c_object_;
+      c_object;
   b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
   const int num_rows = jacobian_.num_rows();
   if (!stepper_)
@@ -163,13 +167,8 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     W_body_ = stepper_->CalcCompliance(jacobian_.J_u);
   const Eigen::MatrixXd W = CalcToolDelassus(jacobian_, tool_system_) + W_body_;
   lambda_.setZero(jacobian_.num_rows());
-  const bool own_friction =
-      options_.response.solve.law == ContactLaw::kFriction &&
-      std::any_of(
-          options_.rigid_objects.begin(), options_.rigid_objects.end(),
-          [](const RigidObject& object) { return object.friction_coefficient.has_value(); });
   Eigen::VectorXd mu_per_contact;
-  if (own_friction) {
+  if (objects_have_own_friction_) {
     // μ of a contact with an object is that object's (its own or the scene's); the grabbed object
     // pressing another takes the other's, as the tool touching it would.
     mu_per_contact.setConstant(static_cast<Eigen::Index>(contacts_.size()),
@@ -181,8 +180,9 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
             *options_.rigid_objects[object].friction_coefficient;
     }
   }
-  last_solve_ = SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve,
-                                     &lambda_, own_friction ? &mu_per_contact : nullptr);
+  last_solve_ =
+      SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve, &lambda_,
+                           objects_have_own_friction_ ? &mu_per_contact : nullptr);
   // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.
   dv_tool_ += tool_system_.A_v.inverse() * (dt * jacobian_.J_v.transpose() * lambda_);
   dL_tool_ += tool_system_.A_L.inverse() * (dt * jacobian_.J_w.transpose() * lambda_);

@@ -165,7 +165,8 @@ class VisualFrame {
   ToolModel tool_;
   VisualFrameOptions options_;
   int rows_per_contact_;
-  std::unique_ptr<fem::TimeStepper> stepper_;                 // with a body
+  bool objects_have_own_friction_;             // friction law and an object with its own μ
+  std::unique_ptr<fem::TimeStepper> stepper_;  // with a body
   std::unique_ptr<fem::WarpedCompliance> warped_compliance_;  // with a body, kWarped only
   std::unique_ptr<CollisionDetector> detector_;               // with a body
   RigidObjectContacts rigid_contacts_;
@@ -186,8 +187,7 @@ class VisualFrame {
   Eigen::MatrixXd W_body_;  // J_u A_u⁻¹ J_uᵀ at the visual step, kept for the linear model
   Eigen::VectorXd b_, lambda_;
   std::vector<Eigen::Vector3d> object_velocity_;  // w of each contact (CalcObjectVelocities)
-  Eigen::VectorXd c_object_;  // c_object of each row (zero without moving objects)
-  Eigen::VectorXd c_post_;    // separating velocity of each row after the response
+  Eigen::VectorXd c_post_;  // separating velocity of each row after the response
   ContactSolveReport last_solve_;
   LinearContactModel linear_model_;
   ContactRows contact_rows_;
