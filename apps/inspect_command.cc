@@ -77,28 +77,28 @@ nlohmann::json DescribeShape(const ToolShape& shape) {
 // The scene's objects and tool as they will be simulated (the body built).
 nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* body) {
   nlohmann::json objects = nlohmann::json::array();
+  // Each deformable object's part of the one FEM system (config::Body::parts, in scene order).
   const auto describe_deformable = [&](const std::string& name, const config::BodyScene& source,
-                                       const fem::Model& model) {
+                                       const config::Body::Part& part) {
+    int fixed_nodes = 0;
+    for (int n = part.first_node; n < part.first_node + part.num_nodes; ++n)
+      fixed_nodes += body->model.dof_is_fixed[3 * n] ? 1 : 0;
     const fem::FemOptions& fem = source.options;
     objects.push_back({{"name", name},
                        {"kind", "deformable"},
-                       {"nodes", model.num_nodes()},
-                       {"tets", model.num_tets()},
-                       {"dofs", model.num_dofs()},
-                       {"fixed_nodes", model.num_fixed_nodes()},
+                       {"nodes", part.num_nodes},
+                       {"tets", part.num_tets},
+                       {"dofs", 3 * part.num_nodes},
+                       {"fixed_nodes", fixed_nodes},
                        {"elasticity", fem::ToString(fem.elasticity)},
                        {"integrator", fem::ToString(fem.integrator)},
                        {"solver", fem::ToString(fem.solver.kind)},
                        {"youngs_modulus_Pa", source.material.youngs_modulus_Pa}});
   };
-  if (body != nullptr && scene.more_bodies.empty()) {
-    describe_deformable(scene.body_name, *scene.body, body->model);
-  } else if (body != nullptr) {  // several, solved as one system: each built alone to count it
-    describe_deformable(scene.body_name, *scene.body,
-                        config::MakeBody(*scene.body, scene.gravity_m_s2).model);
-    for (const config::DeformableObjectScene& more : scene.more_bodies)
-      describe_deformable(more.name, more.body,
-                          config::MakeBody(more.body, scene.gravity_m_s2).model);
+  if (body != nullptr) {
+    describe_deformable(scene.body_name, *scene.body, body->parts[0]);
+    for (size_t k = 0; k < scene.more_bodies.size(); ++k)
+      describe_deformable(scene.more_bodies[k].name, scene.more_bodies[k].body, body->parts[k + 1]);
   }
   for (const config::RigidObjectScene& rigid : scene.rigid_objects) {
     nlohmann::json object{{"name", rigid.object.name}, {"kind", "rigid"}, {"dofs", 0}};

@@ -54,6 +54,7 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
   }
   Body body;
   body.model = fem::MakeModel(std::move(mesh), scene.material, fixed_nodes);
+  body.parts = {{0, body.model.num_nodes(), 0, body.model.num_tets()}};
   body.external_force_N = fem::CalcGravityForce(body.model, gravity_m_s2);
   for (const NodalLoad& load : scene.loads) {
     const std::vector<int> nodes =
@@ -85,14 +86,15 @@ std::optional<Body> MakeSceneBody(const Scene& scene) {
   Body merged;
   merged.model = fem::MergeModels(models);  // damping checked equal when the scene was read
   merged.external_force_N.resize(merged.model.num_dofs());
-  int dof = 0, tet = 0;
+  int node = 0, tet = 0;
   for (const Body& body : bodies) {
-    merged.external_force_N.segment(dof, body.model.num_dofs()) = body.external_force_N;
+    merged.external_force_N.segment(3 * node, body.model.num_dofs()) = body.external_force_N;
     for (BoundProbe probe : body.probes) {
       probe.binding.tet += tet;
       merged.probes.push_back(probe);
     }
-    dof += body.model.num_dofs();
+    merged.parts.push_back({node, body.model.num_nodes(), tet, body.model.num_tets()});
+    node += body.model.num_nodes();
     tet += body.model.num_tets();
   }
   return merged;

@@ -23,6 +23,12 @@ struct Body {
   fem::Model model;
   Eigen::VectorXd external_force_N;  // (3N) gravity on lumped masses + nodal loads
   std::vector<BoundProbe> probes;
+  // Where each deformable object lies in the model, in scene order (one part for one object).
+  struct Part {
+    int first_node = 0, num_nodes = 0;
+    int first_tet = 0, num_tets = 0;
+  };
+  std::vector<Part> parts;
 };
 
 // Builds the mesh (lattice, cut lattice or file), the model, the loads and the probes.

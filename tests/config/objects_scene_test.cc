@@ -162,6 +162,10 @@ device: {trajectory: [{t_s: 0, position_m: [0, 0, 0.5]}]}
   ASSERT_TRUE(body.has_value());
   const int light_nodes = 5 * 5 * 3;  // the lattice's nodes: the light block's come first
   ASSERT_EQ(body->model.num_nodes(), 2 * light_nodes);
+  ASSERT_EQ(body->parts.size(), 2u);
+  EXPECT_EQ(body->parts[1].first_node, light_nodes);
+  EXPECT_EQ(body->parts[1].num_nodes, light_nodes);
+  EXPECT_EQ(body->parts[1].first_tet, body->parts[0].num_tets);
   contact::VisualFrameOptions options = MakeVisualFrameOptions(scene);
   options.response.solve.max_iterations = 5000;
   contact::VisualFrame frame = MakeVisualFrame(scene, body, options);
