@@ -44,16 +44,20 @@ set -e
 [ "$status" -eq 1 ] || fail "diverging run should exit 1, got $status"
 grep -q "diverged at step" "$work/explicit.err" || fail "message: $(cat "$work/explicit.err")"
 [ ! -e "$work/explicit_out" ] || fail "diverged run must write nothing"
+# `fem` refuses SCENE with exit 2 and a message matching PATTERN, writing nothing.
+expect_refused() {  # SCENE NAME PATTERN
+  local scene=$1 name=$2 pattern=$3 status
+  set +e
+  "$hapsim" fem "$scene" --out "$work/${name}_out" > /dev/null 2> "$work/$name.err"
+  status=$?
+  set -e
+  [ "$status" -eq 2 ] || fail "$name: should exit 2, got $status"
+  grep -q "$pattern" "$work/$name.err" || fail "$name: message: $(cat "$work/$name.err")"
+  [ ! -e "$work/${name}_out" ] || fail "$name: a refused scene must write nothing"
+}
 # A scene with rigid objects (the liver on its tray): `fem` would drop the organ through the
-# tray, so it refuses, naming the objects' line; nothing written.
-set +e
-"$hapsim" fem scenes/liver_palpation.yaml --out "$work/rigid_out" > /dev/null 2> "$work/rigid.err"
-status=$?
-set -e
-[ "$status" -eq 2 ] || fail "a scene with rigid objects should exit 2, got $status"
-grep -q "liver_palpation.yaml:[0-9]*: key 'objects'" "$work/rigid.err" ||
-  fail "message: $(cat "$work/rigid.err")"
-[ ! -e "$work/rigid_out" ] || fail "a refused scene must write nothing"
+# tray, so it refuses, naming the objects' line.
+expect_refused scenes/liver_palpation.yaml rigid "liver_palpation.yaml:[0-9]*: key 'objects'"
 # Two deformable objects: `fem` steps one, so it refuses, naming the second one's line.
 cat > "$work/two.yaml" <<'YAML'
 name: two
@@ -68,12 +72,5 @@ objects:
       mesh: {box: {min_m: [0.02, 0, 0], max_m: [0.03, 0.01, 0.01], cells: [1, 1, 1]}}
       material: {youngs_modulus_Pa: 5000, poisson_ratio: 0.3, density_kg_m3: 1000}
 YAML
-set +e
-"$hapsim" fem "$work/two.yaml" --out "$work/two_out" > /dev/null 2> "$work/two.err"
-status=$?
-set -e
-[ "$status" -eq 2 ] || fail "a scene of two deformable objects should exit 2, got $status"
-grep -q "two.yaml:9: key 'objects'.*steps one deformable object" "$work/two.err" ||
-  fail "message: $(cat "$work/two.err")"
-[ ! -e "$work/two_out" ] || fail "a refused scene must write nothing"
+expect_refused "$work/two.yaml" two "two.yaml:9: key 'objects'.*steps one deformable object"
 echo "fem_command_test: all checks passed"
