@@ -53,6 +53,10 @@
 //                                      # button grabs it (paper 003); not with a trajectory
 //         friction_coefficient: 0.1    # optional, ≥ 0: μ of every contact with it (friction law
 //                                      # only); default contact.friction_coefficient
+//         material: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}
+//                                      # optional, the material mode's (paper 003; defaults as
+//                                      # shown): stiffness, viscosity in [0, 1] (fractions of
+//                                      # haptic.material's max), stickiness ≥ 0, friction ≥ 0
 //     - name: liver
 //       deformable: {mesh: …, material: …}   # the keys of `body`; `body` is the shorthand for
 //                                      # one deformable object named "body" (the first). Several
@@ -90,8 +94,19 @@
 //   haptic:                            # optional (with a tool), defaults as shown
 //     rate_hz: 1000                    # > 0; rate_hz · dt_s must be an integer ≥ 1 (to 1e-9):
 //                                      # the number of haptic steps per visual frame
-//     mode: linear                     # linear | lcp | coupling | reference (lcp: not with
-//                                      # the friction law; its 1 kHz rows are normal only)
+//     mode: linear                     # linear | lcp | coupling | reference | penalty |
+//                                      # material | impact (device/haptic_mode.h; lcp: not with
+//                                      # the friction law; its 1 kHz rows are normal only;
+//                                      # reference, penalty, material, impact: `hapsim sim` only)
+//     penalty:                         # optional, penalty mode (contact/penalty_contact.h)
+//       {stiffness_N_m: 600, predictive_margin: true, max_force_change_N: 0.5,
+//        max_torque_change_N_m: 0.02}  # > 0 each; any subset, the rest as shown
+//     impact: {restitution: 0.5}       # optional, impact mode: e in [0, 1]
+//     material:                        # optional, material mode (contact/material_contact.h)
+//       max_stiffness_N_m: 600         # > 0: the device's k_max
+//       max_damping_N_s_m: 2           # ≥ 0: b_max
+//       tool: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}   # as objects'
+//       body: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}   # the body's
 //     lcp_max_rows: 512                # ≥ 1: rows the 1 kHz lcp solver holds (≈ 16 n² bytes);
 //                                      # a frame with more falls back to the linear model
 //     safety:                          # optional: the haptic process's limits
@@ -128,6 +143,7 @@
 #include "core/scripted_trajectory.h"
 #include "core/virtual_coupling.h"
 #include "device/device_backend.h"
+#include "device/geometric_haptic_contact.h"
 #include "device/haptic_mode.h"
 #include "device/haptic_safety.h"
 #include "fem/fem_options.h"
@@ -200,6 +216,7 @@ struct RigidObjectScene {
   std::string mesh_file;             // ToolShape::Kind::kMesh: the file read (resolved path)
   SourceLocation location;           // the `objects[i]` entry
   SourceLocation friction_location;  // its friction_coefficient key, if given
+  contact::Material material;        // the material mode's (haptic.mode material), paper 003
 };
 
 // The rigid tool, resolved: a mesh file read, mass properties computed.
@@ -232,6 +249,8 @@ struct HapticScene {
   int lcp_max_rows = 512;
   device::SafetyLimits safety;
   int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
+  // penalty, material, impact modes (the rigid objects' materials come from `objects`).
+  device::GeometricContactParams geometric;
 };
 
 // A palpation target of the task: a ball on or near the tissue's rest surface.

@@ -39,13 +39,15 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
     const auto parsed = ParseHapticMode(option_value);
     if (!parsed)
       throw InputError("", 0, option,
-                       "unknown mode '" + option_value + "' (linear, lcp, coupling, reference)");
+                       "unknown mode '" + option_value +
+                           "' (linear, lcp, coupling, reference, penalty, material, impact)");
     mode = *parsed;
   }
-  if (mode == device::HapticMode::kReference && !allow_reference)
+  if ((mode == device::HapticMode::kReference || device::IsGeometricMode(mode)) && !allow_reference)
     throw InputError(file, 0, key,
-                     "the reference mode runs in `hapsim sim` only; the two processes render "
-                     "linear, lcp or coupling");
+                     std::string("the ") + device::ToString(mode) +
+                         " mode runs in `hapsim sim` only; the two processes render linear, lcp "
+                         "or coupling");
   if (mode == device::HapticMode::kLcp && scene.contact.law == contact::ContactLaw::kFriction)
     throw InputError(file, 0, key,
                      "lcp solves normal rows only; the scene's contact law is friction");
@@ -59,6 +61,10 @@ device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::Haptic
   options.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
   options.haptic_steps_per_frame = steps_per_frame;
   options.lcp_max_rows = scene.haptic.lcp_max_rows;
+  options.geometric = scene.haptic.geometric;
+  options.geometric.material.objects.clear();
+  for (const RigidObjectScene& rigid : scene.rigid_objects)
+    options.geometric.material.objects.push_back(rigid.material);
   return options;
 }
 

@@ -29,8 +29,10 @@ constexpr contact::ComplianceMethod kComplianceMethods[] = {contact::ComplianceM
                                                             contact::ComplianceMethod::kExact};
 constexpr ContactLaw kContactLaws[] = {ContactLaw::kEquality, ContactLaw::kUnilateral,
                                        ContactLaw::kFriction};
-constexpr HapticMode kHapticModes[] = {HapticMode::kLinear, HapticMode::kLcp, HapticMode::kCoupling,
-                                       HapticMode::kReference};
+constexpr HapticMode kHapticModes[] = {HapticMode::kLinear,    HapticMode::kLcp,
+                                       HapticMode::kCoupling,  HapticMode::kReference,
+                                       HapticMode::kPenalty,   HapticMode::kMaterial,
+                                       HapticMode::kImpact};
 
 // (name, value) pairs for YamlMap::GetEnumOr, in declaration order.
 template <typename Enum, std::size_t N>
@@ -132,10 +134,20 @@ ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
 
 }  // namespace
 
+contact::Material ReadMaterial(const YamlMap& map) {
+  map.CheckKeys({"stiffness", "viscosity", "stickiness_N", "friction_N_m"});
+  contact::Material material;
+  material.stiffness = map.GetDoubleOr("stiffness", material.stiffness, ClosedInterval(0.0, 1.0));
+  material.viscosity = map.GetDoubleOr("viscosity", material.viscosity, ClosedInterval(0.0, 1.0));
+  material.stickiness_N = map.GetDoubleOr("stickiness_N", material.stickiness_N, AtLeast(0.0));
+  material.friction_N_m = map.GetDoubleOr("friction_N_m", material.friction_N_m, AtLeast(0.0));
+  return material;
+}
+
 RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
                                  const std::string& base_dir) {
   map.CheckKeys({"shape", "position_m", "rotation_vector_rad", "trajectory", "grabbable",
-                 "friction_coefficient"});
+                 "friction_coefficient", "material"});
   RigidObjectScene rigid;
   rigid.location = LocationOf(map);
   rigid.object.name = name;
@@ -156,6 +168,8 @@ RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
     rigid.friction_location = {map.file(), map.LineOf("friction_coefficient"),
                                map.KeyPath("friction_coefficient")};
   }
+  if (const std::optional<YamlMap> material = map.FindMap("material"))
+    rigid.material = ReadMaterial(*material);
   if (map.Has("trajectory")) {
     for (const char* key : {"position_m", "rotation_vector_rad"})
       if (map.Has(key))
@@ -235,10 +249,43 @@ device::SafetyLimits ReadSafety(const YamlMap& map) {
   return limits;
 }
 
+contact::PenaltyParams ReadPenalty(const YamlMap& map) {
+  map.CheckKeys({"stiffness_N_m", "predictive_margin", "max_force_change_N",
+                 "max_torque_change_N_m"});
+  contact::PenaltyParams p;
+  p.stiffness_N_m = map.GetDoubleOr("stiffness_N_m", p.stiffness_N_m, Above(0.0));
+  p.predictive_margin = map.GetBoolOr("predictive_margin", p.predictive_margin);
+  p.max_force_change_N = map.GetDoubleOr("max_force_change_N", p.max_force_change_N, Above(0.0));
+  p.max_torque_change_N_m =
+      map.GetDoubleOr("max_torque_change_N_m", p.max_torque_change_N_m, Above(0.0));
+  return p;
+}
+
+// haptic.material: the device's k_max and b_max, and the tool's and the body's materials (each
+// rigid object's is under its own `material`).
+void ReadMaterialSection(const YamlMap& map, contact::MaterialParams* params) {
+  map.CheckKeys({"max_stiffness_N_m", "max_damping_N_s_m", "tool", "body"});
+  params->max_stiffness_N_m =
+      map.GetDoubleOr("max_stiffness_N_m", params->max_stiffness_N_m, Above(0.0));
+  params->max_damping_N_s_m =
+      map.GetDoubleOr("max_damping_N_s_m", params->max_damping_N_s_m, AtLeast(0.0));
+  if (const std::optional<YamlMap> tool = map.FindMap("tool")) params->tool = ReadMaterial(*tool);
+  if (const std::optional<YamlMap> body = map.FindMap("body")) params->body = ReadMaterial(*body);
+}
+
 HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, ContactLaw law) {
   HapticScene haptic;
   if (map.has_value()) {
-    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "safety"});
+    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "safety", "penalty", "material", "impact"});
+    if (const std::optional<YamlMap> penalty = map->FindMap("penalty"))
+      haptic.geometric.penalty = ReadPenalty(*penalty);
+    if (const std::optional<YamlMap> material = map->FindMap("material"))
+      ReadMaterialSection(*material, &haptic.geometric.material);
+    if (const std::optional<YamlMap> impact = map->FindMap("impact")) {
+      impact->CheckKeys({"restitution"});
+      haptic.geometric.impact.restitution = impact->GetDoubleOr(
+          "restitution", haptic.geometric.impact.restitution, ClosedInterval(0.0, 1.0));
+    }
     haptic.rate_hz = map->GetDoubleOr("rate_hz", haptic.rate_hz, Above(0.0));
     haptic.mode = map->GetEnumOr("mode", Choices(kHapticModes), haptic.mode);
     if (haptic.mode == HapticMode::kLcp && law == ContactLaw::kFriction)

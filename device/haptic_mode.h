@@ -4,10 +4,16 @@
 //   kLcp        the per-contact rows of the last visual frame, the small LCP solved at 1 kHz
 //   kCoupling   standard multirate rendering: only the virtual coupling to the visual tool
 //   kReference  everything at the haptic step (the ground truth)
+// The source papers' other systems, as baselines (device/geometric_haptic_contact.h):
+//   kPenalty    paper 000: penalty forces k (ε + d) on the haptic tool at 1 kHz, smoothed
+//   kMaterial   paper 003: per-object Hooke, viscous and stick–slip forces, averaged over pairs
+//   kImpact     paper 001: constraint impulses with a coefficient of restitution at 1 kHz
+// Each works on the world of the last visual frame (rigid objects, the body's surface as rigid).
 
 namespace hapsim::device {
 
-enum class HapticMode { kLinear, kLcp, kCoupling, kReference };
-const char* ToString(HapticMode mode);  // "linear", "lcp", "coupling", "reference"
+enum class HapticMode { kLinear, kLcp, kCoupling, kReference, kPenalty, kMaterial, kImpact };
+// "linear", "lcp", "coupling", "reference", "penalty", "material", "impact"
+const char* ToString(HapticMode mode);
 
 }  // namespace hapsim::device

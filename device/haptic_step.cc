@@ -24,11 +24,13 @@ HapticOutput HapticStep::Step(const DeviceState& device) {
   Eigen::Vector3d F_hat_N, T_hat_N_m;
   contact::CalcDiscreteTimeWrench(system, tool_state_, &F_hat_N, &T_hat_N_m);
   HapticOutput out;
-  if (rows_ != nullptr) {
-    out.lcp_fell_back = !solver_->Solve(*rows_, system, F_hat_N, T_hat_N_m,
-                                        &out.contact_force_W_N, &out.contact_torque_W_N_m);
+  if (geometric_ != nullptr) {
+    geometric_->Calc(system, tool_state_, &out.contact_force_W_N, &out.contact_torque_W_N_m);
+  } else if (rows_ != nullptr) {
+    out.lcp_fell_back = !solver_->Solve(*rows_, system, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
+                                        &out.contact_torque_W_N_m);
   }
-  if (rows_ == nullptr || out.lcp_fell_back) {
+  if (geometric_ == nullptr && (rows_ == nullptr || out.lcp_fell_back)) {
     contact::EvaluateLinearContactModel(model_, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
                                         &out.contact_torque_W_N_m);
   }
@@ -43,14 +45,13 @@ HapticOutput HapticStep::Step(const DeviceState& device) {
 }
 
 bool HapticStep::PrepareContactRows(const contact::ContactRows& rows) {
-  return lcp_.Prepare(rows, CalcLinearisationSystem(tool_, coupling_, gravity_m_s2_, dt_s_,
-                                                    tool_state_));
+  return lcp_.Prepare(rows,
+                      CalcLinearisationSystem(tool_, coupling_, gravity_m_s2_, dt_s_, tool_state_));
 }
 
-ToolStepSystem CalcLinearisationSystem(const ToolModel& tool,
-                                                const CouplingParams& coupling,
-                                                const Eigen::Vector3d& gravity_m_s2, double dt_s,
-                                                const ToolState& state) {
+ToolStepSystem CalcLinearisationSystem(const ToolModel& tool, const CouplingParams& coupling,
+                                       const Eigen::Vector3d& gravity_m_s2, double dt_s,
+                                       const ToolState& state) {
   // The coupling's Jacobians at zero coupling error: the device at the tool.
   const DeviceState at_tool = MakeDeviceAtTool(tool, state);
   const CouplingWrench wrench = CalcCouplingWrench(coupling, at_tool, state, at_tool.w_W_rad_s);

@@ -19,6 +19,7 @@
 #include "core/rigid_tool.h"
 #include "core/tool_integrator.h"
 #include "core/virtual_coupling.h"
+#include "device/geometric_haptic_contact.h"
 
 namespace hapsim::device {
 
@@ -52,6 +53,9 @@ class HapticStep {
   // the current haptic tool state), so that the first step on them is a warm one: for the
   // in-process simulator, which calls it at the visual frame. Returns Prepare's result.
   bool PrepareContactRows(const contact::ContactRows& rows);
+  // Penalty, material and impact modes: the contact force comes from `geometric` (not owned;
+  // it must outlive its use) in place of the linear model and rows; nullptr: back to them.
+  void SetGeometricContact(GeometricHapticContact* geometric) { geometric_ = geometric; }
   int lcp_max_rows() const { return lcp_.max_rows(); }
   HapticOutput Step(const DeviceState& device);
 
@@ -72,6 +76,7 @@ class HapticStep {
   const contact::ContactRows* rows_ = nullptr;
   contact::HapticLcpSolver lcp_;
   contact::HapticLcpSolver* solver_ = &lcp_;
+  GeometricHapticContact* geometric_ = nullptr;
 };
 
 // A device state at the tool's pose and velocities (a coupling target with zero error).

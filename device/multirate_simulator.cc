@@ -28,6 +28,12 @@ const char* ToString(HapticMode mode) {
       return "coupling";
     case HapticMode::kReference:
       return "reference";
+    case HapticMode::kPenalty:
+      return "penalty";
+    case HapticMode::kMaterial:
+      return "material";
+    case HapticMode::kImpact:
+      return "impact";
   }
   return "?";
 }
@@ -53,6 +59,11 @@ MultirateSimulator::MultirateSimulator(const fem::Model* body, const fem::FemOpt
       haptic_(tool, visual_options_.coupling, visual_options_.gravity_m_s2, options.haptic_dt_s,
               initial_tool, options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0) {
   if (options.haptic_steps_per_frame < 1) throw std::invalid_argument("haptic_steps_per_frame < 1");
+  if (IsGeometricMode(options.mode)) {
+    geometric_ = std::make_unique<GeometricHapticContact>(options.mode, options.geometric, tool,
+                                                          body, visual_options_.rigid_objects);
+    haptic_.SetGeometricContact(geometric_.get());
+  }
 }
 
 void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_haptic_steps,
@@ -65,6 +76,9 @@ void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_hapt
     switch (options_.mode) {
       case HapticMode::kLinear:
       case HapticMode::kLcp:
+      case HapticMode::kPenalty:
+      case HapticMode::kMaterial:
+      case HapticMode::kImpact:
         sample = StepHapticTool(device, k);
         break;
       case HapticMode::kCoupling:
@@ -92,6 +106,11 @@ HapticSample MultirateSimulator::StepHapticTool(const DeviceState& device, long 
       haptic_.PrepareContactRows(frame_.contact_rows());
       haptic_.SetContactRows(&frame_.contact_rows());
     }
+    if (geometric_) {  // the world the haptic tool touches until the next frame
+      object_poses_.resize(frame_.num_objects());
+      for (int i = 0; i < frame_.num_objects(); ++i) object_poses_[i] = frame_.object_pose(i);
+      geometric_->SetWorld(body_state_.x_m, object_poses_);
+    }
     last_frame_step_ = k;
     if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
   }
@@ -102,8 +121,9 @@ HapticSample MultirateSimulator::StepHapticTool(const DeviceState& device, long 
   sample.contact_force_W_N = out.contact_force_W_N;
   sample.tool_x_W_m = haptic_.tool_state().x_W_m;
   sample.tool_q_WT = haptic_.tool_state().q_WT;
-  sample.num_contacts =
-      lcp ? frame_.contact_rows().num_rows() : frame_.linear_model().num_contacts;
+  sample.num_contacts = geometric_ ? geometric_->num_contacts()
+                        : lcp      ? frame_.contact_rows().num_rows()
+                                   : frame_.linear_model().num_contacts;
   sample.lcp_fell_back = out.lcp_fell_back;
   sample.model_age_s = (k - last_frame_step_) * options_.haptic_dt_s;
   return sample;

@@ -13,25 +13,32 @@
 //              1 kHz on the rows of all the frame's contacts (contact/haptic_lcp_solver.h).
 //   reference  everything (FEM, detection, constraint solve) at the haptic step, with the exact
 //              body compliance (contact::ComplianceMethod::kExact): the ground truth.
+//   penalty, material, impact
+//              as linear, but the haptic tool's contact force comes from its own contacts at
+//              1 kHz against the last frame's world (device/geometric_haptic_contact.h).
 // Within one haptic period a visual frame is computed first (when one is due), then the haptic
 // step; the model a frame produces is used from that same step on (no transport latency).
 
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "contact/visual_frame.h"
+#include "core/scripted_trajectory.h"
+#include "device/geometric_haptic_contact.h"
 #include "device/haptic_mode.h"
 #include "device/haptic_step.h"
-#include "core/scripted_trajectory.h"
 
 namespace hapsim::device {
 
 struct MultirateOptions {
   HapticMode mode = HapticMode::kLinear;
   double haptic_dt_s = 1e-3;
-  int haptic_steps_per_frame = 33;  // visual frame = this many haptic steps (reference: 1)
-  int lcp_max_rows = 512;           // lcp: rows the 1 kHz solver holds (more: linear fallback)
+  int haptic_steps_per_frame = 33;   // visual frame = this many haptic steps (reference: 1)
+  int lcp_max_rows = 512;            // lcp: rows the 1 kHz solver holds (more: linear fallback)
+  GeometricContactParams geometric;  // penalty, material, impact
 };
 
 // What one haptic step produced.
@@ -42,9 +49,9 @@ struct HapticSample {
   Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();  // on that tool (held in coupling)
   Eigen::Vector3d tool_x_W_m = Eigen::Vector3d::Zero();         // the tool the device feels
   Eigen::Quaterniond tool_q_WT = Eigen::Quaterniond::Identity();
-  int num_contacts = 0;      // in the contact model or lcp rows (the frame's, coupling/reference)
+  int num_contacts = 0;        // in the contact model or lcp rows (the frame's, coupling/reference)
   bool lcp_fell_back = false;  // lcp: the solve failed and the linear model was used
-  double model_age_s = 0.0;  // time since the visual frame that produced the model
+  double model_age_s = 0.0;    // time since the visual frame that produced the model
 };
 
 struct FrameSample {
@@ -74,6 +81,8 @@ class MultirateSimulator {
   const fem::State& body_state() const { return body_state_; }
   // The visual frame's options as run (steps, compliance: the reference's is always exact).
   const contact::VisualFrameOptions& visual_options() const { return visual_options_; }
+  // Penalty, material and impact modes: the 1 kHz contact (null in the other modes).
+  const GeometricHapticContact* geometric_contact() const { return geometric_.get(); }
 
  private:
   HapticSample StepHapticTool(const DeviceState& device, long k);
@@ -88,6 +97,8 @@ class MultirateSimulator {
   fem::State body_state_;
   ToolState visual_tool_;
   HapticStep haptic_;
+  std::unique_ptr<GeometricHapticContact> geometric_;  // penalty, material, impact
+  std::vector<Eigen::Isometry3d> object_poses_;        // scratch: the frame's object poses
   long last_frame_step_ = 0;
   std::function<void(const FrameSample&)> on_frame_;
 };
