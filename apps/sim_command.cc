@@ -82,8 +82,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
           << 1e3 * s.model_s << ',' << 1e3 * s.sanity_s << ',' << 1e3 * s.total_s << ','
           << s.num_candidates << ',' << s.num_contacts << ',' << s.num_active << ','
           << s.solve.iterations << ',' << s.solve.residual << ',' << s.num_sanity_corrections << ','
-          << s.max_penetration_m << ',' << s.num_rigid_contacts << ','
-          << s.max_object_penetration_m << '\n';
+          << s.max_penetration_m << ',' << s.num_rigid_contacts << ',' << s.max_object_penetration_m
+          << '\n';
     }
   });
 }
@@ -211,7 +211,9 @@ void AddSimCommand(CLI::App* app) {
       "--mode", options->mode,
       "linear (the paper's model), lcp (a unilateral solve on the frame's contact rows each\n"
       "haptic step), coupling (standard multirate), reference (all at the haptic rate, exact\n"
-      "compliance); default: the scene's haptic.mode");
+      "compliance); the source papers' other systems on the haptic tool at 1 kHz: penalty\n"
+      "(k (eps + d), paper 000), material (Hooke + viscous + stick-slip, paper 003), impact\n"
+      "(impulses with restitution, paper 001); default: the scene's haptic.mode");
   sim->add_option(
       "--compliance", options->compliance,
       "Body contact compliance: warped (precomputed at rest, warped by node rotations)\n"

@@ -29,10 +29,9 @@ constexpr contact::ComplianceMethod kComplianceMethods[] = {contact::ComplianceM
                                                             contact::ComplianceMethod::kExact};
 constexpr ContactLaw kContactLaws[] = {ContactLaw::kEquality, ContactLaw::kUnilateral,
                                        ContactLaw::kFriction};
-constexpr HapticMode kHapticModes[] = {HapticMode::kLinear,    HapticMode::kLcp,
-                                       HapticMode::kCoupling,  HapticMode::kReference,
-                                       HapticMode::kPenalty,   HapticMode::kMaterial,
-                                       HapticMode::kImpact};
+constexpr HapticMode kHapticModes[] = {
+    HapticMode::kLinear,  HapticMode::kLcp,      HapticMode::kCoupling, HapticMode::kReference,
+    HapticMode::kPenalty, HapticMode::kMaterial, HapticMode::kImpact};
 
 // (name, value) pairs for YamlMap::GetEnumOr, in declaration order.
 template <typename Enum, std::size_t N>
@@ -250,8 +249,8 @@ device::SafetyLimits ReadSafety(const YamlMap& map) {
 }
 
 contact::PenaltyParams ReadPenalty(const YamlMap& map) {
-  map.CheckKeys({"stiffness_N_m", "predictive_margin", "max_force_change_N",
-                 "max_torque_change_N_m"});
+  map.CheckKeys(
+      {"stiffness_N_m", "predictive_margin", "max_force_change_N", "max_torque_change_N_m"});
   contact::PenaltyParams p;
   p.stiffness_N_m = map.GetDoubleOr("stiffness_N_m", p.stiffness_N_m, Above(0.0));
   p.predictive_margin = map.GetBoolOr("predictive_margin", p.predictive_margin);

@@ -18,7 +18,6 @@
 namespace hapsim::config {
 namespace {
 
-
 constexpr double kPi = 3.14159265358979323846;
 
 // Every simulation key, no body (a rigid scene). Trailing comments number the lines.
@@ -150,7 +149,8 @@ TEST(SimSceneTest, EnumNamesRoundTrip) {
     EXPECT_EQ(ParseContactLaw(ToString(law)), law);
   }
   for (const HapticMode mode :
-       {HapticMode::kLinear, HapticMode::kLcp, HapticMode::kCoupling, HapticMode::kReference}) {
+       {HapticMode::kLinear, HapticMode::kLcp, HapticMode::kCoupling, HapticMode::kReference,
+        HapticMode::kPenalty, HapticMode::kMaterial, HapticMode::kImpact}) {
     EXPECT_EQ(ParseHapticMode(ToString(mode)), mode);
   }
   EXPECT_EQ(ParseHapticMode("Linear"), std::nullopt);
@@ -232,10 +232,19 @@ const BadCase kBadCases[] = {
      "20.01 haptic steps per visual frame; it must be a whole number >= 1"},
     {"LessThanOneStepPerFrame", "rate_hz: 500", "rate_hz: 10", 17, "haptic.rate_hz",
      "0.2 haptic steps per visual frame"},
-    {"UnknownMode", "mode: coupling", "mode: penalty", 18, "haptic.mode",
-     "one of: linear, lcp, coupling, reference"},
+    {"UnknownMode", "mode: coupling", "mode: spring", 18, "haptic.mode",
+     "one of: linear, lcp, coupling, reference, penalty, material, impact"},
+    {"ZeroPenaltyStiffness", "mode: coupling", "mode: penalty\n  penalty: {stiffness_N_m: 0}", 19,
+     "haptic.penalty.stiffness_N_m", "must be > 0"},
+    {"UnknownPenaltyKey", "mode: coupling", "mode: penalty\n  penalty: {k: 600}", 19,
+     "haptic.penalty.k", "allowed keys here: stiffness_N_m, predictive_margin"},
+    {"RestitutionAboveOne", "mode: coupling", "mode: impact\n  impact: {restitution: 1.5}", 19,
+     "haptic.impact.restitution", "must be in [0, 1]"},
+    {"MaterialStiffnessAboveOne", "mode: coupling",
+     "mode: material\n  material: {tool: {stiffness: 2}}", 19, "haptic.material.tool.stiffness",
+     "must be in [0, 1]"},
     {"UnknownHapticKey", "mode: coupling", "mode: coupling\n  period_s: 0.001", 19,
-     "haptic.period_s", "allowed keys here: rate_hz, mode, lcp_max_rows"},
+     "haptic.period_s", "allowed keys here: rate_hz, mode, lcp_max_rows, safety, penalty"},
     {"NegativeForceLimit", "mode: coupling", "mode: coupling\n  safety: {max_force_N: -1}", 19,
      "haptic.safety.max_force_N", "must be > 0"},
     {"UnknownSafetyKey", "mode: coupling", "mode: coupling\n  safety: {max_speed: 1}", 19,
@@ -294,8 +303,9 @@ TEST(SimSceneTest, ToolNeedsCouplingAndDevice) {
   ExpectSimSceneError(WithoutLines(9, 9), 1, "coupling", "missing required key: the tool (line 3)");
   ExpectSimSceneError(WithoutLines(19, 24), 1, "device", "missing required key: the tool (line 3)");
   ExpectSimSceneError(Replace(WithoutLines(21, 24), "  trajectory:", "  trajectory: []"), 20,
-              "device.trajectory", "at least one waypoint");
-  ExpectSimSceneError(WithoutLines(20, 24) + "  {}\n", 19, "device.trajectory", "missing required key");
+                      "device.trajectory", "at least one waypoint");
+  ExpectSimSceneError(WithoutLines(20, 24) + "  {}\n", 19, "device.trajectory",
+                      "missing required key");
 }
 
 TEST(SimSceneTest, SectionsWithoutToolAreErrors) {
@@ -305,8 +315,8 @@ TEST(SimSceneTest, SectionsWithoutToolAreErrors) {
   const std::string bare = "name: bare\ntime: {dt_s: 0.01, num_steps: 1}\n";
   ExpectSimSceneError(bare + "contact: {law: equality}\n", 3, "contact", "applies only");
   ExpectSimSceneError(bare + "haptic: {rate_hz: 1000}\n", 3, "haptic", "applies only");
-  ExpectSimSceneError(bare + "device: {trajectory: [{t_s: 0, position_m: [0, 0, 0]}]}\n", 3, "device",
-              "applies only");
+  ExpectSimSceneError(bare + "device: {trajectory: [{t_s: 0, position_m: [0, 0, 0]}]}\n", 3,
+                      "device", "applies only");
 }
 
 TEST(SimSceneTest, DefaultHapticRateMustFitTheFrame) {
