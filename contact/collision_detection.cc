@@ -103,6 +103,7 @@ void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
   AddNodeContacts(x_start_m, X_WT_start, contacts);
   const int first_feature_contact = static_cast<int>(contacts->size());
   AddFeatureContacts(x_start_m, X_WT_start, contacts);
+  AddSphereFaceContacts(x_start_m, X_WT_start, contacts);
   const int first_edge_contact = static_cast<int>(contacts->size());
   if (options_.edge_contacts) AddEdgeContacts(x_start_m, X_WT_start, contacts);
   statistics_.num_node_contacts = first_feature_contact;
@@ -224,6 +225,42 @@ void CollisionDetector::AddFeatureContacts(const Eigen::VectorXd& x_m,
     for (int k = 0; k < 3; ++k) {
       contact.nodes[k] = surface_triangles_(k, best_face);
       contact.weights[k] = best.closest.weights[k];
+    }
+    contacts->push_back(contact);
+  }
+}
+
+void CollisionDetector::AddSphereFaceContacts(const Eigen::VectorXd& x_m,
+                                              const Eigen::Isometry3d& X_WT,
+                                              std::vector<Contact>* contacts) {
+  const ToolShape& shape = tool_distance_.shape();
+  if (shape.kind != ToolShape::Kind::kSphere) return;
+  const double radius_m = shape.radius_m;
+  const Vector3d centre_W = X_WT.translation();  // the sphere is centred on the origin of T
+  for (int f : candidate_triangles_) {
+    const Eigen::Vector3i tri = surface_triangles_.col(f);
+    const Vector3d a = x_m.segment<3>(3 * tri[0]), b = x_m.segment<3>(3 * tri[1]),
+                   c = x_m.segment<3>(3 * tri[2]);
+    const Vector3d cross = (b - a).cross(c - a);
+    if (!(cross.norm() > 0.0)) continue;  // collapsed face
+    const TrianglePoint closest = CalcClosestPointOnTriangle(centre_W, a, b, c);
+    if (closest.feature < 3) continue;  // a vertex: the node contact holds it
+    const Vector3d offset = centre_W - closest.point;
+    const double distance_m = offset.norm();
+    // Only a face the centre is in front of (a sphere sunk past its centre is beyond repair here,
+    // as a node deep inside the tool is for the sanity pass).
+    if (!(offset.dot(cross) > 0.0) || !(distance_m > 0.0)) continue;
+    const double gap_m = distance_m - radius_m;
+    if (gap_m > statistics_.threshold_m) continue;
+    const Vector3d n_body = offset / distance_m;  // out of the body, towards the centre
+    Contact contact;
+    contact.p_tool_W_m = centre_W - radius_m * n_body;
+    contact.p_body_W_m = closest.point;
+    contact.n_W = -n_body;
+    contact.gap_m = gap_m;
+    for (int k = 0; k < 3; ++k) {
+      contact.nodes[k] = tri[k];
+      contact.weights[k] = closest.weights[k];
     }
     contacts->push_back(contact);
   }

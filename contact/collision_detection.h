@@ -15,6 +15,11 @@
 //      m opposite to the point's normal-cone axis): the nearest such face whose closest point q
 //      has v − q within 45° of ±m gives φ = (v − q)·m (negative behind the face) and a contact
 //      when φ ≤ τ, distributed to the face's nodes with the barycentric weights of q;
+//      a sphere tool's centre c against every candidate face it is in front of, whose closest
+//      point q lies inside the face or on an edge (a vertex is a node: stage 3): n from q to c,
+//      φ = |c − q| − r, p_tool = c − r n, on the face's nodes with the weights of q (without it
+//      a sphere smaller than a face sinks between the face's nodes by the sagitta, which is
+//      all the way through once r is below the face's circumradius);
 //   5. narrow phase (c) tool edge versus body edge (edge_contacts.cc): every edge of the
 //      candidate faces, once, against every sharp tool edge (box edge, rim segment, convex mesh
 //      edge between non-coplanar faces). The closest points of the two segments (Ericson §5.1.9)
@@ -34,8 +39,7 @@
 // the face's); a cylinder's rim, sharp or rounded, is the polygon through stage 4's rim points;
 // a flat-lying body edge left to a node contact may sink by up to its length × 1e-3; edges
 // within 1e-6 rad of parallel make no edge contact (the end point contacts of stages 3 and 4
-// hold them); a smooth tool (sphere, capsule) between nodes still sinks by up to the sagitta
-// over one face.
+// hold them); a capsule between nodes still sinks by up to the sagitta over one face.
 //
 // Speculative contacts: with `continuous`, the sweep bound is |Δx_tool| + θ·R_tool + max|Δx_node|
 // (θ the rotation angle between the two poses, R_tool the tool's bounding radius), an upper
@@ -111,6 +115,9 @@ class CollisionDetector {
                        std::vector<Contact>* contacts);
   void AddFeatureContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
                           std::vector<Contact>* contacts);
+  // A sphere tool's centre against the candidate faces (pipeline step 4, sphere).
+  void AddSphereFaceContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
+                             std::vector<Contact>* contacts);
   void MergeDuplicates(int first_feature_contact, std::vector<Contact>* contacts);
   void AdvanceFrameStamp();
   // Edge stage (edge_contacts.cc): the body's surface edges and the tool's sharp edges, built

@@ -133,13 +133,25 @@ TEST(CollisionDetectionTest, SphereRestingOnBlockFindsExactlyTheNodesInside) {
   for (int n = 0; n < body.num_nodes(); ++n)
     if ((x.segment<3>(3 * n) - c).norm() < sphere.radius_m) ++num_inside;
   EXPECT_GE(num_inside, 3);
+  const auto is_node = [](const Contact& k) { return k.nodes[1] < 0; };
   EXPECT_EQ(std::count_if(contacts.begin(), contacts.end(),
-                          [](const Contact& k) { return k.gap_m < 0.0; }),
+                          [&](const Contact& k) { return is_node(k) && k.gap_m < 0.0; }),
             num_inside);
   ExpectSameGaps(NodeContactGaps(contacts),
                  BruteForceGaps(body, x, sphere, X_WT, options.margin_m));
+  double deepest_face_gap_m = 1.0;
   for (const Contact& k : contacts) {
-    ASSERT_LT(k.nodes[1], 0) << "a sphere has no features";
+    if (!is_node(k)) {
+      // The centre against the top (z = 0.05) faces: a point of the top plane, its gap the
+      // distance to it less r, the normal along it; the face right under the centre is 4 mm deep.
+      EXPECT_NEAR(k.p_body_W_m.z(), 0.05, 1e-15);
+      const Vector3d to_centre = c - k.p_body_W_m;
+      EXPECT_NEAR(k.gap_m, to_centre.norm() - sphere.radius_m, kExactTolerance_m);
+      EXPECT_LT((k.n_W + to_centre.normalized()).norm(), 1e-12);
+      EXPECT_NEAR(k.gap_m, (k.p_body_W_m - k.p_tool_W_m).dot(k.n_W), kExactTolerance_m);
+      deepest_face_gap_m = std::min(deepest_face_gap_m, k.gap_m);
+      continue;
+    }
     const Vector3d p = x.segment<3>(3 * k.nodes[0]);
     const Vector3d n = (p - c).normalized();
     EXPECT_NEAR(k.gap_m, (p - c).norm() - sphere.radius_m, kExactTolerance_m);
@@ -148,7 +160,47 @@ TEST(CollisionDetectionTest, SphereRestingOnBlockFindsExactlyTheNodesInside) {
     EXPECT_TRUE(k.p_body_W_m == p);
     EXPECT_NEAR(k.gap_m, (k.p_body_W_m - k.p_tool_W_m).dot(k.n_W), kExactTolerance_m);
   }
+  EXPECT_NEAR(deepest_face_gap_m, -0.004, kExactTolerance_m);
   EXPECT_EQ(detector.statistics().num_contacts_after_merge, static_cast<int>(contacts.size()));
+}
+
+// A sphere much smaller than the faces, 0.5 mm into the top between nodes (1 cm cells): no node
+// is near it, so its centre against the face under it holds it, with gap −0.5 mm along the
+// face normal. Without that contact the sphere would fall through the face.
+TEST(CollisionDetectionTest, SmallSphereBetweenNodesIsHeldByTheFaceUnderIt) {
+  const fem::Model body = MakeReferenceBlock();
+  ToolShape sphere;
+  sphere.radius_m = 0.001;
+  const Vector3d c(0.0537, 0.0461, 0.05 + 0.001 - 0.0005);
+  DetectionOptions options;
+  options.continuous = false;
+  CollisionDetector detector(body, sphere, options);
+  std::vector<Contact> contacts;
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  detector.Detect(x, Pose(Eigen::Matrix3d::Identity(), c), x, Pose(Eigen::Matrix3d::Identity(), c),
+                  &contacts);
+  // The face under it, and any neighbour whose nearest point (on their shared edge) is within
+  // the margin; no node.
+  ASSERT_GE(contacts.size(), 1u);
+  for (const Contact& other : contacts) {
+    EXPECT_GE(other.nodes[1], 0);
+    EXPECT_NEAR(other.gap_m, (c - other.p_body_W_m).norm() - sphere.radius_m, kExactTolerance_m);
+  }
+  const Contact& k =
+      *std::min_element(contacts.begin(), contacts.end(),
+                        [](const Contact& p, const Contact& q) { return p.gap_m < q.gap_m; });
+  EXPECT_GE(k.nodes[2], 0);  // on a face's three nodes
+  EXPECT_NEAR(k.gap_m, -0.0005, kExactTolerance_m);
+  EXPECT_LT((k.n_W - Vector3d(0, 0, -1)).norm(), 1e-12);
+  EXPECT_LT((k.p_body_W_m - Vector3d(c.x(), c.y(), 0.05)).norm(), kExactTolerance_m);
+  double weight_sum = 0.0;
+  Vector3d weighted = Vector3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    weight_sum += k.weights[i];
+    weighted += k.weights[i] * x.segment<3>(3 * k.nodes[i]);
+  }
+  EXPECT_NEAR(weight_sum, 1.0, 1e-12);
+  EXPECT_LT((weighted - k.p_body_W_m).norm(), kExactTolerance_m);  // its barycentric weights
 }
 
 // After a large deformation the refitted BVH must still find every node: each tool kind, at a
