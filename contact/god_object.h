@@ -37,6 +37,14 @@
 // (one step), and the next step's path from there crosses the second face. Concave corner: two
 // planes hold it on their line of intersection, three at their common point.
 //
+// Deforming meshes (SetMeshVertices: the body's surface at each visual frame) carry a resting
+// god-object and its stiction point on their first triangle, at the same (u, v, height). In a
+// concave place that alone can leave the point behind a neighbouring face's moved-out plane (at
+// the bottom of a dimple the valid rest is where the planes meet, higher up), from where the next
+// path would miss that face and fall through. So the carried point is re-seated: it is
+// approached from 2r + (the largest vertex move) + ε out along its face's normal, and stops at the
+// first moved-out face met on the way.
+//
 // Moving meshes (thesis §3.3.2): each mesh keeps its pose of the last step; the path test for a
 // mesh runs in its frame O from the last god-object, carried along with the mesh
 // (X_WO_last⁻¹ p), to X_WO⁻¹ goal. A god-object resting on a moving mesh therefore moves with it,
@@ -196,6 +204,10 @@ class GodObject {
 
   // Face normals, offsets, edge widths and vertex normals from the vertices.
   void CalcGeometry(Mesh* mesh) const;
+  // A point carried on face f of mesh `id` after SetMeshVertices, moved to where it is in front
+  // of every moved-out face: the first front crossing met coming down to it from lift_m out
+  // along the face's normal (ε in front of it), or the point itself if none is met.
+  Eigen::Vector3d Reseat(int id, int f, const Eigen::Vector3d& p_W_m, double lift_m) const;
   // Recomputes the node boxes bottom-up.
   void RefitTree(Mesh* mesh) const;
   int BuildNode(Mesh* mesh, int first, int count, std::vector<Eigen::AlignedBox3d>* boxes,

@@ -1,13 +1,12 @@
 // The god-object's meshes (contact/god_object.h): topology, normals, edge widths, the AABB
 // tree over the widened, moved-out triangles, and the first-crossing query along a path.
-#include "contact/god_object.h"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
+#include "contact/god_object.h"
 #include "contact/tool_distance.h"
 
 namespace hapsim::contact {
@@ -256,6 +255,7 @@ void GodObject::SetMeshVertices(int id, const Matrix3Xd& vertices_O_m) {
   const bool carry = num_active_ > 0 && active_[0].mesh == id &&
                      mesh.face_normals_O.col(active_[0].triangle).squaredNorm() > 0.0;
   const int f = carry ? active_[0].triangle : 0;
+  const double max_move_m = (vertices_O_m - mesh.vertices_O_m).colwise().norm().maxCoeff();
   const auto corner = [&](int k) { return mesh.vertices_O_m.col(mesh.triangles(k, f)); };
   Vector3d god_uvh = Vector3d::Zero(), proxy_uvh = Vector3d::Zero();
   if (carry) {
@@ -273,9 +273,22 @@ void GodObject::SetMeshVertices(int id, const Matrix3Xd& vertices_O_m) {
       return mesh.X_WO_last * (corner(0) + uvh(0) * (corner(1) - corner(0)) +
                                uvh(1) * (corner(2) - corner(0)) + uvh(2) * n);
     };
-    god_object_W_m_ = place(god_uvh);
-    proxy_W_m_ = place(proxy_uvh);
+    const double lift_m = 2.0 * params_.proxy_radius_m + max_move_m + params_.surface_epsilon_m;
+    god_object_W_m_ = Reseat(id, f, place(god_uvh), lift_m);
+    proxy_W_m_ = Reseat(id, f, place(proxy_uvh), lift_m);
   }
+}
+
+Vector3d GodObject::Reseat(int id, int f, const Vector3d& p_W_m, double lift_m) const {
+  const Mesh& mesh = meshes_[id];
+  const Eigen::Isometry3d X_OW = mesh.X_WO_last.inverse(Eigen::Isometry);
+  const Vector3d p_O = X_OW * p_W_m;
+  const Vector3d top_O = p_O + lift_m * mesh.face_normals_O.col(f);
+  const Crossing crossing = CalcFirstCrossing(id, top_O, p_O);
+  if (crossing.triangle < 0) return p_W_m;
+  const Vector3d met_O = top_O + crossing.t * (p_O - top_O) +
+                         params_.surface_epsilon_m * mesh.face_normals_O.col(crossing.triangle);
+  return mesh.X_WO_last * met_O;
 }
 
 double GodObject::CalcTriangleCrossing(const Mesh& mesh, int f, const Vector3d& p0_O,

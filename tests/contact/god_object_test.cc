@@ -11,10 +11,12 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <vector>
 
+#include "contact/tool_distance.h"
 #include "tests/allocation_counter.h"
 
 namespace hapsim::contact {
@@ -464,6 +466,79 @@ TEST(GodObject, NewVerticesCarryTheProxyAndUpdateTheNormals) {
   ASSERT_TRUE(god.in_contact());
   EXPECT_NEAR((god.proxy_W_m() - Vector3d(hip.x(), hip.y(), 0.5e-3 + r + kEpsilon)).norm(), 0.0,
               kPosition_m);
+}
+
+// A lattice whose centre vertex sinks by `depth_m` (a dimple: a concave cone of four or eight
+// faces), 4 mm spacing, as a visual tool pressing one node of a body's surface leaves it.
+TriangleMesh MakeDimple(double depth_m) {
+  const int n = 10;
+  const double h = 0.004;
+  TriangleMesh mesh;
+  mesh.vertices_m.resize(3, (n + 1) * (n + 1));
+  mesh.triangles.resize(3, 2 * n * n);
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      const bool centre = i == n / 2 && j == n / 2;
+      mesh.vertices_m.col(j * (n + 1) + i) << (i - n / 2) * h, (j - n / 2) * h,
+          centre ? -depth_m : 0.0;
+    }
+  }
+  for (int j = 0, f = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i;
+      if ((i + j) % 2 == 0) {
+        mesh.triangles.col(f++) << a, a + 1, a + n + 2;
+        mesh.triangles.col(f++) << a, a + n + 2, a + n + 1;
+      } else {
+        mesh.triangles.col(f++) << a, a + 1, a + n + 1;
+        mesh.triangles.col(f++) << a + 1, a + n + 2, a + n + 1;
+      }
+    }
+  }
+  return mesh;
+}
+
+// Distance from p to the nearest triangle of the mesh, by brute force (a second method).
+double CalcMeshDistance(const TriangleMesh& mesh, const Vector3d& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < mesh.triangles.cols(); ++f) {
+    const Vector3d q = CalcClosestPointOnTriangle(p, mesh.vertices_m.col(mesh.triangles(0, f)),
+                                                  mesh.vertices_m.col(mesh.triangles(1, f)),
+                                                  mesh.vertices_m.col(mesh.triangles(2, f)))
+                           .point;
+    best = std::min(best, (p - q).norm());
+  }
+  return best;
+}
+
+TEST(GodObject, DeepeningDimpleNeverLetsTheProxyThrough) {
+  // The HIP descends 10 µm per step near the centre; every 20 steps the dimple is redrawn
+  // deeper, trailing the HIP (its centre at the HIP's sphere bottom, as a visual tool would
+  // leave it). Carried on one face alone, the proxy ends up behind the dimple's other faces and
+  // falls through (it did, before re-seating); the proxy must keep its radius from the surface.
+  GodObjectParams params;
+  params.stiffness_N_per_m = kStiffness;
+  params.proxy_radius_m = 0.001;
+  GodObject god(params);
+  const int id = god.AddMesh(MakeDimple(0.0), Eigen::Isometry3d::Identity());
+  god.Reset(Vector3d(1e-4, 5e-5, 0.005));
+  TriangleMesh mesh = MakeDimple(0.0);
+  int in_contact = 0;
+  for (int k = 0; k < 1000; ++k) {
+    const Vector3d hip(1e-4, 5e-5, 0.005 - 1e-5 * k);
+    if (k % 20 == 0) {
+      mesh = MakeDimple(std::max(0.0, -(hip.z() + 0.001) - 5e-4));
+      god.SetMeshVertices(id, mesh.vertices_m);
+    }
+    god.Step(hip);
+    // In contact once the HIP is within r of the rim level; never closer than r to the surface.
+    if (hip.z() < 0.0) {
+      ASSERT_TRUE(god.in_contact()) << k;
+      ++in_contact;
+    }
+    ASSERT_GE(CalcMeshDistance(mesh, god.proxy_W_m()), params.proxy_radius_m - 1e-9) << k;
+  }
+  EXPECT_EQ(in_contact, 499);
 }
 
 // Texture: sliding along x on a plane, the normal force is k (d + ε + A sin(2π x / λ)).
