@@ -114,6 +114,7 @@ nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* bod
                       {"objects", objects}};
   if (scene.tool) {
     nlohmann::json tool = DescribeShape(scene.tool->model.shape);
+    if (scene.tool->point) tool["shape"] = "point";  // a sphere of its radius in the frame
     tool["mass_kg"] = scene.tool->model.mass_kg;
     json["tool"] = tool;
     json["contact_law"] = contact::ToString(scene.contact.law);

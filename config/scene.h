@@ -78,6 +78,8 @@
 //       box: {half_extents_m: [0.01, 0.01, 0.02]}       # > 0 each
 //       mesh: {file: tools/probe.stl}  # closed OBJ/STL in metres, relative to the scene file's
 //                                      # folder; re-centred on its centre of mass
+//       point: {radius_m: 0.001}       # > 0: a 3-DOF point, the god-object's proxy of that
+//                                      # radius (haptic.mode godobject); elsewhere a sphere
 //     mass_kg: 0.05                    # exactly one of mass_kg / density_kg_m3, > 0
 //     position_m: [0, 0, 0.09]         # initial centre of mass, world; default 0
 //     rotation_vector_rad: [0, 0, 0]   # initial orientation q_WT = exp(axis · angle); default 0
@@ -95,13 +97,18 @@
 //     rate_hz: 1000                    # > 0; rate_hz · dt_s must be an integer ≥ 1 (to 1e-9):
 //                                      # the number of haptic steps per visual frame
 //     mode: linear                     # linear | lcp | coupling | reference | penalty |
-//                                      # material | impact (device/haptic_mode.h; lcp: not with
+//                                      # material | impact | godobject (device/haptic_mode.h;
+//                                      # godobject: a point tool only; lcp: not with
 //                                      # the friction law; its 1 kHz rows are normal only;
-//                                      # reference, penalty, material, impact: `hapsim sim` only)
+//                                      # reference and the papers' modes: `hapsim sim` only)
 //     penalty:                         # optional, penalty mode (contact/penalty_contact.h)
 //       {stiffness_N_m: 600, predictive_margin: true, max_force_change_N: 0.5,
 //        max_torque_change_N_m: 0.02}  # > 0 each; any subset, the rest as shown
 //     impact: {restitution: 0.5}       # optional, impact mode: e in [0, 1]
+//     godobject:                       # optional, godobject mode (contact/god_object.h)
+//       {stiffness_N_m: 1000, static_friction: 0, dynamic_friction: 0, shading: false,
+//        texture_amplitude_m: 0, texture_wavelength_m: 0.001}   # k > 0; 0 ≤ μ_d ≤ μ_s; A ≥ 0;
+//                                      # λ > 0; any subset, the rest as shown
 //     material:                        # optional, material mode (contact/material_contact.h)
 //       max_stiffness_N_m: 600         # > 0: the device's k_max
 //       max_damping_N_s_m: 2           # ≥ 0: b_max
@@ -138,6 +145,7 @@
 #include <vector>
 
 #include "contact/contact_solver.h"
+#include "contact/god_object.h"
 #include "contact/visual_frame.h"
 #include "core/rigid_tool.h"
 #include "core/scripted_trajectory.h"
@@ -225,6 +233,7 @@ struct ToolScene {
   ToolState initial_state;  // at rest at position_m, q_WT = exp(rotation_vector_rad)
   std::string mesh_file;    // ToolShape::Kind::kMesh: the file read (resolved path)
   SourceLocation location;  // the `tool` section
+  bool point = false;       // shape `point`: a 3-DOF point (a sphere of its radius in the frame)
 };
 
 // Tool–body contact law: contact::ContactLaw (equality, unilateral, friction).
@@ -251,6 +260,8 @@ struct HapticScene {
   int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
   // penalty, material, impact modes (the rigid objects' materials come from `objects`).
   device::GeometricContactParams geometric;
+  // godobject mode (contact/god_object.h); the proxy radius is the point tool's radius.
+  contact::GodObjectParams godobject;
 };
 
 // A palpation target of the task: a ball on or near the tissue's rest surface.

@@ -40,10 +40,16 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
     if (!parsed)
       throw InputError("", 0, option,
                        "unknown mode '" + option_value +
-                           "' (linear, lcp, coupling, reference, penalty, material, impact)");
+                           "' (linear, lcp, coupling, reference, penalty, material, impact, "
+                           "godobject)");
     mode = *parsed;
   }
-  if ((mode == device::HapticMode::kReference || device::IsGeometricMode(mode)) && !allow_reference)
+  if (mode == device::HapticMode::kGodObject && !(scene.tool && scene.tool->point))
+    throw InputError(file, 0, key,
+                     "the godobject mode renders a 3-DOF point: give tool.shape.point {radius_m}");
+  if ((mode == device::HapticMode::kReference || device::IsGeometricMode(mode) ||
+       mode == device::HapticMode::kGodObject) &&
+      !allow_reference)
     throw InputError(file, 0, key,
                      std::string("the ") + device::ToString(mode) +
                          " mode runs in `hapsim sim` only; the two processes render linear, lcp "
@@ -62,6 +68,8 @@ device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::Haptic
   options.haptic_steps_per_frame = steps_per_frame;
   options.lcp_max_rows = scene.haptic.lcp_max_rows;
   options.geometric = scene.haptic.geometric;
+  options.godobject = scene.haptic.godobject;
+  if (scene.tool) options.godobject.proxy_radius_m = scene.tool->model.shape.radius_m;
   options.geometric.material.objects.clear();
   for (const RigidObjectScene& rigid : scene.rigid_objects)
     options.geometric.material.objects.push_back(rigid.material);

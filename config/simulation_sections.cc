@@ -31,7 +31,7 @@ constexpr ContactLaw kContactLaws[] = {ContactLaw::kEquality, ContactLaw::kUnila
                                        ContactLaw::kFriction};
 constexpr HapticMode kHapticModes[] = {
     HapticMode::kLinear,  HapticMode::kLcp,      HapticMode::kCoupling, HapticMode::kReference,
-    HapticMode::kPenalty, HapticMode::kMaterial, HapticMode::kImpact};
+    HapticMode::kPenalty, HapticMode::kMaterial, HapticMode::kImpact,   HapticMode::kGodObject};
 
 // (name, value) pairs for YamlMap::GetEnumOr, in declaration order.
 template <typename Enum, std::size_t N>
@@ -111,7 +111,17 @@ ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
   ToolScene tool;
   tool.location = LocationOf(map);
   const YamlMap shape_map = map.GetMap("shape");
-  ToolShape shape = ReadToolShape(shape_map, base_dir, &tool.mesh_file);
+  ToolShape shape;
+  if (shape_map.Has("point")) {  // a 3-DOF point of the god-object rendering: a small sphere
+    shape_map.CheckKeys({"point"});
+    const YamlMap point = shape_map.GetMap("point");
+    point.CheckKeys({"radius_m"});
+    shape.kind = ToolShape::Kind::kSphere;
+    shape.radius_m = point.GetDouble("radius_m", Above(0.0));
+    tool.point = true;
+  } else {
+    shape = ReadToolShape(shape_map, base_dir, &tool.mesh_file);
+  }
   const int num_masses = map.Has("mass_kg") + map.Has("density_kg_m3");
   if (num_masses != 1) {
     map.Fail("must give exactly one of mass_kg, density_kg_m3; got " + std::to_string(num_masses));
@@ -272,10 +282,31 @@ void ReadMaterialSection(const YamlMap& map, contact::MaterialParams* params) {
   if (const std::optional<YamlMap> body = map.FindMap("body")) params->body = ReadMaterial(*body);
 }
 
+contact::GodObjectParams ReadGodObject(const YamlMap& map) {
+  map.CheckKeys({"stiffness_N_m", "static_friction", "dynamic_friction", "shading",
+                 "texture_amplitude_m", "texture_wavelength_m"});
+  contact::GodObjectParams p;
+  p.stiffness_N_per_m = map.GetDoubleOr("stiffness_N_m", p.stiffness_N_per_m, Above(0.0));
+  p.static_friction = map.GetDoubleOr("static_friction", p.static_friction, AtLeast(0.0));
+  p.dynamic_friction = map.GetDoubleOr("dynamic_friction", p.dynamic_friction, AtLeast(0.0));
+  if (p.dynamic_friction > p.static_friction)
+    map.FailKey("dynamic_friction",
+                "must be <= static_friction (" + std::to_string(p.static_friction) + ")");
+  p.shading = map.GetBoolOr("shading", p.shading);
+  p.texture_amplitude_m =
+      map.GetDoubleOr("texture_amplitude_m", p.texture_amplitude_m, AtLeast(0.0));
+  p.texture_wavelength_m =
+      map.GetDoubleOr("texture_wavelength_m", p.texture_wavelength_m, Above(0.0));
+  return p;
+}
+
 HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, ContactLaw law) {
   HapticScene haptic;
   if (map.has_value()) {
-    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "safety", "penalty", "material", "impact"});
+    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "safety", "penalty", "material", "impact",
+                    "godobject"});
+    if (const std::optional<YamlMap> god = map->FindMap("godobject"))
+      haptic.godobject = ReadGodObject(*god);
     if (const std::optional<YamlMap> penalty = map->FindMap("penalty"))
       haptic.geometric.penalty = ReadPenalty(*penalty);
     if (const std::optional<YamlMap> material = map->FindMap("material"))
@@ -392,6 +423,9 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
     scene->contact = ReadContact(*contact);
   }
   scene->haptic = ReadHaptic(root.FindMap("haptic"), time, scene->contact.law);
+  if (scene->haptic.mode == HapticMode::kGodObject && !scene->tool->point)
+    root.GetMap("haptic").FailKey(
+        "mode", "the godobject mode renders a 3-DOF point: give tool.shape.point {radius_m}");
   const YamlMap device = root.GetMap("device");
   device.CheckKeys({"trajectory", "hand"});
   scene->trajectory = ReadWaypoints(device, "trajectory", /*with_button=*/true);

@@ -8,12 +8,22 @@
 //   kPenalty    paper 000: penalty forces k (ε + d) on the haptic tool at 1 kHz, smoothed
 //   kMaterial   paper 003: per-object Hooke, viscous and stick–slip forces, averaged over pairs
 //   kImpact     paper 001: constraint impulses with a coefficient of restitution at 1 kHz
+//   kGodObject  paper 004: a point tool's proxy held on the surfaces' triangles (contact/god_object.h)
 // Each works on the world of the last visual frame (rigid objects, the body's surface as rigid).
 
 namespace hapsim::device {
 
-enum class HapticMode { kLinear, kLcp, kCoupling, kReference, kPenalty, kMaterial, kImpact };
-// "linear", "lcp", "coupling", "reference", "penalty", "material", "impact"
+enum class HapticMode {
+  kLinear,
+  kLcp,
+  kCoupling,
+  kReference,
+  kPenalty,
+  kMaterial,
+  kImpact,
+  kGodObject
+};
+// "linear", "lcp", "coupling", "reference", "penalty", "material", "impact", "godobject"
 const char* ToString(HapticMode mode);
 
 }  // namespace hapsim::device

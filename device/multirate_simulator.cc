@@ -34,6 +34,8 @@ const char* ToString(HapticMode mode) {
       return "material";
     case HapticMode::kImpact:
       return "impact";
+    case HapticMode::kGodObject:
+      return "godobject";
   }
   return "?";
 }
@@ -64,6 +66,11 @@ MultirateSimulator::MultirateSimulator(const fem::Model* body, const fem::FemOpt
                                                           body, visual_options_.rigid_objects);
     haptic_.SetGeometricContact(geometric_.get());
   }
+  if (options.mode == HapticMode::kGodObject) {
+    god_world_ =
+        std::make_unique<GodObjectWorld>(options.godobject, body, visual_options_.rigid_objects);
+    god_world_->god_object().Reset(initial_tool.x_W_m);
+  }
 }
 
 void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_haptic_steps,
@@ -87,6 +94,9 @@ void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_hapt
       case HapticMode::kReference:
         sample = StepReference(device, k);
         break;
+      case HapticMode::kGodObject:
+        sample = StepGodObject(device, k);
+        break;
     }
     sample.t_s = k * options_.haptic_dt_s;
     if (on_haptic_step) on_haptic_step(sample);
@@ -107,8 +117,7 @@ HapticSample MultirateSimulator::StepHapticTool(const DeviceState& device, long 
       haptic_.SetContactRows(&frame_.contact_rows());
     }
     if (geometric_) {  // the world the haptic tool touches until the next frame
-      object_poses_.resize(frame_.num_objects());
-      for (int i = 0; i < frame_.num_objects(); ++i) object_poses_[i] = frame_.object_pose(i);
+      CollectObjectPoses();
       geometric_->SetWorld(body_state_.x_m, object_poses_);
     }
     last_frame_step_ = k;
@@ -169,6 +178,36 @@ HapticSample MultirateSimulator::StepReference(const DeviceState& device, long k
   const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
   if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
   FillFromLastFrame(&sample);
+  return sample;
+}
+
+void MultirateSimulator::CollectObjectPoses() {
+  object_poses_.resize(frame_.num_objects());
+  for (int i = 0; i < frame_.num_objects(); ++i) object_poses_[i] = frame_.object_pose(i);
+}
+
+// God-object (paper 004): at 1 kHz the god-object places the proxy for the device's point on the
+// last frame's surfaces and the device feels k (proxy − point). The visual tool, a sphere of the
+// proxy's radius, is coupled to the device as in the coupling mode, so that the body deforms
+// under what the hand does (a visual tool coupled to the proxy would rest on the undeformed
+// surface and never press it); with the god-object's k equal to the coupling's, the body carries
+// the force the device feels.
+HapticSample MultirateSimulator::StepGodObject(const DeviceState& device, long k) {
+  contact::GodObject& god = god_world_->god_object();
+  if (k % options_.haptic_steps_per_frame == 0) {
+    const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
+    CollectObjectPoses();
+    god_world_->SetWorld(body_state_.x_m, object_poses_);
+    last_frame_step_ = k;
+    if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+  }
+  god.Step(device.x_W_m);
+  HapticSample sample;
+  sample.device_force_W_N = god.force_W_N();
+  sample.contact_force_W_N = god.force_W_N();  // the surfaces hold the proxy against the spring
+  sample.tool_x_W_m = god.proxy_W_m();
+  sample.num_contacts = god.num_active_constraints();
+  sample.model_age_s = (k - last_frame_step_) * options_.haptic_dt_s;
   return sample;
 }
 

@@ -16,6 +16,9 @@
 //   penalty, material, impact
 //              as linear, but the haptic tool's contact force comes from its own contacts at
 //              1 kHz against the last frame's world (device/geometric_haptic_contact.h).
+//   godobject  paper 004: no haptic tool; the device's point is rendered by a god-object on the
+//              last frame's surfaces (device/god_object_world.h); the visual tool, a sphere of
+//              the proxy's radius, is coupled to the device (as in coupling) to press the body.
 // Within one haptic period a visual frame is computed first (when one is due), then the haptic
 // step; the model a frame produces is used from that same step on (no transport latency).
 
@@ -28,6 +31,7 @@
 #include "contact/visual_frame.h"
 #include "core/scripted_trajectory.h"
 #include "device/geometric_haptic_contact.h"
+#include "device/god_object_world.h"
 #include "device/haptic_mode.h"
 #include "device/haptic_step.h"
 
@@ -36,9 +40,10 @@ namespace hapsim::device {
 struct MultirateOptions {
   HapticMode mode = HapticMode::kLinear;
   double haptic_dt_s = 1e-3;
-  int haptic_steps_per_frame = 33;   // visual frame = this many haptic steps (reference: 1)
-  int lcp_max_rows = 512;            // lcp: rows the 1 kHz solver holds (more: linear fallback)
-  GeometricContactParams geometric;  // penalty, material, impact
+  int haptic_steps_per_frame = 33;     // visual frame = this many haptic steps (reference: 1)
+  int lcp_max_rows = 512;              // lcp: rows the 1 kHz solver holds (more: linear fallback)
+  GeometricContactParams geometric;    // penalty, material, impact
+  contact::GodObjectParams godobject;  // godobject
 };
 
 // What one haptic step produced.
@@ -83,11 +88,18 @@ class MultirateSimulator {
   const contact::VisualFrameOptions& visual_options() const { return visual_options_; }
   // Penalty, material and impact modes: the 1 kHz contact (null in the other modes).
   const GeometricHapticContact* geometric_contact() const { return geometric_.get(); }
+  // The godobject mode's god-object (null in the other modes).
+  const contact::GodObject* god_object() const {
+    return god_world_ ? &god_world_->god_object() : nullptr;
+  }
 
  private:
   HapticSample StepHapticTool(const DeviceState& device, long k);
   HapticSample StepCoupling(const DeviceState& device, long k);
   HapticSample StepReference(const DeviceState& device, long k);
+  HapticSample StepGodObject(const DeviceState& device, long k);
+  // The rigid objects where the last frame left them (object_poses_).
+  void CollectObjectPoses();
   void FillFromVisualTool(const DeviceState& device, HapticSample* sample) const;
   void FillFromLastFrame(HapticSample* sample) const;
 
@@ -99,6 +111,7 @@ class MultirateSimulator {
   HapticStep haptic_;
   std::unique_ptr<GeometricHapticContact> geometric_;  // penalty, material, impact
   std::vector<Eigen::Isometry3d> object_poses_;        // scratch: the frame's object poses
+  std::unique_ptr<GodObjectWorld> god_world_;          // godobject
   long last_frame_step_ = 0;
   std::function<void(const FrameSample&)> on_frame_;
 };

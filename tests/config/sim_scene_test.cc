@@ -150,7 +150,7 @@ TEST(SimSceneTest, EnumNamesRoundTrip) {
   }
   for (const HapticMode mode :
        {HapticMode::kLinear, HapticMode::kLcp, HapticMode::kCoupling, HapticMode::kReference,
-        HapticMode::kPenalty, HapticMode::kMaterial, HapticMode::kImpact}) {
+        HapticMode::kPenalty, HapticMode::kMaterial, HapticMode::kImpact, HapticMode::kGodObject}) {
     EXPECT_EQ(ParseHapticMode(ToString(mode)), mode);
   }
   EXPECT_EQ(ParseHapticMode("Linear"), std::nullopt);
@@ -233,7 +233,14 @@ const BadCase kBadCases[] = {
     {"LessThanOneStepPerFrame", "rate_hz: 500", "rate_hz: 10", 17, "haptic.rate_hz",
      "0.2 haptic steps per visual frame"},
     {"UnknownMode", "mode: coupling", "mode: spring", 18, "haptic.mode",
-     "one of: linear, lcp, coupling, reference, penalty, material, impact"},
+     "one of: linear, lcp, coupling, reference, penalty, material, impact, godobject"},
+    {"GodObjectNeedsAPoint", "mode: coupling", "mode: godobject", 18, "haptic.mode",
+     "renders a 3-DOF point: give tool.shape.point"},
+    {"PointToolOnly", kCapsule, "point: {radius_m: 0.001}\n    sphere: {radius_m: 0.01}", 6,
+     "tool.shape.sphere", "allowed keys here: point"},
+    {"DynamicAboveStaticFriction", "mode: coupling",
+     "mode: coupling\n  godobject: {static_friction: 0.2, dynamic_friction: 0.3}", 19,
+     "haptic.godobject.dynamic_friction", "must be <= static_friction"},
     {"ZeroPenaltyStiffness", "mode: coupling", "mode: penalty\n  penalty: {stiffness_N_m: 0}", 19,
      "haptic.penalty.stiffness_N_m", "must be > 0"},
     {"UnknownPenaltyKey", "mode: coupling", "mode: penalty\n  penalty: {k: 600}", 19,
