@@ -84,7 +84,8 @@ CollisionDetector::CollisionDetector(const fem::Model& body, const ToolShape& to
 
 void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
                                const Eigen::Isometry3d& X_WT_start, const Eigen::VectorXd& x_end_m,
-                               const Eigen::Isometry3d& X_WT_end, std::vector<Contact>* contacts) {
+                               const Eigen::Isometry3d& X_WT_end, std::vector<Contact>* contacts,
+                               bool refit_tree) {
   const Eigen::Index expected = 3 * static_cast<Eigen::Index>(num_body_nodes_);
   if (x_start_m.size() != expected || (options_.continuous && x_end_m.size() != expected))
     throw std::invalid_argument("CollisionDetector::Detect: positions must have " +
@@ -95,14 +96,14 @@ void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
     statistics_.sweep_bound_m = CalcSweepBound(x_start_m, X_WT_start, x_end_m, X_WT_end);
   statistics_.threshold_m = options_.margin_m + statistics_.sweep_bound_m;
 
-  bvh_.Refit(x_start_m);
+  if (refit_tree) bvh_.Refit(x_start_m);
   FindCandidateTriangles(X_WT_start, statistics_.threshold_m + kBroadPhasePad_m);
   statistics_.num_candidate_triangles = static_cast<int>(candidate_triangles_.size());
 
   AdvanceFrameStamp();
   AddNodeContacts(x_start_m, X_WT_start, contacts);
   const int first_feature_contact = static_cast<int>(contacts->size());
-  AddFeatureContacts(x_start_m, X_WT_start, contacts);
+  if (options_.feature_contacts) AddFeatureContacts(x_start_m, X_WT_start, contacts);
   AddSphereFaceContacts(x_start_m, X_WT_start, contacts);
   const int first_edge_contact = static_cast<int>(contacts->size());
   if (options_.edge_contacts) AddEdgeContacts(x_start_m, X_WT_start, contacts);
@@ -228,6 +229,13 @@ void CollisionDetector::AddFeatureContacts(const Eigen::VectorXd& x_m,
     }
     contacts->push_back(contact);
   }
+}
+
+void CollisionDetector::SetMargin(double margin_m) {
+  DetectionOptions options = options_;
+  options.margin_m = margin_m;
+  CheckOptions(options);
+  options_.margin_m = margin_m;
 }
 
 void CollisionDetector::AddSphereFaceContacts(const Eigen::VectorXd& x_m,

@@ -68,6 +68,9 @@ struct DetectionOptions {
   // its bottom face). Penetrations are corrected every frame, so real ones stay shallow. m.
   double max_feature_penetration_m = 5e-3;
   bool edge_contacts = true;  // tool-edge-versus-body-edge contacts (pipeline step 5)
+  // Tool-feature-versus-face contacts (pipeline step 4, its feature points: box corners, rim
+  // points, mesh vertices); the sphere's centre against faces is step 4 too and always runs.
+  bool feature_contacts = true;
 };
 
 // What the last Detect() call did.
@@ -98,9 +101,16 @@ class CollisionDetector {
   // allocates only while its scratch buffers grow.
   // x_start_m, x_end_m: (3N) stacked node positions, world, m. Throws std::invalid_argument on a
   // size mismatch.
+  // refit_tree = false skips step 1: the tree was refitted to x_start_m already (by an earlier
+  // Detect or by Refit), as when the same body positions are searched at 1 kHz between frames.
   void Detect(const Eigen::VectorXd& x_start_m, const Eigen::Isometry3d& X_WT_start,
               const Eigen::VectorXd& x_end_m, const Eigen::Isometry3d& X_WT_end,
-              std::vector<Contact>* contacts);
+              std::vector<Contact>* contacts, bool refit_tree = true);
+  // Refits the surface tree to x_m (3N), for Detect with refit_tree = false.
+  void Refit(const Eigen::VectorXd& x_m) { bvh_.Refit(x_m); }
+  // The gap up to which contacts are reported from now on (≥ 0, else std::invalid_argument): a
+  // 1 kHz search whose margin changes every step (penalty's ε = v Δt).
+  void SetMargin(double margin_m);
 
   const DetectionStatistics& statistics() const { return statistics_; }
   const DetectionOptions& options() const { return options_; }

@@ -10,6 +10,9 @@ DetectionOptions MakeDetectionOptions(double margin_m) {
   DetectionOptions options;
   options.margin_m = margin_m;
   options.continuous = false;  // the tool's pose alone; the caller's margin is its prediction
+  // Node contacts only (the header says why).
+  options.edge_contacts = false;
+  options.feature_contacts = false;
   return options;
 }
 
@@ -36,12 +39,15 @@ void HapticContactFinder::SetBodyPositions(const Eigen::VectorXd& x_m) {
     throw std::invalid_argument("HapticContactFinder::SetBodyPositions: wrong size");
   }
   x_body_m_ = x_m;
+  detector_->Refit(x_body_m_);  // once a frame; Find searches these positions without refitting
 }
 
 void HapticContactFinder::Find(const Eigen::Isometry3d& X_WT, double margin_m,
                                std::vector<Contact>* contacts) {
   contacts->clear();
-  if (detector_) detector_->Detect(x_body_m_, X_WT, x_body_m_, X_WT, contacts);
+  if (detector_) detector_->SetMargin(std::min(margin_m, max_margin_m_));
+  if (detector_)
+    detector_->Detect(x_body_m_, X_WT, x_body_m_, X_WT, contacts, /*refit_tree=*/false);
   objects_.AddToolContacts(X_WT, X_WT, contacts);
   // Both detectors report up to max_margin_m; keep those within the margin asked for.
   const double threshold_m = std::min(margin_m, max_margin_m_);

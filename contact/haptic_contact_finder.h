@@ -9,7 +9,12 @@
 // Each contact is measured at the tool's current pose alone (no sweep): the modes that want a
 // predictive margin (penalty's ε = v Δt) widen the search with the `margin_m` they pass.
 // Contacts are those of the visual frame (contact/collision_detection.h, contact/rigid_objects.h),
-// with the same conventions (contact/contact.h): n_W out of the tool, gap = (p_body − p_tool)·n.
+// with the same conventions (contact/contact.h): n_W out of the tool, gap = (p_body − p_tool)·n;
+// against the body, only its node contacts (and a sphere's centre against its faces): the tool's
+// feature points against faces and the edge-versus-edge stage cost O(features × faces), 190 µs
+// of a 290 µs step for block_press's cylinder at peak press, and the 1 kHz modes push along
+// normals that the node contacts give. The body's tree is refitted once a frame, the detection
+// margin set per search (SetMargin), so a step pays for the broad phase and the node distances.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "core/stopwatch.h"
+
 namespace hapsim::device {
 namespace {
 
@@ -123,8 +125,10 @@ HapticSample MultirateSimulator::StepHapticTool(const DeviceState& device, long 
     last_frame_step_ = k;
     if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
   }
+  Stopwatch stopwatch;
   const HapticOutput out = haptic_.Step(device);
   HapticSample sample;
+  sample.step_time_s = stopwatch.Elapsed();
   sample.device_force_W_N = out.device_force_W_N;
   sample.device_torque_W_N_m = out.device_torque_W_N_m;
   sample.contact_force_W_N = out.contact_force_W_N;
@@ -201,8 +205,10 @@ HapticSample MultirateSimulator::StepGodObject(const DeviceState& device, long k
     last_frame_step_ = k;
     if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
   }
+  Stopwatch stopwatch;
   god.Step(device.x_W_m);
   HapticSample sample;
+  sample.step_time_s = stopwatch.Elapsed();
   sample.device_force_W_N = god.force_W_N();
   sample.contact_force_W_N = god.force_W_N();  // the surfaces hold the proxy against the spring
   sample.tool_x_W_m = god.proxy_W_m();
