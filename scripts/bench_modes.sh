@@ -26,5 +26,7 @@ for entry in "${runs[@]}"; do
   /usr/bin/python3 scripts/compare_modes.py "$out/$scene/errors.json" "$out/$scene/forces.png" \
     "$out/$scene/reference" "${dirs[@]}" > /dev/null
 done
-/usr/bin/python3 scripts/summarize_modes.py "$out" block_press probe peg_in_hole | tee "$out/table.md"
+/usr/bin/python3 scripts/summarize_modes.py "$out" "$out/haptic_modes.png" block_press probe peg_in_hole |
+  tee "$out/table.md"
+cp "$out/haptic_modes.png" docs/haptic_modes.png   # the chart of docs/BENCHMARKS.md
 echo "bench_modes: outputs in $out/"
