@@ -27,10 +27,10 @@
 #include "config/simulation_builder.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/scripted_trajectory.h"
 #include "core/statistics.h"
 #include "device/device_backend.h"
 #include "device/haptic_loop.h"
-#include "core/scripted_trajectory.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
 #include "messages/message_gate.h"
@@ -285,9 +285,11 @@ void RunHaptic(const HapticCommandOptions& options) {
   if (!scene.tool) throw InputError(scene.file, 0, "tool", "`hapsim haptic` needs a tool");
   const device::HapticMode mode =
       config::ResolveHapticMode(scene, options.mode, "--mode", /*allow_reference=*/false);
-  const device::HapticLoopOptions loop_options = MakeHapticLoopOptions(scene, mode);
+  const HapticWorld world = MakeHapticWorld(scene, mode);
+  const device::HapticLoopOptions loop_options = MakeHapticLoopOptions(scene, mode, world);
   device::HapticLoop loop(scene.tool->model, scene.coupling, scene.gravity_m_s2,
-                          scene.tool->initial_state, loop_options);
+                          scene.tool->initial_state, loop_options, world.body_model(),
+                          world.objects);
   const double duration_s =
       options.duration_s > 0.0 ? options.duration_s : scene.num_steps * scene.dt_s;
   const long num_steps = std::lround(duration_s / loop_options.dt_s);
@@ -303,8 +305,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   KeepQueued(lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver));
   std::unique_ptr<device::DeviceBackend> backend;
   if (options.device == "scripted") {
-    backend =
-        std::make_unique<device::ScriptedDevice>(ScriptedTrajectory(scene.trajectory));
+    backend = std::make_unique<device::ScriptedDevice>(ScriptedTrajectory(scene.trajectory));
   } else if (options.device == "hand") {
     backend = std::make_unique<device::SimulatedHand>(ScriptedTrajectory(scene.trajectory),
                                                       scene.hand, loop_options.dt_s);
@@ -434,7 +435,9 @@ void AddHapticCommand(CLI::App* app) {
   haptic->add_option("scene", options->scene_path, "Scene file (YAML) with a tool and a device")
       ->required();
   haptic->add_option("--lcm-url", options->lcm_url, "LCM provider URL")->capture_default_str();
-  haptic->add_option("--mode", options->mode, "linear or lcp (default: the scene's haptic.mode)");
+  haptic->add_option("--mode", options->mode,
+                     "linear, lcp, coupling, penalty, material, impact or godobject (default: the\n"
+                     "scene's haptic.mode); the visual process must run the same mode");
   haptic
       ->add_option("--device", options->device,
                    "scripted (the scene's trajectory), hand (a simulated hand pulled along it,\n"

@@ -3,13 +3,18 @@
 // build them: one piece of code, because replay reproduces the live forces bit for bit only if
 // it feeds the loop exactly what the live process did.
 
+#include <algorithm>
 #include <cmath>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "apps/realtime.h"
+#include "config/body_builder.h"
 #include "config/scene.h"
+#include "config/simulation_builder.h"
 #include "device/device_backend.h"
 #include "device/haptic_loop.h"
 #include "device/model_mailbox.h"
@@ -18,19 +23,48 @@
 
 namespace hapsim::apps {
 
-// The loop's options for `mode` from the scene (haptic rate, lcp capacity, safety limits).
+// What the geometric modes and godobject render in the haptic process: the scene's deformable
+// body (built only for those modes; it must outlive the loop) and rigid objects, which each
+// contact model then moves to where its frame left them.
+struct HapticWorld {
+  std::optional<config::Body> body;
+  std::vector<contact::RigidObject> objects;
+  const fem::Model* body_model() const { return body ? &body->model : nullptr; }
+};
+
+inline HapticWorld MakeHapticWorld(const config::Scene& scene, device::HapticMode mode) {
+  HapticWorld world;
+  if (!device::NeedsWorld(mode)) return world;
+  world.body = config::MakeSceneBody(scene);
+  for (const config::RigidObjectScene& rigid : scene.rigid_objects)
+    world.objects.push_back(rigid.object);
+  return world;
+}
+
+// The loop's options for `mode` from the scene (haptic rate, lcp capacity, safety limits, the
+// papers' modes' parameters as `hapsim sim` takes them) and the world it renders.
 inline device::HapticLoopOptions MakeHapticLoopOptions(const config::Scene& scene,
-                                                       device::HapticMode mode) {
+                                                       device::HapticMode mode,
+                                                       const HapticWorld& world) {
   device::HapticLoopOptions options;
   options.mode = mode;
   options.dt_s = 1.0 / scene.haptic.rate_hz;
   options.lcp_max_rows = scene.haptic.lcp_max_rows;
   options.safety = scene.haptic.safety;
+  const device::MultirateOptions in_process =
+      config::MakeMultirateOptions(scene, mode, std::max(1, scene.haptic.steps_per_frame));
+  options.geometric = in_process.geometric;
+  options.godobject = in_process.godobject;
+  if (device::NeedsWorld(mode)) {
+    options.world_nodes = world.body ? world.body->model.num_nodes() : 0;
+    options.world_objects = static_cast<int>(world.objects.size());
+  }
   return options;
 }
 
-// Decodes a CONTACT_MODEL into an update (model, rows, visual tool, linearisation pose) and, in
-// the lcp mode, prepares its solver (device::PrepareLcpUpdate). Returns false with *error on a
+// Decodes a CONTACT_MODEL into an update (model, rows, visual tool, linearisation pose, and in
+// the geometric modes and godobject the frame's world, which must match the scene's) and, in the
+// lcp mode, prepares its solver (device::PrepareLcpUpdate). Returns false with *error on a
 // message the adapters reject; a rejected lcp preparation is not an error (the loop falls back
 // to the linear model and counts it).
 inline bool ReadContactModelUpdate(const hapsim_lcm::contact_model_t& msg,
@@ -52,6 +86,20 @@ inline bool ReadContactModelUpdate(const hapsim_lcm::contact_model_t& msg,
   update->linearised_tool = ToolState{};
   update->linearised_tool.x_W_m = header.x_W_m;
   update->linearised_tool.q_WT = header.q_WT;
+  update->has_world = false;
+  if (device::NeedsWorld(options.mode)) {
+    if (!messages::WorldFromMessage(msg, options.world_nodes, options.world_objects,
+                                    &update->body_x_m, &update->object_poses, &update->has_world,
+                                    error))
+      return false;
+    // A scene with a body or objects always sends them in these modes: none means the visual
+    // process renders another mode.
+    if (!update->has_world && options.world_nodes + options.world_objects > 0) {
+      *error = "contact_model_t carries no world: the visual process must run the " +
+               std::string(device::ToString(options.mode)) + " mode too";
+      return false;
+    }
+  }
   device::PrepareLcpUpdate(tool.model, coupling, gravity_m_s2, options, update);
   return true;
 }

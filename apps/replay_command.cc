@@ -170,9 +170,10 @@ long Replay(const config::Scene& scene, LogContents* log_contents) {
   const LogContents& log = *log_contents;
   device::HapticMode mode = scene.haptic.mode;
   if (const auto logged_mode = config::ParseHapticMode(log.mode)) mode = *logged_mode;
-  const device::HapticLoopOptions options = MakeHapticLoopOptions(scene, mode);
+  const HapticWorld world = MakeHapticWorld(scene, mode);
+  const device::HapticLoopOptions options = MakeHapticLoopOptions(scene, mode, world);
   device::HapticLoop loop(scene.tool->model, scene.coupling, scene.gravity_m_s2,
-                          scene.tool->initial_state, options);
+                          scene.tool->initial_state, options, world.body_model(), world.objects);
   // As the haptic process's receive thread did (apps/haptic_inputs.h): the same inputs.
   std::map<long, std::unique_ptr<device::ContactModelUpdate>> models;  // by sequence
   for (const hapsim_lcm::contact_model_t& msg : log.model_messages) {

@@ -24,6 +24,7 @@
 #include <optional>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include "apps/child_process.h"
 #include "apps/commands.h"
@@ -36,6 +37,7 @@
 #include "config/simulation_builder.h"
 #include "contact/visual_frame.h"
 #include "core/error.h"
+#include "device/haptic_loop.h"
 #include "fem/tet_mesh.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
@@ -217,7 +219,12 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
   visual.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
   visual.export_contact_rows = mode == device::HapticMode::kLcp;
   // coupling: there is no haptic tool; the model is linearised at the visual tool (and unused).
-  const bool haptic_tool = mode != device::HapticMode::kCoupling;
+  // godobject: the visual tool is coupled to the device, to press the body (as in `hapsim sim`).
+  const bool haptic_tool =
+      mode != device::HapticMode::kCoupling && mode != device::HapticMode::kGodObject;
+  // The geometric modes and godobject render the frame's world: it travels with each model.
+  const bool send_world = device::NeedsWorld(mode);
+  std::vector<Eigen::Isometry3d> object_poses;
   contact::VisualFrame frame = config::MakeVisualFrame(scene, body, visual);
   // A scene of rigid objects: no body state, no surface (SIM_FRAME has no nodes).
   fem::State body_state = body ? fem::MakeRestState(body->model) : fem::State{};
@@ -258,6 +265,11 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
     hapsim_lcm::contact_model_t model_msg = messages::ToMessage(
         frame.linear_model(), visual.export_contact_rows ? &frame.contact_rows() : nullptr, header);
     model_msg.run_id = info.run_id;
+    if (send_world) {
+      object_poses.resize(frame.num_objects());
+      for (int i = 0; i < frame.num_objects(); ++i) object_poses[i] = frame.object_pose(i);
+      messages::WorldToMessage(body_state.x_m, object_poses, &model_msg);
+    }
     lcm->publish(messages::kContactModelChannel, &model_msg);
     const hapsim_lcm::sim_frame_t sim_frame = MakeSimFrame(body_state, surface, visual_tool, frame,
                                                            stats, k, k * scene.dt_s, info.run_id);
@@ -351,8 +363,10 @@ void AddRunCommand(CLI::App* app) {
       ->required();
   run->add_option("--lcm-url", options->lcm_url, "LCM provider URL")->capture_default_str();
   run->add_option("--mode", options->mode,
-                  "linear (the paper), lcp (1 kHz unilateral solve on the frame's rows) or\n"
-                  "coupling (standard multirate); default: the scene's haptic.mode");
+                  "linear (the paper), lcp (1 kHz unilateral solve on the frame's rows),\n"
+                  "coupling (standard multirate), or the source papers' 1 kHz methods on the\n"
+                  "frame's world: penalty, material, impact, godobject (a point tool; see\n"
+                  "docs/HAPTIC_MODES.md); default: the scene's haptic.mode");
   run->add_option("--device", options->device,
                   "The haptic process's device: scripted, hand or external (docs/DEVICE.md)")
       ->check(CLI::IsMember({"scripted", "hand", "external"}))

@@ -47,13 +47,10 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
   if (mode == device::HapticMode::kGodObject && !(scene.tool && scene.tool->point))
     throw InputError(file, 0, key,
                      "the godobject mode renders a 3-DOF point: give tool.shape.point {radius_m}");
-  if ((mode == device::HapticMode::kReference || device::IsGeometricMode(mode) ||
-       mode == device::HapticMode::kGodObject) &&
-      !allow_reference)
+  if (mode == device::HapticMode::kReference && !allow_reference)
     throw InputError(file, 0, key,
-                     std::string("the ") + device::ToString(mode) +
-                         " mode runs in `hapsim sim` only; the two processes render linear, lcp "
-                         "or coupling");
+                     "the reference mode runs in `hapsim sim` only; the two processes render "
+                     "every other mode");
   if (mode == device::HapticMode::kLcp && scene.contact.law == contact::ContactLaw::kFriction)
     throw InputError(file, 0, key,
                      "lcp solves normal rows only; the scene's contact law is friction");

@@ -25,8 +25,8 @@ contact::VisualFrame MakeVisualFrame(const Scene& scene, const std::optional<Bod
 // The haptic mode of a run: the scene's haptic.mode, or `option_value` when given (a
 // command-line override). Throws InputError naming `option` (or haptic.mode, when the scene's
 // mode is the problem) for an unknown mode, for lcp with the friction law (its 1 kHz rows are
-// normal only), and for the reference mode unless allow_reference (the two-process run renders
-// linear, lcp or coupling; the reference exists in the in-process simulator only).
+// normal only), for godobject without a point tool, and for the reference mode unless
+// allow_reference (the reference exists in the in-process simulator only).
 device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& option_value,
                                      const std::string& option, bool allow_reference);
 

@@ -11,15 +11,26 @@ bool IsFinite(const DeviceState& device) {
 
 HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
                        const Eigen::Vector3d& gravity_m_s2, const ToolState& initial_tool,
-                       const HapticLoopOptions& options)
+                       const HapticLoopOptions& options, const fem::Model* body,
+                       const std::vector<contact::RigidObject>& objects)
     : options_(options),
       step_(tool, coupling, gravity_m_s2, options.dt_s, initial_tool,
             options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0),
       visual_tool_(initial_tool),
+      proxy_tool_(initial_tool),
       safety_(options.safety, options.dt_s),
       passivity_(options.passivity_threshold_J) {
   if (options.mode == HapticMode::kReference)
     throw std::invalid_argument("the reference mode runs in the in-process simulator only");
+  if (IsGeometricMode(options.mode)) {
+    geometric_ = std::make_unique<GeometricHapticContact>(options.mode, options.geometric, tool,
+                                                          body, objects);
+    step_.SetGeometricContact(geometric_.get());
+  }
+  if (options.mode == HapticMode::kGodObject) {
+    god_world_ = std::make_unique<GodObjectWorld>(options.godobject, body, objects);
+    god_world_->god_object().Reset(initial_tool.x_W_m);
+  }
 }
 
 void EnsureLcpSolver(const HapticLoopOptions& options, ContactModelUpdate* update) {
@@ -33,8 +44,8 @@ bool PrepareLcpUpdate(const ToolModel& tool, const CouplingParams& coupling,
   if (options.mode != HapticMode::kLcp || update->rows.num_rows() == 0) return true;
   EnsureLcpSolver(options, update);
   return update->lcp_solver->Prepare(
-      update->rows, CalcLinearisationSystem(tool, coupling, gravity_m_s2, options.dt_s,
-                                            update->linearised_tool));
+      update->rows,
+      CalcLinearisationSystem(tool, coupling, gravity_m_s2, options.dt_s, update->linearised_tool));
 }
 
 HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s,
@@ -47,6 +58,11 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
       step_.SetContactRows(new_model->rows.num_rows() > 0 ? &new_model->rows : nullptr,
                            new_model->lcp_solver.get());
     visual_tool_ = new_model->visual_tool;
+    // The world to render from this step on (a refit of the body's tree: once a frame).
+    if (new_model->has_world && geometric_)
+      geometric_->SetWorld(new_model->body_x_m, new_model->object_poses);
+    if (new_model->has_world && god_world_)
+      god_world_->SetWorld(new_model->body_x_m, new_model->object_poses);
     model_sequence_ = new_model->sequence;
     model_age_s_ = 0.0;
   } else if (model_sequence_ >= 0) {
@@ -60,6 +76,12 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
                            CalcAngularVelocity(step_.tool_model(), visual_tool_));
     out.rendered.device_force_W_N = -wrench.F_W_N;
     out.rendered.device_torque_W_N_m = -wrench.T_W_N_m;
+  } else if (device_finite && god_world_) {
+    contact::GodObject& god = god_world_->god_object();
+    god.Step(device.x_W_m);
+    out.rendered.device_force_W_N = god.force_W_N();
+    out.rendered.contact_force_W_N = god.force_W_N();  // the surfaces hold the proxy
+    proxy_tool_.x_W_m = god.proxy_W_m();
   } else if (device_finite) {
     out.rendered = step_.Step(device);
   }
@@ -69,13 +91,13 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
   inputs.model_age_s = model_age_s_;
   inputs.new_model = new_model != nullptr;
   inputs.device_finite = device_finite;
-  out.sent = safety_.Filter(out.rendered.device_force_W_N, out.rendered.device_torque_W_N_m,
-                            inputs);
+  out.sent =
+      safety_.Filter(out.rendered.device_force_W_N, out.rendered.device_torque_W_N_m, inputs);
   // 4. Passivity of what was sent.
   const bool was_active = passivity_.active();
   if (device_finite)
-    passivity_.Update(out.sent.force_W_N, out.sent.torque_W_N_m, device.v_W_m_s,
-                      device.w_W_rad_s, options_.dt_s);
+    passivity_.Update(out.sent.force_W_N, out.sent.torque_W_N_m, device.v_W_m_s, device.w_W_rad_s,
+                      options_.dt_s);
   out.passivity_energy_J = passivity_.energy_in_J();
   out.passivity_alarm = passivity_.active() && !was_active;
   out.lcp_fell_back = out.rendered.lcp_fell_back;

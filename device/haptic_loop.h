@@ -5,7 +5,9 @@
 //   1 take the newest contact model, if one arrived (linear model, and the rows in lcp mode)
 //   2 the haptic step (device/haptic_step.h) — skipped on a non-finite device state, which would
 //     poison the haptic tool's state; in the coupling mode instead the coupling between the
-//     device and the visual tool of the last frame, held until the next (standard multirate)
+//     device and the visual tool of the last frame, held until the next (standard multirate);
+//     in the geometric modes and godobject the step renders the world the model carried
+//     (device/geometric_haptic_contact.h, device/god_object_world.h), put in place first
 //   3 the safety layer (device/haptic_safety.h): NaN/stale → zero, blend, rate limit, clamp
 //   4 the passivity observer on what was actually sent (device/passivity_observer.h)
 // Deterministic: the output depends only on the sequence of (device state, device age, model)
@@ -15,7 +17,11 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <vector>
 
+#include "device/geometric_haptic_contact.h"
+#include "device/god_object_world.h"
 #include "device/haptic_mode.h"
 #include "device/haptic_safety.h"
 #include "device/haptic_step.h"
@@ -25,12 +31,23 @@
 namespace hapsim::device {
 
 struct HapticLoopOptions {
-  HapticMode mode = HapticMode::kLinear;  // linear, lcp or coupling
+  HapticMode mode = HapticMode::kLinear;  // any but reference
   double dt_s = 1e-3;
   int lcp_max_rows = 512;
   SafetyLimits safety;
   double passivity_threshold_J = 1e-3;
+  // The geometric modes (penalty, material, impact) and godobject: their parameters, and the
+  // size of the world every contact model must carry (the scene's body nodes and rigid objects).
+  GeometricContactParams geometric;
+  contact::GodObjectParams godobject;
+  int world_nodes = 0;
+  int world_objects = 0;
 };
+
+// Whether `mode` renders the frame's world at 1 kHz (contact_model_t carries it).
+inline bool NeedsWorld(HapticMode mode) {
+  return IsGeometricMode(mode) || mode == HapticMode::kGodObject;
+}
 
 struct HapticLoopOutput {
   HapticOutput rendered;  // what the haptic step computed (zero when skipped)
@@ -45,25 +62,33 @@ struct HapticLoopOutput {
 class HapticLoop {
  public:
   // Throws std::invalid_argument for the reference mode (in-process only) or bad safety limits.
+  // body, objects: the world of the geometric modes and godobject (the scene's deformable body,
+  // which must outlive the loop, or null; its rigid objects at their start poses).
   HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
              const Eigen::Vector3d& gravity_m_s2, const ToolState& initial_tool,
-             const HapticLoopOptions& options);
+             const HapticLoopOptions& options, const fem::Model* body = nullptr,
+             const std::vector<contact::RigidObject>& objects = {});
 
   // One step. device_age_s: how old `device` is; new_model: the update that arrived since the
   // last step, or nullptr (it must stay unchanged until the next non-null new_model).
   HapticLoopOutput Step(const DeviceState& device, double device_age_s,
                         const ContactModelUpdate* new_model) noexcept;
 
-  // The haptic tool (linear, lcp) or the visual tool of the last frame (coupling).
+  // The haptic tool (linear, lcp, geometric modes), the visual tool of the last frame
+  // (coupling), or a tool at the god-object's proxy (godobject).
   const ToolState& tool_state() const {
-    return options_.mode == HapticMode::kCoupling ? visual_tool_ : step_.tool_state();
+    if (options_.mode == HapticMode::kCoupling) return visual_tool_;
+    return options_.mode == HapticMode::kGodObject ? proxy_tool_ : step_.tool_state();
   }
   long num_steps() const { return num_steps_; }
 
  private:
   HapticLoopOptions options_;
   HapticStep step_;
-  ToolState visual_tool_;  // coupling mode
+  ToolState visual_tool_;                              // coupling mode
+  std::unique_ptr<GeometricHapticContact> geometric_;  // penalty, material, impact
+  std::unique_ptr<GodObjectWorld> god_world_;          // godobject
+  ToolState proxy_tool_;                               // godobject: at the proxy
   HapticSafety safety_;
   PassivityObserver passivity_;
   std::int64_t model_sequence_ = -1;

@@ -9,10 +9,13 @@
 // One writer thread and one reader thread; the swaps are single atomic exchanges. The same
 // buffer carries the external driver's device states (apps/haptic_command.cc).
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "contact/haptic_lcp_solver.h"
 #include "contact/linear_contact_model.h"
@@ -32,6 +35,12 @@ struct ContactModelUpdate {
   // lcp mode: a solver prepared for `rows` by the receive thread (PrepareLcpUpdate), used by the
   // loop while this update is the newest; null otherwise.
   std::unique_ptr<contact::HapticLcpSolver> lcp_solver;
+  // The frame's world, for the geometric modes and godobject (contact_model_t.body_x_W_m ...):
+  // the body's node positions (3N, world, m) and the rigid objects' poses; has_world false when
+  // the model carried none.
+  bool has_world = false;
+  Eigen::VectorXd body_x_m;
+  std::vector<Eigen::Isometry3d> object_poses;
 };
 
 // The newest value from one writer thread to one reader thread.

@@ -367,4 +367,68 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
   return true;
 }
 
+void WorldToMessage(const Eigen::VectorXd& body_x_m,
+                    const std::vector<Eigen::Isometry3d>& object_poses,
+                    hapsim_lcm::contact_model_t* msg) {
+  const int nodes = static_cast<int>(body_x_m.size() / 3);
+  msg->num_body_nodes = nodes;
+  msg->body_x_W_m.assign(nodes, std::vector<double>(3));
+  for (int i = 0; i < nodes; ++i)
+    for (int d = 0; d < 3; ++d) msg->body_x_W_m[i][d] = body_x_m[3 * i + d];
+  const int objects = static_cast<int>(object_poses.size());
+  msg->num_objects = objects;
+  msg->object_x_W_m.assign(objects, std::vector<double>(3));
+  msg->object_q_WO.assign(objects, std::vector<double>(4));
+  for (int i = 0; i < objects; ++i) {
+    VectorToArray(object_poses[i].translation(), msg->object_x_W_m[i].data());
+    QuaternionToArray(Eigen::Quaterniond(object_poses[i].linear()), msg->object_q_WO[i].data());
+  }
+}
+
+bool WorldFromMessage(const hapsim_lcm::contact_model_t& msg, int expected_nodes,
+                      int expected_objects, Eigen::VectorXd* body_x_m,
+                      std::vector<Eigen::Isometry3d>* object_poses, bool* has_world,
+                      std::string* error) {
+  *has_world = false;
+  if (msg.num_body_nodes == 0 && msg.num_objects == 0) return true;
+  if (msg.num_body_nodes < 0 || msg.body_x_W_m.size() != static_cast<size_t>(msg.num_body_nodes) ||
+      msg.num_objects < 0 || msg.object_x_W_m.size() != static_cast<size_t>(msg.num_objects) ||
+      msg.object_q_WO.size() != static_cast<size_t>(msg.num_objects)) {
+    *error = "contact_model_t.num_body_nodes / num_objects: sizes disagree with the counts";
+    return false;
+  }
+  if (msg.num_body_nodes != expected_nodes || msg.num_objects != expected_objects) {
+    *error = "contact_model_t: a world of " + std::to_string(msg.num_body_nodes) + " nodes and " +
+             std::to_string(msg.num_objects) + " objects, but the scene has " +
+             std::to_string(expected_nodes) + " and " + std::to_string(expected_objects);
+    return false;
+  }
+  for (int i = 0; i < msg.num_body_nodes; ++i) {
+    if (msg.body_x_W_m[i].size() != 3 ||
+        !CheckFinite(msg.body_x_W_m[i].data(), 3, "contact_model_t.body_x_W_m", error))
+      return false;
+  }
+  for (int i = 0; i < msg.num_objects; ++i) {
+    Eigen::Quaterniond q;
+    if (msg.object_x_W_m[i].size() != 3 || msg.object_q_WO[i].size() != 4 ||
+        !CheckFinite(msg.object_x_W_m[i].data(), 3, "contact_model_t.object_x_W_m", error) ||
+        !ReadUnitQuaternion(msg.object_q_WO[i].data(), "contact_model_t.object_q_WO", &q, error))
+      return false;
+  }
+  // Valid: copy (resize keeps the storage when the size is unchanged).
+  body_x_m->resize(3 * msg.num_body_nodes);
+  for (int i = 0; i < msg.num_body_nodes; ++i)
+    for (int d = 0; d < 3; ++d) (*body_x_m)[3 * i + d] = msg.body_x_W_m[i][d];
+  object_poses->resize(msg.num_objects);
+  for (int i = 0; i < msg.num_objects; ++i) {
+    Eigen::Quaterniond q;
+    ReadUnitQuaternion(msg.object_q_WO[i].data(), "object_q_WO", &q, error);
+    (*object_poses)[i] = Eigen::Isometry3d::Identity();
+    (*object_poses)[i].linear() = q.toRotationMatrix();
+    (*object_poses)[i].translation() = ArrayToVector(msg.object_x_W_m[i].data());
+  }
+  *has_world = true;
+  return true;
+}
+
 }  // namespace hapsim::messages

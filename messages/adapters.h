@@ -17,6 +17,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
@@ -122,5 +123,21 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
 // loop only swaps in the result.
 bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactModel* model,
                  contact::ContactRows* rows, ContactModelHeader* header, std::string* error);
+
+// The frame's world carried by a contact_model_t (docs/HAPTIC_MODES.md): the body's node
+// positions body_x_m (3N, world, m; empty without a body) and each rigid object's pose X_WO.
+// Writes them into msg (allocates: visual process).
+void WorldToMessage(const Eigen::VectorXd& body_x_m,
+                    const std::vector<Eigen::Isometry3d>& object_poses,
+                    hapsim_lcm::contact_model_t* msg);
+// Reads msg's world, reusing the outputs' storage when the sizes are unchanged; *has_world says
+// whether the message carried one (both counts 0: no world, outputs untouched). Rejects, with
+// the field's name in *error: sizes that disagree with their counts, any non-finite value, a bad
+// object quaternion, and a world whose node or object count differs from expected_nodes /
+// expected_objects (the scene the haptic process loaded).
+bool WorldFromMessage(const hapsim_lcm::contact_model_t& msg, int expected_nodes,
+                      int expected_objects, Eigen::VectorXd* body_x_m,
+                      std::vector<Eigen::Isometry3d>* object_poses, bool* has_world,
+                      std::string* error);
 
 }  // namespace hapsim::messages

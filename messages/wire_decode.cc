@@ -133,6 +133,10 @@ bool CheckWireLayout<hapsim_lcm::contact_model_t>(const void* data, int size, st
   const std::int64_t lower = wire.ReadCount("num_W_body_lower");
   wire.Skip(lower, kDouble, "W_body_lower");
   wire.Skip(2 * rows, kDouble, "body_rhs, lambda_frame_N");
+  const std::int64_t nodes = wire.ReadCount("num_body_nodes");
+  wire.Skip(nodes * 3, kDouble, "body_x_W_m");
+  const std::int64_t objects = wire.ReadCount("num_objects");
+  wire.Skip(objects * (3 + 4), kDouble, "object_x_W_m, object_q_WO");
   return wire.Finish(error);
 }
 

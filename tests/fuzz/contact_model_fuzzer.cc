@@ -5,11 +5,14 @@
 //
 // An accepted model must hold what adapters.h promises: finite values, dt > 0, sizes that agree
 // with num_rows, unit normals in J_v, a symmetric W_body with a diagonal >= 0, lambda >= 0, unit
-// quaternions. FromMessage without rows must accept exactly what it accepts with them.
+// quaternions. FromMessage without rows must accept exactly what it accepts with them. The frame's
+// world (WorldFromMessage) is finite and made of rotations when accepted.
 
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include "contact/haptic_lcp_solver.h"
 #include "contact/linear_contact_model.h"
@@ -63,11 +66,36 @@ void CheckAccepted(const contact::LinearContactModel& model, const contact::Cont
   }
 }
 
+// The frame's world (the geometric modes): whatever the message, WorldFromMessage either
+// rejects it with a reason or gives finite positions and unit-rotation poses of the counts the
+// message names (expected: the message's own counts, so that the content is what is fuzzed).
+void CheckWorld(const hapsim_lcm::contact_model_t& msg) {
+  Eigen::VectorXd body_x_m;
+  std::vector<Eigen::Isometry3d> poses;
+  bool has_world = false;
+  std::string error;
+  if (!messages::WorldFromMessage(msg, msg.num_body_nodes, msg.num_objects, &body_x_m, &poses,
+                                  &has_world, &error)) {
+    fuzz::CheckOrDie(!error.empty(), "contact_model_t world rejected without a reason");
+    return;
+  }
+  if (!has_world) return;
+  fuzz::CheckOrDie(body_x_m.size() == 3 * msg.num_body_nodes && body_x_m.allFinite() &&
+                       static_cast<int>(poses.size()) == msg.num_objects,
+                   "contact_model_t accepted a world of the wrong size or non-finite");
+  for (const Eigen::Isometry3d& X : poses)
+    fuzz::CheckOrDie(
+        X.translation().allFinite() &&
+            (X.linear().transpose() * X.linear() - Eigen::Matrix3d::Identity()).norm() < 1e-6,
+        "contact_model_t accepted a pose that is not a rotation");
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   hapsim_lcm::contact_model_t msg;
   if (!fuzz::DecodeMessage(data, size, &msg)) return 0;
+  CheckWorld(msg);
   contact::LinearContactModel model, model_alone;
   contact::ContactRows rows;
   messages::ContactModelHeader header, header_alone;

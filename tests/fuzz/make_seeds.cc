@@ -8,6 +8,10 @@
 //   hapsim run scenes/block_press.yaml --mode lcp --duration 0.6 --log lcp.lcm
 //   build-fuzzcheck/tests/fuzz/fuzz_make_seeds linear.lcm lcp.lcm tests/fuzz/corpus
 //
+// tests/fuzz/corpus/contact_model/world_objects is cut by hand from the log of
+// `hapsim run scenes/peg_in_hole.yaml --mode penalty`: its first CONTACT_MODEL, which carries the
+// frame's world (five objects' poses; docs/HAPTIC_MODES.md).
+//
 // Small on purpose: libFuzzer mutates small inputs faster, and the largest seed sets the input
 // size it explores.
 

@@ -314,6 +314,60 @@ TEST(ContactModelMessage, RoundTripWithoutRowsEmptiesTheRows) {
   ExpectSameRowsAndHeader(in, rows, header);
 }
 
+// The frame's world of the geometric modes (docs/HAPTIC_MODES.md): bit-identical through the
+// wire; a message without one says so; a wrong size for the scene, a NaN or a bad quaternion is
+// refused with the field's name, the outputs untouched.
+TEST(ContactModelMessage, WorldRoundTripAndRejections) {
+  const ContactModelFixture in(0);
+  Eigen::VectorXd body_x_m(9);
+  body_x_m << 0.1, -0.2, 0.3, 1e-7, 2.5, -3.0, 0.0, 0.01, 1.0 / 3.0;
+  std::vector<Eigen::Isometry3d> poses(2, Eigen::Isometry3d::Identity());
+  poses[1].translation() = Eigen::Vector3d(0.01, 0.02, -0.03);
+  poses[1].linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
+  hapsim_lcm::contact_model_t msg = ToMessage(in.model, nullptr, in.header);
+  WorldToMessage(body_x_m, poses, &msg);
+  msg = EncodeDecode(msg);
+  Eigen::VectorXd x_out;
+  std::vector<Eigen::Isometry3d> poses_out;
+  bool has_world = false;
+  std::string error;
+  ASSERT_TRUE(WorldFromMessage(msg, 3, 2, &x_out, &poses_out, &has_world, &error)) << error;
+  EXPECT_TRUE(has_world);
+  ExpectBitIdentical(x_out, body_x_m, "body_x_W_m");
+  ASSERT_EQ(poses_out.size(), 2u);
+  EXPECT_TRUE(poses_out[1].translation() == poses[1].translation());
+  EXPECT_LT((poses_out[1].linear() - poses[1].linear()).norm(), 1e-15);
+  // No world: nothing read, nothing changed.
+  const auto without = EncodeDecode(ToMessage(in.model, nullptr, in.header));
+  ASSERT_TRUE(WorldFromMessage(without, 3, 2, &x_out, &poses_out, &has_world, &error));
+  EXPECT_FALSE(has_world);
+  // Refusals, each naming what is wrong.
+  struct Case {
+    const char* what;
+    std::function<void(hapsim_lcm::contact_model_t*)> spoil;
+  };
+  const Case cases[] = {
+      {"the scene has",
+       [](hapsim_lcm::contact_model_t* m) {
+         m->num_body_nodes = 2;
+         m->body_x_W_m.pop_back();
+       }},
+      {"body_x_W_m", [](hapsim_lcm::contact_model_t* m) { m->body_x_W_m[1][2] = NAN; }},
+      {"object_q_WO", [](hapsim_lcm::contact_model_t* m) { m->object_q_WO[0][0] = 2.0; }},
+      {"sizes disagree", [](hapsim_lcm::contact_model_t* m) { m->object_x_W_m.pop_back(); }},
+  };
+  for (const Case& c : cases) {
+    hapsim_lcm::contact_model_t bad = msg;
+    c.spoil(&bad);
+    Eigen::VectorXd x_kept = Eigen::VectorXd::Constant(9, 7.0);
+    std::vector<Eigen::Isometry3d> poses_kept(2, Eigen::Isometry3d::Identity());
+    error.clear();
+    EXPECT_FALSE(WorldFromMessage(bad, 3, 2, &x_kept, &poses_kept, &has_world, &error)) << c.what;
+    EXPECT_NE(error.find(c.what), std::string::npos) << error;
+    EXPECT_EQ(x_kept, Eigen::VectorXd::Constant(9, 7.0)) << c.what;
+  }
+}
+
 TEST(ContactModelMessage, InconsistentOrNonFiniteMessagesAreRejected) {
   const ContactModelFixture in(3);
   const hapsim_lcm::contact_model_t good = ToMessage(in.model, &in.rows, in.header);

@@ -132,7 +132,10 @@ TEST(WireDecode, EveryTypeRoundTripsThroughTheLayoutCheck) {
 
 // The offset of contact_model_t.num_rows: the empty message ends with num_rows, then
 // num_W_body_lower (two int32), so it sits 8 bytes before the end.
-std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 8; }
+// With no rows and no world, a contact model ends in four int32 counts: num_rows,
+// num_W_body_lower, num_body_nodes, num_objects.
+std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 16; }
+std::size_t NumBodyNodesOffset() { return Encode(MakeContactModel(0)).size() - 8; }
 
 // num_rows = −1 makes lcm-gen's decode() throw (resize to SIZE_MAX) and 10^8 or 2^31 − 1 makes
 // it allocate gigabytes before noticing the bytes are missing; Decode refuses all three from the
@@ -150,6 +153,19 @@ TEST(WireDecode, HostileRowCountsAreRejectedBeforeDecoding) {
       hapsim_lcm::contact_model_t raw;
       EXPECT_ANY_THROW(raw.decode(bytes.data(), 0, static_cast<int>(bytes.size())));
     }
+  }
+}
+
+// The world's node count likewise (docs/HAPTIC_MODES.md): refused from the count alone.
+TEST(WireDecode, HostileWorldCountsAreRejectedBeforeDecoding) {
+  for (const std::int64_t nodes : {-1LL, 100000000LL, 2147483647LL}) {
+    auto bytes = Encode(MakeContactModel(0));
+    PutBigEndian(&bytes, NumBodyNodesOffset(), static_cast<std::uint64_t>(nodes), 4);
+    std::string error;
+    EXPECT_FALSE(CheckWireLayout<hapsim_lcm::contact_model_t>(bytes.data(), bytes.size(), &error));
+    EXPECT_NE(error.find("body"), std::string::npos) << error;
+    hapsim_lcm::contact_model_t out;
+    EXPECT_FALSE(Decode(bytes.data(), bytes.size(), &out, &error));
   }
 }
 
