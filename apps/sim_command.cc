@@ -220,7 +220,8 @@ void AddSimCommand(CLI::App* app) {
       "haptic step), coupling (standard multirate), reference (all at the haptic rate, exact\n"
       "compliance); the source papers' other systems on the haptic tool at 1 kHz: penalty\n"
       "(k (eps + d), paper 000), material (Hooke + viscous + stick-slip, paper 003), impact\n"
-      "(impulses with restitution, paper 001); default: the scene's haptic.mode");
+      "(impulses with restitution, paper 001), godobject (a point tool's proxy, paper 004);\n"
+      "default: the scene's haptic.mode");
   sim->add_option(
       "--compliance", options->compliance,
       "Body contact compliance: warped (precomputed at rest, warped by node rotations)\n"

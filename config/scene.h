@@ -100,7 +100,7 @@
 //                                      # material | impact | godobject (device/haptic_mode.h;
 //                                      # godobject: a point tool only; lcp: not with
 //                                      # the friction law; its 1 kHz rows are normal only;
-//                                      # reference and the papers' modes: `hapsim sim` only)
+//                                      # reference: `hapsim sim` only)
 //     penalty:                         # optional, penalty mode (contact/penalty_contact.h)
 //       {stiffness_N_m: 600, predictive_margin: true, max_force_change_N: 0.5,
 //        max_torque_change_N_m: 0.02}  # > 0 each; any subset, the rest as shown

@@ -286,7 +286,7 @@ contact::GodObjectParams ReadGodObject(const YamlMap& map) {
   map.CheckKeys({"stiffness_N_m", "static_friction", "dynamic_friction", "shading",
                  "texture_amplitude_m", "texture_wavelength_m"});
   contact::GodObjectParams p;
-  p.stiffness_N_per_m = map.GetDoubleOr("stiffness_N_m", p.stiffness_N_per_m, Above(0.0));
+  p.stiffness_N_m = map.GetDoubleOr("stiffness_N_m", p.stiffness_N_m, Above(0.0));
   p.static_friction = map.GetDoubleOr("static_friction", p.static_friction, AtLeast(0.0));
   p.dynamic_friction = map.GetDoubleOr("dynamic_friction", p.dynamic_friction, AtLeast(0.0));
   if (p.dynamic_friction > p.static_friction)

@@ -77,7 +77,8 @@ struct DetectionOptions {
 struct DetectionStatistics {
   int num_candidate_triangles = 0;    // faces returned by the broad phase
   int num_node_contacts = 0;          // node-versus-tool contacts, before merging
-  int num_feature_contacts = 0;       // tool-feature-versus-face contacts, before merging
+  int num_feature_contacts = 0;       // tool-feature- and sphere-centre-versus-face contacts,
+                                      // before merging
   int num_edge_contacts = 0;          // tool-edge-versus-body-edge contacts, before merging
   int num_contacts_before_merge = 0;  // node + feature + edge contacts
   int num_contacts_after_merge = 0;   // contacts returned

@@ -67,8 +67,8 @@ void ValidateGodObjectParams(const GodObjectParams& p) {
   const auto fail = [](const std::string& what) {
     throw std::invalid_argument("GodObjectParams: " + what);
   };
-  if (!(p.stiffness_N_per_m > 0.0) || !std::isfinite(p.stiffness_N_per_m))
-    fail("stiffness_N_per_m must be positive and finite");
+  if (!(p.stiffness_N_m > 0.0) || !std::isfinite(p.stiffness_N_m))
+    fail("stiffness_N_m must be positive and finite");
   if (!(p.proxy_radius_m >= 0.0) || !std::isfinite(p.proxy_radius_m))
     fail("proxy_radius_m must be >= 0 and finite");
   if (!(p.surface_epsilon_m > 0.0) || !std::isfinite(p.surface_epsilon_m))
@@ -107,16 +107,15 @@ Constraint GodObject::FindFirstCrossing(const Vector3d& goal_W, Vector3d* point_
     // From the last god-object, carried along with the mesh, to the goal, in O.
     const Vector3d p0 = mesh.X_WO_last.inverse(Eigen::Isometry) * god_object_W_m_;
     const Vector3d p1 = mesh.X_WO.inverse(Eigen::Isometry) * goal_W;
-    int exclude = -1;  // the goal is ε in front of the active planes; skip their triangles anyway
+    // The goal is ε in front of the active planes, but round-off in a nearly singular solve can
+    // put it a hair behind one: their triangles are skipped, all of them, so that such a plane
+    // does not hide a real crossing further along.
+    Exclusions exclude = {-1, -1, -1};
     for (int i = 0; i < num_active_; ++i) {
-      if (active_[i].mesh == id) exclude = active_[i].triangle;
+      if (active_[i].mesh == id) exclude[i] = active_[i].triangle;
     }
     const Crossing crossing = CalcFirstCrossing(id, p0, p1, exclude);
     if (crossing.triangle < 0 || crossing.t >= *t_out) continue;
-    bool active = false;
-    for (int i = 0; i < num_active_; ++i)
-      active |= active_[i].mesh == id && active_[i].triangle == crossing.triangle;
-    if (active) continue;
     *t_out = crossing.t;
     best.mesh = id;
     best.triangle = crossing.triangle;
@@ -151,9 +150,15 @@ void GodObject::Step(const Vector3d& hip_W_m) {
     proxy_W_m_ = mesh.X_WO * (mesh.X_WO_last.inverse(Eigen::Isometry) * proxy_W_m_);
   }
   const bool was_in_contact = num_active_ > 0;
-  const double epsilon = params_.surface_epsilon_m;
+  const Vector3d first_point_W = PlaceGodObject(hip_W_m);  // 1. the constrained god-object
+  ApplyFriction(hip_W_m, was_in_contact, first_point_W);   // 2. the stiction point, the force
+  ApplyTextureAndShading();                                // 3. one plane only
+}
 
-  // 1. The god-object: constraints found one at a time along the path (thesis §3.2.2).
+// 1. Constraints found one at a time along the path (thesis §3.2.2); returns where the path
+// first met a surface (the hip if it met none).
+Vector3d GodObject::PlaceGodObject(const Vector3d& hip_W_m) {
+  const double epsilon = params_.surface_epsilon_m;
   num_active_ = 0;
   Vector3d goal = hip_W_m;
   Vector3d first_point_W = hip_W_m;
@@ -194,9 +199,13 @@ void GodObject::Step(const Vector3d& hip_W_m) {
   }
   god_object_W_m_ = goal;
   for (Mesh& mesh : meshes_) mesh.X_WO_last = mesh.X_WO;
+  return first_point_W;
+}
 
-  // 2. Friction: the stiction point follows the god-object (thesis §4.1.1).
-  const double k = params_.stiffness_N_per_m;
+// 2. The stiction point follows the god-object (thesis §4.1.1); the spring force to it.
+void GodObject::ApplyFriction(const Vector3d& hip_W_m, bool was_in_contact,
+                              const Vector3d& first_point_W) {
+  const double k = params_.stiffness_N_m;
   stuck_ = false;
   normal_force_N_ = 0.0;
   if (num_active_ == 0) {
@@ -214,23 +223,23 @@ void GodObject::Step(const Vector3d& hip_W_m) {
     }
   }
   force_W_N_ = k * (proxy_W_m_ - hip_W_m);
+}
 
-  // 3. Texture and shading, one plane only (header comment).
-  if (num_active_ == 1) {
-    const Constraint& c = active_[0];
-    if (params_.texture_amplitude_m > 0.0) {
-      const Mesh& mesh = meshes_[c.mesh];
-      const double s_m =
-          params_.texture_direction_O.dot(mesh.X_WO.inverse(Eigen::Isometry) * proxy_W_m_);
-      const double h_m =
-          params_.texture_amplitude_m * std::sin(2.0 * kPi * s_m / params_.texture_wavelength_m);
-      force_W_N_ += k * h_m * c.normal_W;
-      normal_force_N_ += k * h_m;
-    }
-    if (params_.shading) {
-      force_W_N_ =
-          Eigen::Quaterniond::FromTwoVectors(c.normal_W, CalcShadingNormal(c)) * force_W_N_;
-    }
+// 3. Texture and shading on the output, with one active plane only (header comment).
+void GodObject::ApplyTextureAndShading() {
+  if (num_active_ != 1) return;
+  const Constraint& c = active_[0];
+  if (params_.texture_amplitude_m > 0.0) {
+    const Mesh& mesh = meshes_[c.mesh];
+    const double s_m =
+        params_.texture_direction_O.dot(mesh.X_WO.inverse(Eigen::Isometry) * proxy_W_m_);
+    const double h_m =
+        params_.texture_amplitude_m * std::sin(2.0 * kPi * s_m / params_.texture_wavelength_m);
+    force_W_N_ += params_.stiffness_N_m * h_m * c.normal_W;
+    normal_force_N_ += params_.stiffness_N_m * h_m;
+  }
+  if (params_.shading) {
+    force_W_N_ = Eigen::Quaterniond::FromTwoVectors(c.normal_W, CalcShadingNormal(c)) * force_W_N_;
   }
 }
 

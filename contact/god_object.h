@@ -101,7 +101,7 @@
 namespace hapsim::contact {
 
 struct GodObjectParams {
-  double stiffness_N_per_m = 1000.0;   // k > 0
+  double stiffness_N_m = 1000.0;       // k > 0
   double proxy_radius_m = 0.0;         // r ≥ 0
   double surface_epsilon_m = 1e-9;     // ε > 0: how far above its planes the god-object rests
   double static_friction = 0.0;        // μ_s ≥ 0
@@ -174,12 +174,15 @@ class GodObject {
   const GodObjectParams& params() const { return params_; }
 
   // The first front crossing of p0_O → p1_O with mesh `id`'s widened, moved-out triangles
-  // (header comment), skipping `exclude` (−1: none), through the AABB tree; and the same by
-  // testing every triangle (a second method, for tests).
+  // (header comment), skipping the triangles in `exclude` (−1 entries: none; the active
+  // constraints' triangles), through the AABB tree; and the same by testing every triangle (a
+  // second method, for tests).
+  using Exclusions = std::array<int, 3>;
   Crossing CalcFirstCrossing(int id, const Eigen::Vector3d& p0_O_m, const Eigen::Vector3d& p1_O_m,
-                             int exclude = -1) const;
+                             const Exclusions& exclude = {-1, -1, -1}) const;
   Crossing CalcFirstCrossingBruteForce(int id, const Eigen::Vector3d& p0_O_m,
-                                       const Eigen::Vector3d& p1_O_m, int exclude = -1) const;
+                                       const Eigen::Vector3d& p1_O_m,
+                                       const Exclusions& exclude = {-1, -1, -1}) const;
 
  private:
   struct Node {               // AABB tree node, pre-order: the left child follows its parent
@@ -223,6 +226,11 @@ class GodObject {
                                double* t) const;
   // The force shading normal at the god-object for constraint c, W.
   Eigen::Vector3d CalcShadingNormal(const Constraint& c) const;
+  // The three parts of Step (god_object.cc).
+  Eigen::Vector3d PlaceGodObject(const Eigen::Vector3d& hip_W_m);
+  void ApplyFriction(const Eigen::Vector3d& hip_W_m, bool was_in_contact,
+                     const Eigen::Vector3d& first_point_W);
+  void ApplyTextureAndShading();
 
   GodObjectParams params_;
   std::vector<Mesh> meshes_;

@@ -312,7 +312,8 @@ double GodObject::CalcTriangleCrossing(const Mesh& mesh, int f, const Vector3d& 
 }
 
 GodObject::Crossing GodObject::CalcFirstCrossing(int id, const Vector3d& p0_O_m,
-                                                 const Vector3d& p1_O_m, int exclude) const {
+                                                 const Vector3d& p1_O_m,
+                                                 const Exclusions& exclude) const {
   const Mesh& mesh = meshes_.at(id);
   const Vector3d d = p1_O_m - p0_O_m;
   Crossing best;
@@ -325,7 +326,7 @@ GodObject::Crossing GodObject::CalcFirstCrossing(int id, const Vector3d& p0_O_m,
     if (node.count > 0) {
       for (int j = node.first; j < node.first + node.count; ++j) {
         const int f = mesh.order[j];
-        if (f == exclude) continue;
+        if (f == exclude[0] || f == exclude[1] || f == exclude[2]) continue;
         const double t = CalcTriangleCrossing(mesh, f, p0_O_m, p1_O_m);
         if (t < best.t || (t == best.t && best.triangle >= 0 && f < best.triangle)) {
           best.t = t;
@@ -342,11 +343,11 @@ GodObject::Crossing GodObject::CalcFirstCrossing(int id, const Vector3d& p0_O_m,
 
 GodObject::Crossing GodObject::CalcFirstCrossingBruteForce(int id, const Vector3d& p0_O_m,
                                                            const Vector3d& p1_O_m,
-                                                           int exclude) const {
+                                                           const Exclusions& exclude) const {
   const Mesh& mesh = meshes_.at(id);
   Crossing best;
   for (int f = 0; f < mesh.triangles.cols(); ++f) {
-    if (f == exclude) continue;
+    if (f == exclude[0] || f == exclude[1] || f == exclude[2]) continue;
     const double t = CalcTriangleCrossing(mesh, f, p0_O_m, p1_O_m);
     if (t < best.t) {
       best.t = t;

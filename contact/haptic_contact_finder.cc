@@ -45,12 +45,14 @@ void HapticContactFinder::SetBodyPositions(const Eigen::VectorXd& x_m) {
 void HapticContactFinder::Find(const Eigen::Isometry3d& X_WT, double margin_m,
                                std::vector<Contact>* contacts) {
   contacts->clear();
-  if (detector_) detector_->SetMargin(std::min(margin_m, max_margin_m_));
+  // In [0, max_margin_m] whatever is asked (NaN too: SetMargin must not throw in the loop).
+  margin_m = margin_m >= 0.0 ? std::min(margin_m, max_margin_m_) : 0.0;
+  if (detector_) detector_->SetMargin(margin_m);
   if (detector_)
     detector_->Detect(x_body_m_, X_WT, x_body_m_, X_WT, contacts, /*refit_tree=*/false);
   objects_.AddToolContacts(X_WT, X_WT, contacts);
   // Both detectors report up to max_margin_m; keep those within the margin asked for.
-  const double threshold_m = std::min(margin_m, max_margin_m_);
+  const double threshold_m = margin_m;
   contacts->erase(std::remove_if(contacts->begin(), contacts->end(),
                                  [threshold_m](const Contact& c) { return c.gap_m > threshold_m; }),
                   contacts->end());

@@ -6,8 +6,27 @@
 
 namespace hapsim::contact {
 
+namespace {
+
+// The parameters, checked before anything is sized from them.
+const ImpactParams& Checked(const ImpactParams& params) {
+  if (!(params.restitution >= 0.0 && params.restitution <= 1.0))
+    throw std::invalid_argument("impact restitution must be in [0, 1]");
+  if (!(params.rest_speed_m_s >= 0.0)) throw std::invalid_argument("impact rest speed < 0");
+  if (params.max_contacts < 1) throw std::invalid_argument("impact max_contacts < 1");
+  if (params.max_iterations < 1) throw std::invalid_argument("impact max_iterations < 1");
+  if (!(params.tolerance_m_s >= 0.0)) throw std::invalid_argument("impact tolerance < 0");
+  return params;
+}
+
+// Contacts ordered by depth when there are more than the rows: room for this many without a
+// reallocation in the step (the geometric modes' contact buffer holds 512).
+constexpr std::size_t kOrderCapacity = 4096;
+
+}  // namespace
+
 ImpactContact::ImpactContact(const ImpactParams& params)
-    : params_(params),
+    : params_(Checked(params)),
       a_(3, params.max_contacts),
       ra_(3, params.max_contacts),
       gv_(3, params.max_contacts),
@@ -16,12 +35,7 @@ ImpactContact::ImpactContact(const ImpactParams& params)
       s_(params.max_contacts),
       target_(params.max_contacts),
       lambda_(params.max_contacts) {
-  if (!(params.restitution >= 0.0 && params.restitution <= 1.0)) {
-    throw std::invalid_argument("impact restitution must be in [0, 1]");
-  }
-  if (!(params.rest_speed_m_s >= 0.0)) throw std::invalid_argument("impact rest speed < 0");
-  if (params.max_contacts < 1) throw std::invalid_argument("impact max_contacts < 1");
-  order_.reserve(4 * static_cast<size_t>(params.max_contacts));
+  order_.reserve(kOrderCapacity);
 }
 
 void ImpactContact::Calc(const std::vector<Contact>& contacts, const ToolStepSystem& system,
@@ -69,7 +83,15 @@ void ImpactContact::Calc(const std::vector<Contact>& contacts, const ToolStepSys
     for (int j = 0; j < n_; ++j)
       W_(i, j) = dt * (a_.col(i).dot(gv_.col(j)) + ra_.col(i).dot(gw_.col(j)));
   }
-  // Projected Gauss–Seidel on s⁺ = s_free + W λ ≥ target, λ ≥ 0, complementary. s_ holds s⁺.
+  SolveRows();
+  for (int i = 0; i < n_; ++i) {
+    *F_W_N += lambda_(i) * a_.col(i);
+    *T_W_N_m += lambda_(i) * ra_.col(i);
+  }
+}
+
+// Projected Gauss–Seidel on s⁺ = s_free + W λ ≥ target, λ ≥ 0, complementary; s_ holds s⁺.
+void ImpactContact::SolveRows() {
   for (int sweep = 0; sweep < params_.max_iterations; ++sweep) {
     double worst_m_s = 0.0;
     for (int i = 0; i < n_; ++i) {
@@ -84,10 +106,6 @@ void ImpactContact::Calc(const std::vector<Contact>& contacts, const ToolStepSys
       worst_m_s = std::max(worst_m_s, lambda_(i) > 0.0 ? std::abs(miss) : std::max(miss, 0.0));
     }
     if (worst_m_s <= params_.tolerance_m_s) break;
-  }
-  for (int i = 0; i < n_; ++i) {
-    *F_W_N += lambda_(i) * a_.col(i);
-    *T_W_N_m += lambda_(i) * ra_.col(i);
   }
 }
 

@@ -38,11 +38,13 @@ struct ImpactParams {
 
 class ImpactContact {
  public:
-  // Throws std::invalid_argument for e outside [0, 1], v_rest < 0 or max_contacts < 1.
+  // Throws std::invalid_argument for e outside [0, 1], v_rest < 0, max_contacts < 1,
+  // max_iterations < 1 or a negative tolerance.
   explicit ImpactContact(const ImpactParams& params);
 
   // The contact force and torque on the tool (world; torque about the tool's centre of mass)
-  // over the step whose free system is `system`, at tool state `tool`. Allocates nothing.
+  // over the step whose free system is `system`, at tool state `tool`. Allocates nothing (up to
+  // 4,096 contacts; more: the depth ordering grows once).
   void Calc(const std::vector<Contact>& contacts, const ToolStepSystem& system,
             const ToolModel& model, const ToolState& tool, Eigen::Vector3d* F_W_N,
             Eigen::Vector3d* T_W_N_m);
@@ -52,6 +54,8 @@ class ImpactContact {
   const ImpactParams& params() const { return params_; }
 
  private:
+  void SolveRows();  // λ for the rows set up by Calc
+
   ImpactParams params_;
   int n_ = 0;
   int num_impacts_ = 0;

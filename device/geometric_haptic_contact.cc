@@ -7,11 +7,6 @@
 
 namespace hapsim::device {
 
-bool IsGeometricMode(HapticMode mode) {
-  return mode == HapticMode::kPenalty || mode == HapticMode::kMaterial ||
-         mode == HapticMode::kImpact;
-}
-
 GeometricHapticContact::GeometricHapticContact(HapticMode mode,
                                                const GeometricContactParams& params,
                                                const ToolModel& tool, const fem::Model* body,
@@ -47,10 +42,9 @@ void GeometricHapticContact::Calc(const ToolStepSystem& system, const ToolState&
   const Eigen::Vector3d w_W = CalcAngularVelocity(tool_, state);
   switch (mode_) {
     case HapticMode::kPenalty: {
-      // ε = v Δt, capped by how far the finder searches.
-      const double margin_m =
-          std::min(penalty_.CalcMargin(state.v_W_m_s, w_W, bounding_radius_m_, system.dt_s),
-                   search_margin_m_);
+      // ε = v Δt, capped by how far the finder searches (a non-finite state gives none).
+      double margin_m = penalty_.CalcMargin(state.v_W_m_s, w_W, bounding_radius_m_, system.dt_s);
+      margin_m = margin_m >= 0.0 ? std::min(margin_m, search_margin_m_) : 0.0;
       finder_.Find(X_WT, margin_m, &contacts_);
       penalty_.Calc(contacts_, margin_m, state.x_W_m, F_W_N, T_W_N_m);
       return;

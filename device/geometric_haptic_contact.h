@@ -69,7 +69,4 @@ class GeometricHapticContact {
   std::vector<contact::Contact> contacts_;
 };
 
-// Whether `mode` is one of the geometric modes above.
-bool IsGeometricMode(HapticMode mode);
-
 }  // namespace hapsim::device

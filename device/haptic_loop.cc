@@ -18,6 +18,8 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
             options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0),
       visual_tool_(initial_tool),
       proxy_tool_(initial_tool),
+      world_nodes_(body != nullptr ? body->num_nodes() : 0),
+      world_objects_(static_cast<int>(objects.size())),
       safety_(options.safety, options.dt_s),
       passivity_(options.passivity_threshold_J) {
   if (options.mode == HapticMode::kReference)
@@ -58,10 +60,16 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
       step_.SetContactRows(new_model->rows.num_rows() > 0 ? &new_model->rows : nullptr,
                            new_model->lcp_solver.get());
     visual_tool_ = new_model->visual_tool;
-    // The world to render from this step on (a refit of the body's tree: once a frame).
-    if (new_model->has_world && geometric_)
+    // The world to render from this step on (a refit of the body's tree: once a frame). One of
+    // another size than the loop's (the receiver checks it against the scene) is not applied:
+    // the world setters would throw, and this step must not.
+    const bool world_fits =
+        new_model->has_world &&
+        new_model->body_x_m.size() == 3 * static_cast<Eigen::Index>(world_nodes_) &&
+        static_cast<int>(new_model->object_poses.size()) == world_objects_;
+    if (world_fits && geometric_)
       geometric_->SetWorld(new_model->body_x_m, new_model->object_poses);
-    if (new_model->has_world && god_world_)
+    if (world_fits && god_world_)
       god_world_->SetWorld(new_model->body_x_m, new_model->object_poses);
     model_sequence_ = new_model->sequence;
     model_age_s_ = 0.0;

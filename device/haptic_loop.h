@@ -44,11 +44,6 @@ struct HapticLoopOptions {
   int world_objects = 0;
 };
 
-// Whether `mode` renders the frame's world at 1 kHz (contact_model_t carries it).
-inline bool NeedsWorld(HapticMode mode) {
-  return IsGeometricMode(mode) || mode == HapticMode::kGodObject;
-}
-
 struct HapticLoopOutput {
   HapticOutput rendered;  // what the haptic step computed (zero when skipped)
   SafeWrench sent;        // what may go to the device
@@ -61,9 +56,11 @@ struct HapticLoopOutput {
 
 class HapticLoop {
  public:
-  // Throws std::invalid_argument for the reference mode (in-process only) or bad safety limits.
-  // body, objects: the world of the geometric modes and godobject (the scene's deformable body,
-  // which must outlive the loop, or null; its rigid objects at their start poses).
+  // Throws std::invalid_argument for the reference mode (in-process only), bad safety limits, or
+  // bad parameters of the papers' modes (penalty, material, impact, god-object: as their
+  // classes do). body, objects: the world of the geometric modes and godobject (the scene's
+  // deformable body, which must outlive the loop, or null; its rigid objects at their start
+  // poses); every model's world must have their sizes (else it is not applied).
   HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
              const Eigen::Vector3d& gravity_m_s2, const ToolState& initial_tool,
              const HapticLoopOptions& options, const fem::Model* body = nullptr,
@@ -89,6 +86,8 @@ class HapticLoop {
   std::unique_ptr<GeometricHapticContact> geometric_;  // penalty, material, impact
   std::unique_ptr<GodObjectWorld> god_world_;          // godobject
   ToolState proxy_tool_;                               // godobject: at the proxy
+  int world_nodes_ = 0;    // the size of a world this loop renders (its body's nodes,
+  int world_objects_ = 0;  // its rigid objects); a model's world of another size is not applied
   HapticSafety safety_;
   PassivityObserver passivity_;
   std::int64_t model_sequence_ = -1;

@@ -8,7 +8,8 @@
 //   kPenalty    paper 000: penalty forces k (ε + d) on the haptic tool at 1 kHz, smoothed
 //   kMaterial   paper 003: per-object Hooke, viscous and stick–slip forces, averaged over pairs
 //   kImpact     paper 001: constraint impulses with a coefficient of restitution at 1 kHz
-//   kGodObject  paper 004: a point tool's proxy held on the surfaces' triangles (contact/god_object.h)
+//   kGodObject  paper 004: a point tool's proxy held on the surfaces' triangles
+//   (contact/god_object.h)
 // Each works on the world of the last visual frame (rigid objects, the body's surface as rigid).
 
 namespace hapsim::device {
@@ -25,5 +26,16 @@ enum class HapticMode {
 };
 // "linear", "lcp", "coupling", "reference", "penalty", "material", "impact", "godobject"
 const char* ToString(HapticMode mode);
+
+// penalty, material or impact: a haptic tool whose contact force comes from its own contacts
+// at 1 kHz (device/geometric_haptic_contact.h).
+inline bool IsGeometricMode(HapticMode mode) {
+  return mode == HapticMode::kPenalty || mode == HapticMode::kMaterial ||
+         mode == HapticMode::kImpact;
+}
+// The modes that render the frame's world at 1 kHz (each contact model carries it).
+inline bool NeedsWorld(HapticMode mode) {
+  return IsGeometricMode(mode) || mode == HapticMode::kGodObject;
+}
 
 }  // namespace hapsim::device

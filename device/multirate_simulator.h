@@ -59,6 +59,7 @@ struct HapticSample {
   double model_age_s = 0.0;    // time since the visual frame that produced the model
   // Wall time of the haptic step alone (not the visual frame computed before it in the same
   // period), s: the mode's 1 kHz cost; 0 in the reference and coupling modes, which have none.
+  // In the papers' modes a frame's first step includes putting the frame's world in place.
   double step_time_s = 0.0;
 };
 
@@ -101,8 +102,10 @@ class MultirateSimulator {
   HapticSample StepCoupling(const DeviceState& device, long k);
   HapticSample StepReference(const DeviceState& device, long k);
   HapticSample StepGodObject(const DeviceState& device, long k);
-  // The rigid objects where the last frame left them (object_poses_).
-  void CollectObjectPoses();
+  // Penalty, material, impact, godobject: the last frame's world put in place (the body's nodes,
+  // the objects' poses), its wall time kept for the step that follows (TakeWorldTime).
+  void SetGeometricWorld();
+  double TakeWorldTime(long k);
   void FillFromVisualTool(const DeviceState& device, HapticSample* sample) const;
   void FillFromLastFrame(HapticSample* sample) const;
 
@@ -115,6 +118,7 @@ class MultirateSimulator {
   std::unique_ptr<GeometricHapticContact> geometric_;  // penalty, material, impact
   std::vector<Eigen::Isometry3d> object_poses_;        // scratch: the frame's object poses
   std::unique_ptr<GodObjectWorld> god_world_;          // godobject
+  double world_time_s_ = 0.0;                          // SetGeometricWorld's last wall time
   long last_frame_step_ = 0;
   std::function<void(const FrameSample&)> on_frame_;
 };

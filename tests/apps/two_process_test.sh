@@ -427,27 +427,17 @@ PY
 agrees_with_in_process "$work/hostile.json" "$work/hostile.csv" | sed "s/^/under a hostile publisher: /" ||
   inconclusive="${inconclusive:+$inconclusive; }the run under a hostile publisher disagreed (host?)"
 
-# 11. The papers' 1 kHz modes: the world travels with the models; replay and forces as above.
-for entry in "probe:godobject" "peg_in_hole:penalty"; do
-  name=${entry%%:*}
-  mode=${entry#*:}
-  "$hapsim" sim "scenes/$name.yaml" --mode "$mode" --out "$work/sim_$name" > /dev/null
-  "$hapsim" run "scenes/$name.yaml" --mode "$mode" --lcm-url "$url" --log "$work/$name.lcm" \
-    --haptic-summary "$work/$name.json" > "$work/$name.out" 2>&1 ||
-    fail "$name $mode run: $(cat "$work/$name.out")"
-  (cd "$work/elsewhere" && "$hapsim" replay "../$name.lcm" --csv "../$name.csv") \
-    > "$work/${name}_replay.out" 2>&1 || fail "$name replay: $(cat "$work/${name}_replay.out")"
-  grep -q "reproduced bit for bit" "$work/${name}_replay.out" ||
-    fail "$name replay: $(cat "$work/${name}_replay.out")"
-  /usr/bin/python3 - "$work/$name.json" "$work/$name.csv" "$work/sim_$name/haptic.csv" \
-    "$name $mode" <<'PY' || inconclusive="${inconclusive:+$inconclusive; }$name disagreed (host?)"
+# 11. The papers' 1 kHz modes: the world travels with the models; replay and forces as above,
+# with check 1's three attempts (a lost datagram or a disturbed run is repeated).
+papers_mode_agrees() {  # summary, logged CSV, in-process CSV, label
+  /usr/bin/python3 - "$@" <<'PY'
 import csv, json, math, sys
 summary = json.load(open(sys.argv[1]))
 logged = list(csv.DictReader(open(sys.argv[2])))
 inproc = list(csv.DictReader(open(sys.argv[3])))
 assert summary["steps"] == len(inproc), (summary["steps"], len(inproc))
 assert len(logged) >= len(inproc) - 10, f"{len(inproc) - len(logged)} steps missing from the log"
-# As check 1: 0.1 N RMS, the peak within 5% (measured 0.027 N for probe, 0.002 N for the peg).
+# As check 1: 0.1 N RMS, the peak within 5% (measured 0.028 N for probe, 0.002 N for the peg).
 err = math.sqrt(sum((float(r[f"force_{a}_N"]) - float(inproc[int(r["step"])][f"force_{a}_N"])) ** 2
                     for r in logged for a in "xyz") / len(logged))
 peak = lambda rows: max(math.sqrt(sum(float(r[f"force_{a}_N"]) ** 2 for a in "xyz")) for r in rows)
@@ -456,6 +446,34 @@ print(f"{sys.argv[4]} across processes: device force RMS difference from `hapsim
 assert err < 0.1, err
 assert abs(peak(logged) - peak(inproc)) < 0.05 * peak(inproc)
 PY
+}
+for entry in "probe:godobject" "peg_in_hole:penalty"; do
+  name=${entry%%:*}
+  mode=${entry#*:}
+  "$hapsim" sim "scenes/$name.yaml" --mode "$mode" --out "$work/sim_$name" > /dev/null
+  good=0
+  for attempt in 1 2 3; do
+    "$hapsim" run "scenes/$name.yaml" --mode "$mode" --lcm-url "$url" --log "$work/$name.lcm" \
+      --haptic-summary "$work/$name.json" > "$work/$name.out" 2>&1 ||
+      fail "$name $mode run: $(cat "$work/$name.out")"
+    if ! (cd "$work/elsewhere" && "$hapsim" replay "../$name.lcm" --csv "../$name.csv") \
+      > "$work/${name}_replay.out" 2>&1; then
+      grep -qE "the log misses|is not in the log" "$work/${name}_replay.out" ||
+        fail "$name replay: $(cat "$work/${name}_replay.out")"
+      echo "$name attempt $attempt: a datagram was lost; running again"
+      continue
+    fi
+    grep -q "reproduced bit for bit" "$work/${name}_replay.out" ||
+      fail "$name replay: $(cat "$work/${name}_replay.out")"
+    if ! papers_mode_agrees "$work/$name.json" "$work/$name.csv" "$work/sim_$name/haptic.csv" \
+      "$name $mode"; then
+      echo "$name attempt $attempt: forces outside the tolerance (host?); running again"
+      continue
+    fi
+    good=1
+    break
+  done
+  [ "$good" -eq 1 ] || inconclusive="${inconclusive:+$inconclusive; }three $name runs disturbed"
 done
 
 if [ -n "$inconclusive" ]; then

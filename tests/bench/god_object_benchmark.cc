@@ -38,7 +38,7 @@ TriangleMesh MakeBumpyField(int n) {
 
 void Run(benchmark::State& state, bool contact) {
   GodObjectParams params;
-  params.stiffness_N_per_m = 1000.0;
+  params.stiffness_N_m = 1000.0;
   params.proxy_radius_m = 0.5e-3;
   params.static_friction = 0.3;
   params.dynamic_friction = 0.2;

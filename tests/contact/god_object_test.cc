@@ -115,7 +115,7 @@ TriangleMesh MakeRoof(double alpha, double width_m, double half_m) {
 
 GodObjectParams Params(double radius_m = 0.0) {
   GodObjectParams p;
-  p.stiffness_N_per_m = kStiffness;
+  p.stiffness_N_m = kStiffness;
   p.proxy_radius_m = radius_m;
   return p;
 }
@@ -130,7 +130,7 @@ TEST(GodObject, RejectsBadParametersAndMeshes) {
     edit(&p);
     return GodObject(p);
   };
-  EXPECT_THROW(make([](GodObjectParams* p) { p->stiffness_N_per_m = 0.0; }), std::invalid_argument);
+  EXPECT_THROW(make([](GodObjectParams* p) { p->stiffness_N_m = 0.0; }), std::invalid_argument);
   EXPECT_THROW(make([](GodObjectParams* p) { p->proxy_radius_m = -1e-3; }), std::invalid_argument);
   EXPECT_THROW(make([](GodObjectParams* p) { p->surface_epsilon_m = 0.0; }), std::invalid_argument);
   EXPECT_THROW(make([](GodObjectParams* p) { p->static_friction = -0.1; }), std::invalid_argument);
@@ -517,7 +517,7 @@ TEST(GodObject, DeepeningDimpleNeverLetsTheProxyThrough) {
   // leave it). Carried on one face alone, the proxy ends up behind the dimple's other faces and
   // falls through (it did, before re-seating); the proxy must keep its radius from the surface.
   GodObjectParams params;
-  params.stiffness_N_per_m = kStiffness;
+  params.stiffness_N_m = kStiffness;
   params.proxy_radius_m = 0.001;
   GodObject god(params);
   const int id = god.AddMesh(MakeDimple(0.0), Eigen::Isometry3d::Identity());

@@ -15,6 +15,7 @@
 
 #include "device/geometric_haptic_contact.h"
 #include "device/haptic_step.h"
+#include "fem/lattice_mesher.h"
 #include "tests/allocation_counter.h"
 
 namespace hapsim::device {
@@ -212,19 +213,26 @@ GeometricContactParams MaterialParams(double friction_N_m, double stickiness_N) 
   return params;
 }
 
-// The material force on a box tool held 1 mm into `objects`.
-Eigen::Vector3d MaterialForceOfBoxPress(const std::vector<contact::RigidObject>& objects) {
+// The material force on a box tool held 1 mm into `objects` (and the pairs that collided).
+Eigen::Vector3d MaterialForceOfBoxPress(const std::vector<contact::RigidObject>& objects,
+                                        const std::vector<double>& stiffness = {},
+                                        int* num_pairs = nullptr) {
   ToolShape box;
   box.kind = ToolShape::Kind::kBox;
   box.half_extents_m = Eigen::Vector3d(0.01, 0.01, 0.005);
   const ToolModel tool = MakeToolModelWithMass(box, kMass_kg);
-  GeometricHapticContact geometric(HapticMode::kMaterial, MaterialParams(0, 0), tool, nullptr,
-                                   objects);
+  GeometricContactParams params = MaterialParams(0, 0);
+  for (double s : stiffness) {
+    params.material.objects.push_back(params.material.default_object);
+    params.material.objects.back().stiffness = s;
+  }
+  GeometricHapticContact geometric(HapticMode::kMaterial, params, tool, nullptr, objects);
   const ToolState state = At({0, 0, 0.005 - 0.001});
   ToolStepSystem system;
   system.dt_s = kDt_s;
   Eigen::Vector3d F, T;
   geometric.Calc(system, state, &F, &T);
+  if (num_pairs != nullptr) *num_pairs = geometric.material().num_colliding_pairs();
   return F;
 }
 
@@ -236,9 +244,17 @@ TEST(MaterialMode, TwoIdenticalPairsGiveTheForceOfOne) {
   EXPECT_NEAR(one.head<2>().norm(), 0.0, 1e-9);
   // Two identical plates side by side, the tool across both: each pair alone gives 0.3 N; the
   // average of the two is the force of one (their sum would be 0.6 N).
+  int pairs = 0;
   const Eigen::Vector3d two =
-      MaterialForceOfBoxPress({MakePlate(0.05, -0.05), MakePlate(0.05, 0.05)});
+      MaterialForceOfBoxPress({MakePlate(0.05, -0.05), MakePlate(0.05, 0.05)}, {}, &pairs);
+  EXPECT_EQ(pairs, 2);
   EXPECT_NEAR(two.z(), expected_N, 1e-9);
+  // Two different plates (S₁ 0.75 and 0.25: 0.3 and 0.1 N alone): their mean, 0.2 N, neither the
+  // sum (0.4 N) nor the larger (0.3 N).
+  const Eigen::Vector3d mixed = MaterialForceOfBoxPress(
+      {MakePlate(0.05, -0.05), MakePlate(0.05, 0.05)}, {0.75, 0.25}, &pairs);
+  EXPECT_EQ(pairs, 2);
+  EXPECT_NEAR(mixed.z(), 0.5 * (expected_N + 800.0 * 0.5 * 0.25 * 0.001), 1e-9);
 }
 
 TEST(MaterialMode, StickSlipSawtooth) {
@@ -270,6 +286,33 @@ TEST(MaterialMode, StickSlipSawtooth) {
 }
 
 // ---- no allocation --------------------------------------------------------------------------
+
+// The body path: a 5 mm sphere pressed into a small soft block's surface snapshot (node and
+// sphere-centre-versus-face contacts, the merge), every mode, no allocation after a warm-up.
+TEST(GeometricModes, StepOnABodyAllocatesNothing) {
+  if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocation counting is off (sanitizer)";
+  const fem::Model block =
+      fem::MakeModel(fem::MakeBoxTetMesh({-0.02, -0.02, -0.01}, {0.02, 0.02, 0.0}, {8, 8, 2}),
+                     fem::Material{}, {});
+  for (HapticMode mode : {HapticMode::kPenalty, HapticMode::kMaterial, HapticMode::kImpact}) {
+    GeometricHapticContact geometric(mode, MaterialParams(500, 0.2), MakeSphereTool(), &block, {});
+    HapticStep step(MakeSphereTool(), Coupling(300, 3), Eigen::Vector3d(0, 0, -kG_m_s2), kDt_s,
+                    At({0.0013, 0.0007, kRadius_m + 0.001}));
+    step.SetGeometricContact(&geometric);
+    const auto device_at = [](int k) {
+      return DeviceAt({0.004 * std::sin(0.01 * k), 0.0007, kRadius_m - 0.003 * std::sin(0.02 * k)});
+    };
+    for (int k = 0; k < 400; ++k) step.Step(device_at(k));  // warm-up: buffers grow
+    AllocationCounter counter;
+    int in_contact = 0;
+    for (int k = 400; k < 800; ++k) {
+      step.Step(device_at(k));
+      in_contact += geometric.num_contacts() > 0 ? 1 : 0;
+    }
+    EXPECT_EQ(counter.count(), 0) << ToString(mode);
+    EXPECT_GT(in_contact, 50) << ToString(mode);
+  }
+}
 
 TEST(GeometricModes, StepAllocatesNothing) {
   if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocation counting is off (sanitizer)";
