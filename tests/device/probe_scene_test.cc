@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "config/body_builder.h"
@@ -33,6 +34,20 @@ std::vector<HapticSample> Simulate(const config::Scene& scene, const config::Bod
       ScriptedTrajectory(scene.trajectory), std::lround(duration_s * 1000),
       [&](const HapticSample& s) { samples.push_back(s); }, nullptr);
   return samples;
+}
+
+// Unsigned distance from p to the body's surface triangles at node positions x, by brute force
+// over every triangle (a second method beside the god-object's tree).
+double CalcSurfaceDistance(const Eigen::Vector3d& p_W, const Eigen::VectorXd& x_m,
+                           const Matrix3Xi& faces) {
+  double distance_m = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < faces.cols(); ++f) {
+    const contact::TrianglePoint q = contact::CalcClosestPointOnTriangle(
+        p_W, x_m.segment<3>(3 * faces(0, f)), x_m.segment<3>(3 * faces(1, f)),
+        x_m.segment<3>(3 * faces(2, f)));
+    distance_m = std::min(distance_m, (p_W - q.point).norm());
+  }
+  return distance_m;
 }
 
 struct ProbeScene : testing::Test {
@@ -114,13 +129,7 @@ TEST_F(ProbeScene, GodObjectOnTheDeformedBlock) {
   const Eigen::Vector3d proxy_W = god.back().tool_x_W_m;
   const Eigen::VectorXd& x = simulator.body_state().x_m;
   const Matrix3Xi& faces = body_->model.surface_triangles;
-  double distance_m = 1.0;
-  for (int f = 0; f < faces.cols(); ++f) {
-    const contact::TrianglePoint q = contact::CalcClosestPointOnTriangle(
-        proxy_W, x.segment<3>(3 * faces(0, f)), x.segment<3>(3 * faces(1, f)),
-        x.segment<3>(3 * faces(2, f)));
-    distance_m = std::min(distance_m, (proxy_W - q.point).norm());
-  }
+  const double distance_m = CalcSurfaceDistance(proxy_W, x, faces);
   const double r_m = scene.tool->model.shape.radius_m;
   ASSERT_TRUE(simulator.god_object()->in_contact());
   EXPECT_NEAR(distance_m, r_m, 1e-8);
@@ -129,13 +138,7 @@ TEST_F(ProbeScene, GodObjectOnTheDeformedBlock) {
   // The device's point lies |d| under the deformed surface (brute force again): |F| ≥ k (r + |d|),
   // as on the plate, and the block is felt.
   const Eigen::Vector3d hip_W(0.03, 0, -0.003);
-  double hip_depth_m = 1.0;
-  for (int f = 0; f < faces.cols(); ++f) {
-    const contact::TrianglePoint q = contact::CalcClosestPointOnTriangle(
-        hip_W, x.segment<3>(3 * faces(0, f)), x.segment<3>(3 * faces(1, f)),
-        x.segment<3>(3 * faces(2, f)));
-    hip_depth_m = std::min(hip_depth_m, (hip_W - q.point).norm());
-  }
+  const double hip_depth_m = CalcSurfaceDistance(hip_W, x, faces);
   const double force_N = god.back().device_force_W_N.norm();
   const double bound_N = options.godobject.stiffness_N_m * (r_m + hip_depth_m);
   EXPECT_GE(force_N, bound_N - 1e-9);
