@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "core/progress_bar.h"
 #include "core/statistics.h"
+#include "fem/max_frequency.h"
 #include "fem/mesh_io.h"
 
 namespace hapsim::apps {
@@ -72,30 +73,38 @@ nlohmann::json MakeSummary(const config::Scene& scene, const config::Body& body,
     probes.push_back(
         {{"name", body.probes[p].name}, {"final_displacement_m", {u_m.x(), u_m.y(), u_m.z()}}});
   }
-  return {{"scene", scene.file},
-          {"name", scene.name},
-          {"num_nodes", body.model.num_nodes()},
-          {"num_tets", body.model.num_tets()},
-          {"num_dofs", body.model.num_dofs()},
-          {"num_fixed_nodes", body.model.num_fixed_nodes()},
-          {"num_steps", num_steps},
-          {"dt_s", scene.dt_s},
-          {"elasticity", fem::ToString(options.elasticity)},
-          {"integrator", fem::ToString(options.integrator)},
-          {"solver", fem::ToString(options.solver.kind)},
-          {"preconditioner", fem::ToString(options.solver.preconditioner)},
-          {"timings",
-           {{"rotations", StageSummary(Column(record.steps, &fem::StepStats::rotations_s))},
-            {"assembly", StageSummary(Column(record.steps, &fem::StepStats::assembly_s))},
-            {"solve", StageSummary(Column(record.steps, &fem::StepStats::solve_s))},
-            {"total", StageSummary(Column(record.steps, &fem::StepStats::total_s))}}},
-          {"solver_iterations",
-           {{"median", Median(iterations)},
-            {"mean", Mean(iterations)},
-            {"max", *std::max_element(iterations.begin(), iterations.end())}}},
-          {"max_relative_residual", *std::max_element(residuals.begin(), residuals.end())},
-          {"num_factorizations", record.num_factorizations},
-          {"probes", probes}};
+  nlohmann::json summary = {
+      {"scene", scene.file},
+      {"name", scene.name},
+      {"num_nodes", body.model.num_nodes()},
+      {"num_tets", body.model.num_tets()},
+      {"num_dofs", body.model.num_dofs()},
+      {"num_fixed_nodes", body.model.num_fixed_nodes()},
+      {"num_steps", num_steps},
+      {"dt_s", scene.dt_s},
+      {"elasticity", fem::ToString(options.elasticity)},
+      {"integrator", fem::ToString(options.integrator)},
+      {"solver", fem::ToString(options.solver.kind)},
+      {"preconditioner", fem::ToString(options.solver.preconditioner)},
+      {"timings",
+       {{"rotations", StageSummary(Column(record.steps, &fem::StepStats::rotations_s))},
+        {"assembly", StageSummary(Column(record.steps, &fem::StepStats::assembly_s))},
+        {"solve", StageSummary(Column(record.steps, &fem::StepStats::solve_s))},
+        {"total", StageSummary(Column(record.steps, &fem::StepStats::total_s))}}},
+      {"solver_iterations",
+       {{"median", Median(iterations)},
+        {"mean", Mean(iterations)},
+        {"max", *std::max_element(iterations.begin(), iterations.end())}}},
+      {"max_relative_residual", *std::max_element(residuals.begin(), residuals.end())},
+      {"num_factorizations", record.num_factorizations},
+      {"probes", probes}};
+  if (options.integrator == fem::IntegratorKind::kExplicitEuler) {
+    // Where the explicit step must fail: Δt < 2 / ω_max (without damping).
+    const fem::MaxFrequencyEstimate estimate = fem::EstimateMaxFrequency(body.model);
+    summary["omega_max_rad_s"] = estimate.omega_max_rad_s;
+    summary["explicit_stable_dt_s"] = 2.0 / estimate.omega_max_rad_s;
+  }
+  return summary;
 }
 
 void WriteStepsCsv(const std::string& path, const config::Body& body, const FemRunRecord& record,

@@ -2,7 +2,8 @@
 // the in-process multirate simulator (device/multirate_simulator.h) on a scene with a body, a tool
 // and a scripted device. Writes <out>/haptic.csv (one row per haptic step: device force and torque,
 // tool pose, contacts in the model, model age), <out>/frames.csv (one row per visual frame: stage
-// timings, contacts, solver figures, penetration of the tool and of the rigid objects) and a JSON
+// timings, contacts, solver figures, penetration of the tool and of the rigid objects, the visual
+// tool's position and the frame's contact force on it) and a JSON
 // summary; all after the run,
 // atomically.
 
@@ -74,7 +75,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
   WriteFileAtomically(path, [&](std::ostream& out) {
     out << "t_s,coupling_ms,free_tool_ms,free_fem_ms,detection_ms,response_ms,model_ms,sanity_ms,"
            "total_ms,candidates,contacts,active,solver_iterations,solver_residual,"
-           "sanity_corrections,max_penetration_m,rigid_contacts,max_object_penetration_m\n";
+           "sanity_corrections,max_penetration_m,rigid_contacts,max_object_penetration_m,"
+           "tool_x_m,tool_y_m,tool_z_m,contact_force_x_N,contact_force_y_N,contact_force_z_N\n";
     for (const device::FrameSample& f : record.frames) {
       const contact::VisualFrameStats& s = f.stats;
       out << f.t_s << ',' << 1e3 * s.coupling_s << ',' << 1e3 * s.free_tool_s << ','
@@ -83,7 +85,9 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
           << s.num_candidates << ',' << s.num_contacts << ',' << s.num_active << ','
           << s.solve.iterations << ',' << s.solve.residual << ',' << s.num_sanity_corrections << ','
           << s.max_penetration_m << ',' << s.num_rigid_contacts << ',' << s.max_object_penetration_m
-          << '\n';
+          << ',' << f.tool_x_W_m.x() << ',' << f.tool_x_W_m.y() << ',' << f.tool_x_W_m.z() << ','
+          << f.contact_force_W_N.x() << ',' << f.contact_force_W_N.y() << ','
+          << f.contact_force_W_N.z() << '\n';
     }
   });
 }

@@ -101,11 +101,19 @@ MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
   MeshSource mesh;
   mesh.location = LocationOf(map);
   if (const std::optional<YamlMap> box = map.FindMap("box")) {
-    box->CheckKeys({"min_m", "max_m", "cells"});
+    box->CheckKeys({"min_m", "max_m", "cells", "graded"});
     mesh.kind = MeshSource::Kind::kBox;
     mesh.box = ReadBox(*box, /*allow_flat=*/false);
     mesh.cells = box->GetVector3i("cells", AtLeast(1));
     CheckLatticeFitsMemory(*box, "cells", mesh.cells.cast<double>());
+    if (const std::optional<YamlMap> graded = box->FindMap("graded")) {
+      graded->CheckKeys({"focus_m", "ratio"});
+      mesh.grading_focus_m = graded->GetVector3("focus_m");
+      mesh.grading_ratio = graded->GetDouble("ratio", AtLeast(1.0));
+      const bool inside = (mesh.grading_focus_m.array() >= mesh.box.min_m.array()).all() &&
+                          (mesh.grading_focus_m.array() <= mesh.box.max_m.array()).all();
+      if (!inside) graded->FailKey("focus_m", "must lie inside the box (min_m to max_m)");
+    }
   } else if (const std::optional<YamlMap> ellipsoid = map.FindMap("ellipsoid")) {
     ellipsoid->CheckKeys({"center_m", "radii_m", "cell_size_m"});
     mesh.kind = MeshSource::Kind::kEllipsoid;

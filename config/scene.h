@@ -15,6 +15,8 @@
 //   body:                              # optional: the deformable body
 //     mesh:                            # exactly one of box / ellipsoid / file
 //       box: {min_m: [x,y,z], max_m: [x,y,z], cells: [nx,ny,nz]}   # max > min, cells ≥ 1
+//         # optional in box: graded: {focus_m: [x,y,z], ratio: 5}: cells grow linearly with the
+//         # distance from focus_m (inside the box) to `ratio` (≥ 1) times at the farthest face
 //       ellipsoid: {center_m: [..], radii_m: [..], cell_size_m: h} # radii > 0, h > 0
 //       file: meshes/liver.msh         # .msh (Gmsh 2.2/4.1 ASCII) or .node (TetGen, + .ele),
 //                                      # relative to the scene file's folder
@@ -180,8 +182,12 @@ struct AxisAlignedBox {
 struct MeshSource {
   enum class Kind { kBox, kEllipsoid, kFile };
   Kind kind = Kind::kBox;
-  AxisAlignedBox box;                                  // kBox
-  Eigen::Vector3i cells = Eigen::Vector3i::Ones();     // kBox: lattice cells per axis
+  AxisAlignedBox box;                               // kBox
+  Eigen::Vector3i cells = Eigen::Vector3i::Ones();  // kBox: lattice cells per axis
+  // kBox: cells graded towards this point, `ratio` times larger at the farthest faces
+  // (fem::MakeGradedAxis); ratio 1: uniform.
+  Eigen::Vector3d grading_focus_m = Eigen::Vector3d::Zero();
+  double grading_ratio = 1.0;
   Eigen::Vector3d center_m = Eigen::Vector3d::Zero();  // kEllipsoid
   Eigen::Vector3d radii_m = Eigen::Vector3d::Ones();   // kEllipsoid
   double cell_size_m = 0.0;                            // kEllipsoid: lattice cell edge

@@ -120,7 +120,7 @@ HapticSample MultirateSimulator::StepHapticTool(const DeviceState& device, long 
     }
     if (geometric_) SetGeometricWorld();
     last_frame_step_ = k;
-    if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+    if (on_frame_) on_frame_(MakeFrameSample(k, stats));
   }
   Stopwatch stopwatch;
   const HapticOutput out = haptic_.Step(device);
@@ -149,6 +149,16 @@ void MultirateSimulator::FillFromVisualTool(const DeviceState& device, HapticSam
   sample->device_torque_W_N_m = -wrench.T_W_N_m;
 }
 
+FrameSample MultirateSimulator::MakeFrameSample(long k,
+                                                const contact::VisualFrameStats& stats) const {
+  FrameSample sample;
+  sample.t_s = k * options_.haptic_dt_s;
+  sample.stats = stats;
+  sample.tool_x_W_m = visual_tool_.x_W_m;
+  sample.contact_force_W_N = frame_.contact_force_N();
+  return sample;
+}
+
 void MultirateSimulator::FillFromLastFrame(HapticSample* sample) const {
   sample->contact_force_W_N = frame_.contact_force_N();
   sample->tool_x_W_m = visual_tool_.x_W_m;
@@ -162,7 +172,7 @@ HapticSample MultirateSimulator::StepCoupling(const DeviceState& device, long k)
   if (k % options_.haptic_steps_per_frame == 0) {
     const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
     last_frame_step_ = k;
-    if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+    if (on_frame_) on_frame_(MakeFrameSample(k, stats));
   }
   HapticSample sample;
   FillFromVisualTool(device, &sample);
@@ -177,7 +187,7 @@ HapticSample MultirateSimulator::StepReference(const DeviceState& device, long k
   HapticSample sample;
   FillFromVisualTool(device, &sample);
   const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
-  if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+  if (on_frame_) on_frame_(MakeFrameSample(k, stats));
   FillFromLastFrame(&sample);
   return sample;
 }
@@ -212,7 +222,7 @@ HapticSample MultirateSimulator::StepGodObject(const DeviceState& device, long k
     const contact::VisualFrameStats stats = frame_.Step(device, &body_state_, &visual_tool_);
     SetGeometricWorld();
     last_frame_step_ = k;
-    if (on_frame_) on_frame_({k * options_.haptic_dt_s, stats});
+    if (on_frame_) on_frame_(MakeFrameSample(k, stats));
   }
   Stopwatch stopwatch;
   god.Step(device.x_W_m);

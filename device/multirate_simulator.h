@@ -66,6 +66,10 @@ struct HapticSample {
 struct FrameSample {
   double t_s = 0.0;
   contact::VisualFrameStats stats;
+  // The visual tool after the frame, and the frame's contact force on it (J_vᵀλ, λ in N):
+  // at rest these are the quasi-static indentation and its force (scripts/bench: Hertz, punch).
+  Eigen::Vector3d tool_x_W_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d contact_force_W_N = Eigen::Vector3d::Zero();
 };
 
 class MultirateSimulator {
@@ -108,6 +112,7 @@ class MultirateSimulator {
   double TakeWorldTime(long k);
   void FillFromVisualTool(const DeviceState& device, HapticSample* sample) const;
   void FillFromLastFrame(HapticSample* sample) const;
+  FrameSample MakeFrameSample(long k, const contact::VisualFrameStats& stats) const;
 
   MultirateOptions options_;
   contact::VisualFrameOptions visual_options_;

@@ -1,6 +1,7 @@
 #include "fem/lattice_mesher.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -17,10 +18,24 @@ constexpr int kCutEven[5][4] = {
 constexpr int kCutOdd[5][4] = {
     {1, 2, 4, 7}, {0, 1, 2, 4}, {3, 1, 2, 7}, {5, 1, 4, 7}, {6, 2, 4, 7}};
 
-// Lattice nodes and the five tets of every cell, each tet oriented positively.
-TetMesh MakeLattice(const Eigen::Vector3d& min_m, const Eigen::Vector3d& cell_m,
-                    const Eigen::Vector3i& cells) {
-  const Eigen::Vector3i nodes = cells.array() + 1;
+// Node coordinates along each axis of a lattice: cells + 1 increasing values.
+using LatticeAxes = std::array<Eigen::VectorXd, 3>;
+
+LatticeAxes MakeUniformAxes(const Eigen::Vector3d& min_m, const Eigen::Vector3d& cell_m,
+                            const Eigen::Vector3i& cells) {
+  LatticeAxes axes;
+  for (int a = 0; a < 3; ++a)
+    axes[a] =
+        (Eigen::VectorXd::LinSpaced(cells[a] + 1, 0.0, cells[a]) * cell_m[a]).array() + min_m[a];
+  return axes;
+}
+
+// Lattice nodes at the axes' coordinates and the five tets of every cell, each tet oriented
+// positively.
+TetMesh MakeLattice(const LatticeAxes& axes) {
+  const Eigen::Vector3i nodes(static_cast<int>(axes[0].size()), static_cast<int>(axes[1].size()),
+                              static_cast<int>(axes[2].size()));
+  const Eigen::Vector3i cells = nodes.array() - 1;
   auto node_index = [&](int i, int j, int k) { return i + nodes.x() * (j + nodes.y() * k); };
   TetMesh mesh;
   mesh.rest_positions_m.resize(3, nodes.prod());
@@ -28,7 +43,7 @@ TetMesh MakeLattice(const Eigen::Vector3d& min_m, const Eigen::Vector3d& cell_m,
     for (int j = 0; j < nodes.y(); ++j)
       for (int i = 0; i < nodes.x(); ++i)
         mesh.rest_positions_m.col(node_index(i, j, k)) =
-            min_m + Eigen::Vector3d(i, j, k).cwiseProduct(cell_m);
+            Eigen::Vector3d(axes[0][i], axes[1][j], axes[2][k]);
   mesh.tets.resize(4, 5 * cells.prod());
   int t = 0;
   for (int k = 0; k < cells.z(); ++k)
@@ -114,7 +129,44 @@ TetMesh MakeBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_
   if (!((cells.array() >= 1).all()))
     throw std::invalid_argument("box needs at least one cell per axis");
   const Eigen::Vector3d cell_m = (max_m - min_m).cwiseQuotient(cells.cast<double>());
-  return MakeLattice(min_m, cell_m, cells);
+  return MakeLattice(MakeUniformAxes(min_m, cell_m, cells));
+}
+
+Eigen::VectorXd MakeGradedAxis(double min_m, double max_m, int cells, double focus_m,
+                               double ratio) {
+  if (!(max_m > min_m)) throw std::invalid_argument("graded axis: max must exceed min");
+  if (cells < 1) throw std::invalid_argument("graded axis needs at least one cell");
+  if (!(focus_m >= min_m && focus_m <= max_m))
+    throw std::invalid_argument("the grading focus must lie inside the box");
+  if (!(ratio >= 1.0)) throw std::invalid_argument("the grading ratio must be at least 1");
+  const double far_m = std::max(focus_m - min_m, max_m - focus_m);
+  const double slope = (ratio - 1.0) / far_m;  // h(x) = h0 (1 + slope |x − f|)
+  // Uniform in ψ(x) = sign(x − f) ln(1 + slope |x − f|) / slope, whose inverse is below; ψ → x − f
+  // as slope → 0 (ratio 1: a uniform axis).
+  auto psi = [&](double x_m) {
+    const double d = x_m - focus_m;
+    return slope > 0.0 ? std::copysign(std::log1p(slope * std::abs(d)) / slope, d) : d;
+  };
+  auto inverse_psi = [&](double s) {
+    return focus_m + (slope > 0.0 ? std::copysign(std::expm1(slope * std::abs(s)) / slope, s) : s);
+  };
+  const double s_min = psi(min_m), s_max = psi(max_m);
+  Eigen::VectorXd axis(cells + 1);
+  for (int i = 0; i <= cells; ++i) axis[i] = inverse_psi(s_min + (s_max - s_min) * i / cells);
+  axis[0] = min_m;  // exact ends, whatever the round-off of exp(log(·))
+  axis[cells] = max_m;
+  return axis;
+}
+
+TetMesh MakeGradedBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m,
+                             const Eigen::Vector3i& cells, const Eigen::Vector3d& focus_m,
+                             double ratio) {
+  if (!((max_m.array() > min_m.array()).all()))
+    throw std::invalid_argument("box max must exceed min on every axis");
+  LatticeAxes axes;
+  for (int a = 0; a < 3; ++a)
+    axes[a] = MakeGradedAxis(min_m[a], max_m[a], cells[a], focus_m[a], ratio);
+  return MakeLattice(axes);
 }
 
 TetMesh MakeImplicitTetMesh(const ImplicitFunction& phi, const Eigen::Vector3d& min_m,
@@ -125,7 +177,8 @@ TetMesh MakeImplicitTetMesh(const ImplicitFunction& phi, const Eigen::Vector3d& 
   // The 1e-9 keeps a box that is a whole number of cells from gaining a cell to round-off.
   const Eigen::Vector3i cells =
       (((max_m - min_m) / cell_size_m).array() - 1e-9).array().ceil().cast<int>().max(1).matrix();
-  const TetMesh lattice = MakeLattice(min_m, Eigen::Vector3d::Constant(cell_size_m), cells);
+  const TetMesh lattice =
+      MakeLattice(MakeUniformAxes(min_m, Eigen::Vector3d::Constant(cell_size_m), cells));
   std::vector<int> inside;
   for (int t = 0; t < lattice.num_tets(); ++t) {
     Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();

@@ -17,6 +17,19 @@ namespace hapsim::fem {
 TetMesh MakeBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m,
                        const Eigen::Vector3i& cells);
 
+// Nodes along one axis of [min_m, max_m] in `cells` cells whose size grows linearly with the
+// distance from focus_m, h(x) = h0 (1 + (ratio − 1) |x − focus| / D), D the farther end's distance:
+// the cells at the farther end are `ratio` times those at the focus. The nodes are uniform in
+// ∫ dx / h, which has a closed form. ratio 1: a uniform axis. For meshes fine where the contact is
+// (a Hertz or punch indentation) and coarse where the field is smooth.
+// Throws std::invalid_argument unless max > min, cells ≥ 1, min ≤ focus ≤ max and ratio ≥ 1.
+Eigen::VectorXd MakeGradedAxis(double min_m, double max_m, int cells, double focus_m, double ratio);
+
+// MakeBoxTetMesh with every axis graded by MakeGradedAxis towards the point focus_m.
+TetMesh MakeGradedBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m,
+                             const Eigen::Vector3i& cells, const Eigen::Vector3d& focus_m,
+                             double ratio);
+
 // Signed distance-like function: negative inside the body, positive outside, zero on its
 // surface, Lipschitz near the surface (a true signed distance is best).
 using ImplicitFunction = std::function<double(const Eigen::Vector3d& p_m)>;

@@ -226,6 +226,14 @@ const BadCase kBadCases[] = {
      "axis z"},
     {"ZeroCells", "cells: [12, 12, 5]", "cells: [12, 0, 5]", 9, "body.mesh.box.cells",
      "must be >= 1"},
+    {"GradingFocusOutside", "cells: [12, 12, 5]",
+     "cells: [12, 12, 5], graded: {focus_m: [0, 0, "
+     "0.06], ratio: 4}",
+     9, "body.mesh.box.graded.focus_m", "inside the box"},
+    {"GradingRatioBelowOne", "cells: [12, 12, 5]",
+     "cells: [12, 12, 5], graded: {focus_m: [0, "
+     "0, 0.05], ratio: 0.5}",
+     9, "body.mesh.box.graded.ratio", ">= 1"},
     {"ToleranceOne", "relative_tolerance: 1e-8", "relative_tolerance: 1", 18,
      "body.solver.relative_tolerance", "in (0, 1)"},
     {"ToleranceZero", "relative_tolerance: 1e-8", "relative_tolerance: 0", 18,

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #include "fem/lattice_mesher.h"
@@ -52,6 +53,51 @@ TEST(LatticeMesher, VolumesAndSurfaceMatchTheBox) {
   EXPECT_EQ(surface.cols(), 2 * 2 * (3 * 4 + 4 * 2 + 3 * 2));
   // Outward orientation: the divergence theorem gives +V (inward faces would give −V).
   EXPECT_NEAR(VolumeFromSurface(mesh, surface), box_volume_m3, 1e-15);
+}
+
+// The graded axis against its defining law h(x) = h0 (1 + (r − 1)|x − f| / D): the cell next to
+// the focus and the cell at the farther end differ by the ratio (to within the change of h over
+// one cell), sizes grow monotonically away from the focus, and the ends are exact.
+TEST(LatticeMesher, GradedAxisFollowsItsSizeLaw) {
+  const double ratio = 6.0;
+  const Eigen::VectorXd x = MakeGradedAxis(-0.03, 0.03, 40, 0.0, ratio);
+  ASSERT_EQ(x.size(), 41);
+  EXPECT_EQ(x[0], -0.03);
+  EXPECT_EQ(x[40], 0.03);
+  const Eigen::VectorXd h = x.tail(40) - x.head(40);
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_NEAR(h[19 - i], h[20 + i], 1e-15);  // symmetric about the centred focus
+    if (i > 0) {
+      EXPECT_GT(h[20 + i], h[19 + i]);
+    }
+  }
+  // At cell midpoints h / (1 + (r − 1)|x_mid| / D) is the same h0 everywhere, to O(h²).
+  auto h0_at = [&](int i) {
+    return h[i] / (1.0 + (ratio - 1.0) * std::abs(0.5 * (x[i] + x[i + 1])) / 0.03);
+  };
+  for (int i = 0; i < 40; ++i) EXPECT_NEAR(h0_at(i), h0_at(20), 0.01 * h0_at(20));
+  EXPECT_NEAR(h[39] / h[20], ratio, 0.1 * ratio);
+  // Ratio 1 is the uniform lattice; a focus at one end grades one way only.
+  const Eigen::VectorXd uniform = MakeGradedAxis(0.0, 0.1, 4, 0.05, 1.0);
+  for (int i = 0; i <= 4; ++i) EXPECT_NEAR(uniform[i], 0.025 * i, 1e-15);
+  const Eigen::VectorXd one_way = MakeGradedAxis(0.0, 0.03, 10, 0.03, 4.0);
+  auto law = [](double mid_m) { return 1.0 + 3.0 * std::abs(mid_m - 0.03) / 0.03; };
+  const double expected =
+      law(0.5 * (one_way[0] + one_way[1])) / law(0.5 * (one_way[9] + one_way[10]));
+  EXPECT_NEAR((one_way[1] - one_way[0]) / (one_way[10] - one_way[9]), expected, 0.02 * expected);
+  EXPECT_THROW(MakeGradedAxis(0.0, 0.1, 4, 0.2, 2.0), std::invalid_argument);
+  EXPECT_THROW(MakeGradedAxis(0.0, 0.1, 4, 0.05, 0.5), std::invalid_argument);
+}
+
+TEST(LatticeMesher, GradedBoxIsAConformingBox) {
+  const TetMesh mesh =
+      MakeGradedBoxTetMesh({-0.03, -0.03, 0.0}, {0.03, 0.03, 0.03}, {8, 8, 6}, {0, 0, 0.03}, 5.0);
+  EXPECT_EQ(mesh.num_nodes(), 9 * 9 * 7);
+  EXPECT_EQ(mesh.num_tets(), 5 * 8 * 8 * 6);
+  EXPECT_FALSE(FindRestMeshProblem(mesh).has_value());
+  const double box_volume_m3 = 0.06 * 0.06 * 0.03;
+  EXPECT_NEAR(SumOfVolumes(mesh), box_volume_m3, 1e-15);
+  EXPECT_NEAR(VolumeFromSurface(mesh, ExtractBoundarySurface(mesh)), box_volume_m3, 1e-15);
 }
 
 TEST(LatticeMesher, EllipsoidVolumeConvergesToAnalytic) {

@@ -16,6 +16,7 @@
 
 #include "fem/corotational.h"
 #include "fem/lattice_mesher.h"
+#include "fem/max_frequency.h"
 #include "fem/model.h"
 #include "fem/state.h"
 #include "fem/stiffness_assembly.h"
@@ -228,26 +229,8 @@ Model MakeSmallCantilever(double alpha_1_s = 0.0, double beta_s = 0.0) {
   return MakeModel(mesh, material, NodesOnPlane(mesh, 0, 0.0));
 }
 
-// Largest eigenvalue of M⁻¹K (free dofs, K at rest) by power iteration on the symmetric
-// M^{-1/2} K M^{-1/2}; the Rayleigh quotient approaches λ_max from below.
-double EstimateMaxOmegaSquared(const Model& model, int iterations) {
-  const StiffnessAssembler assembler(model);
-  Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
-  assembler.Assemble(
-      model, std::vector<Eigen::Matrix3d>(model.num_tets(), Eigen::Matrix3d::Identity()), &K);
-  const Eigen::VectorXd inv_sqrt_mass = model.dof_mass_kg.cwiseSqrt().cwiseInverse();
-  Eigen::VectorXd v = test::ZeroFixedDofs(model, Random(21).Vector(model.num_dofs())).normalized();
-  double lambda = 0.0;
-  for (int k = 0; k < iterations; ++k) {
-    const Eigen::VectorXd w =
-        test::ZeroFixedDofs(model, inv_sqrt_mass.cwiseProduct(K * inv_sqrt_mass.cwiseProduct(v)));
-    lambda = v.dot(w);
-    v = w.normalized();
-  }
-  return lambda;
-}
-
-// Same eigenvalue by a dense symmetric eigensolver (a check of the power iteration).
+// Largest eigenvalue of M⁻¹K by a dense symmetric eigensolver (a check of the power iteration of
+// EstimateMaxFrequency).
 double DenseMaxOmegaSquared(const Model& model) {
   const StiffnessAssembler assembler(model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
@@ -314,10 +297,12 @@ TEST(TimeStepper, ImplicitEulerNeverGainsEnergy) {
 
 TEST(TimeStepper, ExplicitEulerBlowsUpAboveTwoOverOmegaMax) {
   const Model model = MakeSmallCantilever();
-  const double omega_sq_power = EstimateMaxOmegaSquared(model, 400);
+  const MaxFrequencyEstimate estimate = EstimateMaxFrequency(model);
+  const double omega_sq_power = estimate.omega_max_rad_s * estimate.omega_max_rad_s;
   const double omega_sq_dense = DenseMaxOmegaSquared(model);
   EXPECT_LE(omega_sq_power, omega_sq_dense * (1.0 + 1e-9));  // a Rayleigh quotient: from below
   EXPECT_GE(omega_sq_power, 0.97 * omega_sq_dense);
+  EXPECT_LT(estimate.relative_change, 1e-6);  // converged, not stopped by the iteration cap
   const double limit_s = 2.0 / std::sqrt(omega_sq_power);
   std::printf("omega_max %.1f rad/s (dense %.1f): explicit limit 2/omega_max = %.3e s\n",
               std::sqrt(omega_sq_power), std::sqrt(omega_sq_dense), limit_s);
@@ -438,7 +423,7 @@ TEST(TimeStepper, ConjugateGradientAgreesWithCholmod) {
   const double mass_ratio = model.node_mass_kg.maxCoeff() / model.node_mass_kg.minCoeff();
   const double condition_bound =
       mass_ratio * (1.0 + (dt_s * dt_s + dt_s * model.material.rayleigh_beta_s) *
-                              EstimateMaxOmegaSquared(model, 400) * 1.05);
+                              std::pow(EstimateMaxFrequency(model).omega_max_rad_s, 2) * 1.05);
   std::printf("condition bound of A: %.2e\n", condition_bound);
 
   State reference = initial;
@@ -486,7 +471,7 @@ TEST(TimeStepper, ConjugateGradientAgreesWithCholmod) {
 TEST(TimeStepper, FixedNodesStayExactlyFixed) {
   const Model model = MakeSmallCantilever(0.5, 1e-3);
   const Eigen::VectorXd gravity_N = CalcGravityForce(model, {0.0, 0.0, -kGravity_m_s2});
-  const double explicit_dt_s = 0.5 * 2.0 / std::sqrt(EstimateMaxOmegaSquared(model, 400));
+  const double explicit_dt_s = 0.5 * 2.0 / EstimateMaxFrequency(model).omega_max_rad_s;
   struct Case {
     FemOptions options;
     double dt_s;
