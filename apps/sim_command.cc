@@ -1,11 +1,10 @@
-// `hapsim sim SCENE --mode M [--compliance C] [--visual-hz H] [--out DIR] [--summary FILE.json]`:
-// the in-process multirate simulator (device/multirate_simulator.h) on a scene with a body, a tool
-// and a scripted device. Writes <out>/haptic.csv (one row per haptic step: device force and torque,
-// tool pose, contacts in the model, model age), <out>/frames.csv (one row per visual frame: stage
-// timings, contacts, solver figures, penetration of the tool and of the rigid objects, the visual
-// tool's position and the frame's contact force on it) and a JSON
-// summary; all after the run,
-// atomically.
+// `hapsim sim SCENE --mode M [--compliance C] [--visual-hz H] [--device scripted|hand] [--out DIR]
+// [--summary FILE.json]`: the in-process multirate simulator (device/multirate_simulator.h) on a
+// scene with a body, a tool and a scripted device or a simulated hand. Writes <out>/haptic.csv (one
+// row per haptic step: device force and torque, tool pose, contacts in the model, model age, the
+// passivity observer's energy), <out>/frames.csv (one row per visual frame: stage timings,
+// contacts, solver figures, penetration of the tool and of the rigid objects, the visual tool's
+// position and the frame's contact force on it) and a JSON summary; all after the run, atomically.
 
 #include <cmath>
 #include <cstdio>
@@ -29,11 +28,12 @@ namespace {
 
 struct SimCommandOptions {
   std::string scene_path;
-  std::string mode;          // empty: the scene's
-  std::string compliance;    // empty: the scene's contact.compliance
-  double visual_hz = 0.0;    // 0: the scene's (1 / time.dt_s)
-  std::string out_dir;       // default out/<scene name>_<mode>
-  std::string summary_path;  // default <out>/summary.json
+  std::string mode;                 // empty: the scene's
+  std::string compliance;           // empty: the scene's contact.compliance
+  double visual_hz = 0.0;           // 0: the scene's (1 / time.dt_s)
+  std::string device = "scripted";  // scripted (open loop) | hand (closed loop)
+  std::string out_dir;              // default out/<scene name>_<mode>
+  std::string summary_path;         // default <out>/summary.json
 };
 
 struct SimRecord {
@@ -57,7 +57,7 @@ void WriteHapticCsv(const std::string& path, const SimRecord& record) {
   WriteFileAtomically(path, [&](std::ostream& out) {
     out << "t_s,force_x_N,force_y_N,force_z_N,torque_x_N_m,torque_y_N_m,torque_z_N_m,"
            "tool_x_m,tool_y_m,tool_z_m,tool_qw,tool_qx,tool_qy,tool_qz,contacts,model_age_s,"
-           "lcp_fell_back\n";
+           "lcp_fell_back,passivity_energy_J,device_x_m,device_y_m,device_z_m\n";
     for (const device::HapticSample& s : record.haptic) {
       const auto& f = s.device_force_W_N;
       const auto& t = s.device_torque_W_N_m;
@@ -66,7 +66,8 @@ void WriteHapticCsv(const std::string& path, const SimRecord& record) {
       out << s.t_s << ',' << f.x() << ',' << f.y() << ',' << f.z() << ',' << t.x() << ',' << t.y()
           << ',' << t.z() << ',' << x.x() << ',' << x.y() << ',' << x.z() << ',' << q.w() << ','
           << q.x() << ',' << q.y() << ',' << q.z() << ',' << s.num_contacts << ',' << s.model_age_s
-          << ',' << s.lcp_fell_back << '\n';
+          << ',' << s.lcp_fell_back << ',' << s.passivity_energy_J << ',' << s.device_x_W_m.x()
+          << ',' << s.device_x_W_m.y() << ',' << s.device_x_W_m.z() << '\n';
     }
   });
 }
@@ -93,7 +94,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
 }
 
 nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
-                           contact::ComplianceMethod compliance, int steps_per_frame,
+                           const std::string& device, contact::ComplianceMethod compliance,
+                           int steps_per_frame, const device::PassivityObserver& passivity,
                            const SimRecord& record) {
   std::vector<double> stage[8];
   double max_penetration_m = 0.0, max_object_penetration_m = 0.0;
@@ -107,7 +109,7 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
     max_object_penetration_m = std::max(max_object_penetration_m, s.max_object_penetration_m);
     max_contacts = std::max(max_contacts, s.num_contacts);
   }
-  double peak_N = 0.0, sum_sq = 0.0;
+  double peak_N = 0.0, sum_sq = 0.0, min_energy_J = 0.0;
   long lcp_fallbacks = 0;
   std::vector<double> step_us;
   step_us.reserve(record.haptic.size());
@@ -116,6 +118,7 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
     lcp_fallbacks += s.lcp_fell_back;
     peak_N = std::max(peak_N, s.device_force_W_N.norm());
     sum_sq += s.device_force_W_N.squaredNorm();
+    min_energy_J = std::min(min_energy_J, s.passivity_energy_J);
   }
   static const char* kStages[8] = {"coupling", "free_tool", "free_fem", "detection",
                                    "response", "model",     "sanity",   "total"};
@@ -140,6 +143,15 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
           {"lcp_fallback_steps", lcp_fallbacks},
           // the haptic step alone (0 in reference and coupling: no 1 kHz work of their own)
           {"haptic_step_median_us", Median(step_us)},
+          {"device", device},
+          // energy flowed into the environment at the device port (< 0: it put energy out)
+          {"passivity_min_energy_J", min_energy_J},
+          {"passivity_final_energy_J",
+           record.haptic.empty() ? 0.0 : record.haptic.back().passivity_energy_J},
+          {"passivity_active_at_s",
+           passivity.active()
+               ? nlohmann::json(passivity.first_active_step() * (1.0 / scene.haptic.rate_hz))
+               : nlohmann::json(nullptr)},
           {"haptic_step_max_us",
            step_us.empty() ? 0.0 : *std::max_element(step_us.begin(), step_us.end())}};
 }
@@ -175,8 +187,16 @@ void RunSim(const SimCommandOptions& options) {
   record.haptic.reserve(num_steps);
   {
     ProgressBar progress("sim", num_steps);
+    // Open loop: the script is the device; closed loop: a simulated hand pulled along the script
+    // feels the device force (device.hand), which is how an unstable rendering shows itself.
+    std::unique_ptr<device::DeviceBackend> backend;
+    if (options.device == "hand")
+      backend = std::make_unique<device::SimulatedHand>(ScriptedTrajectory(scene.trajectory),
+                                                        scene.hand, 1.0 / scene.haptic.rate_hz);
+    else
+      backend = std::make_unique<device::ScriptedDevice>(ScriptedTrajectory(scene.trajectory));
     simulator.Run(
-        ScriptedTrajectory(scene.trajectory), num_steps,
+        backend.get(), num_steps,
         [&](const device::HapticSample& s) {
           record.haptic.push_back(s);
           progress.Update(static_cast<long>(record.haptic.size()));
@@ -192,9 +212,9 @@ void RunSim(const SimCommandOptions& options) {
   CreateOutputDirectory(std::filesystem::path(summary_path).parent_path().string(), "--summary");
   WriteHapticCsv(out_dir + "/haptic.csv", record);
   WriteFramesCsv(out_dir + "/frames.csv", record);
-  const nlohmann::json summary =
-      MakeSummary(scene, device::ToString(mode), simulator.visual_options().compliance,
-                  multirate.haptic_steps_per_frame, record);
+  const nlohmann::json summary = MakeSummary(
+      scene, device::ToString(mode), options.device, simulator.visual_options().compliance,
+      multirate.haptic_steps_per_frame, simulator.passivity(), record);
   WriteFileAtomically(summary_path, [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
   std::printf(
       "  peak force %.3f N, RMS %.3f N, max contacts %d, max penetration %.2f mm, median frame "
@@ -215,7 +235,8 @@ void AddSimCommand(CLI::App* app) {
       "In-process multirate run of a scene: visual frames (FEM, contact, linear contact model) "
       "and\n"
       "1 kHz haptic steps, one after the other (bit-reproducible), following the scene's scripted\n"
-      "device. Writes haptic.csv, frames.csv and a JSON summary.");
+      "device (or a simulated hand, --device hand). Writes haptic.csv, frames.csv and a JSON\n"
+      "summary with the passivity observer's energy.");
   sim->add_option("scene", options->scene_path, "Scene file (YAML) with body, tool and device")
       ->required();
   sim->add_option(
@@ -235,6 +256,11 @@ void AddSimCommand(CLI::App* app) {
          "--visual-hz", options->visual_hz,
          "Visual frame rate; the haptic rate must be a whole multiple (default: 1/time.dt_s)")
       ->check(CLI::PositiveNumber);
+  sim->add_option("--device", options->device,
+                  "scripted (default: the device follows the scene's script, open loop) or hand\n"
+                  "(a simulated hand, the scene's device.hand mass-spring-damper, pulled along\n"
+                  "the script and pushed by the device force: closed loop, for stability)")
+      ->check(CLI::IsMember({"scripted", "hand"}));
   sim->add_option("--out", options->out_dir, "Output folder (default: out/<scene>_<mode>)");
   sim->add_option("--summary", options->summary_path,
                   "JSON summary file (default: <out>/summary.json)");

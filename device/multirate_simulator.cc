@@ -78,9 +78,18 @@ MultirateSimulator::MultirateSimulator(const fem::Model* body, const fem::FemOpt
 void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_haptic_steps,
                              const std::function<void(const HapticSample&)>& on_haptic_step,
                              const std::function<void(const FrameSample&)>& on_frame) {
+  ScriptedDevice device(trajectory);
+  Run(&device, num_haptic_steps, on_haptic_step, on_frame);
+}
+
+void MultirateSimulator::Run(DeviceBackend* backend, long num_haptic_steps,
+                             const std::function<void(const HapticSample&)>& on_haptic_step,
+                             const std::function<void(const FrameSample&)>& on_frame) {
   on_frame_ = on_frame;
   for (long k = 0; k < num_haptic_steps; ++k) {
-    const DeviceState device = trajectory.Sample(k * options_.haptic_dt_s);
+    double age_s = 0.0;
+    long sequence = 0;
+    const DeviceState device = backend->Read(k * options_.haptic_dt_s, &age_s, &sequence);
     HapticSample sample;
     switch (options_.mode) {
       case HapticMode::kLinear:
@@ -101,6 +110,12 @@ void MultirateSimulator::Run(const ScriptedTrajectory& trajectory, long num_hapt
         break;
     }
     sample.t_s = k * options_.haptic_dt_s;
+    sample.device_x_W_m = device.x_W_m;
+    backend->Write(sample.device_force_W_N, sample.device_torque_W_N_m);
+    // The wrench sent this step paired with the handle's velocity read for it (Hannaford & Ryu).
+    passivity_.Update(sample.device_force_W_N, sample.device_torque_W_N_m, device.v_W_m_s,
+                      device.w_W_rad_s, options_.haptic_dt_s);
+    sample.passivity_energy_J = passivity_.energy_in_J();
     if (on_haptic_step) on_haptic_step(sample);
   }
 }

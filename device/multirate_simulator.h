@@ -30,10 +30,12 @@
 
 #include "contact/visual_frame.h"
 #include "core/scripted_trajectory.h"
+#include "device/device_backend.h"
 #include "device/geometric_haptic_contact.h"
 #include "device/god_object_world.h"
 #include "device/haptic_mode.h"
 #include "device/haptic_step.h"
+#include "device/passivity_observer.h"
 
 namespace hapsim::device {
 
@@ -61,6 +63,10 @@ struct HapticSample {
   // period), s: the mode's 1 kHz cost; 0 in the reference and coupling modes, which have none.
   // In the papers' modes a frame's first step includes putting the frame's world in place.
   double step_time_s = 0.0;
+  // The passivity observer's energy flowed into the environment so far, J (< 0: it has put out
+  // energy; device/passivity_observer.h).
+  double passivity_energy_J = 0.0;
+  Eigen::Vector3d device_x_W_m = Eigen::Vector3d::Zero();  // the handle as read for this step
 };
 
 struct FrameSample {
@@ -86,10 +92,18 @@ class MultirateSimulator {
                      const ToolState& initial_tool, contact::VisualFrameOptions visual_options,
                      const MultirateOptions& options);
 
-  // Runs `num_haptic_steps` steps following `trajectory`, calling the sinks as it goes.
+  // Runs `num_haptic_steps` steps following `trajectory` (open loop), calling the sinks as it
+  // goes.
   void Run(const ScriptedTrajectory& trajectory, long num_haptic_steps,
            const std::function<void(const HapticSample&)>& on_haptic_step,
            const std::function<void(const FrameSample&)>& on_frame);
+  // Same with a device backend: each step reads it and writes the device wrench back (a
+  // SimulatedHand closes the loop, for stability maps).
+  void Run(DeviceBackend* device, long num_haptic_steps,
+           const std::function<void(const HapticSample&)>& on_haptic_step,
+           const std::function<void(const FrameSample&)>& on_frame);
+  // Energy that has flowed into the rendered environment at the device port over the run.
+  const PassivityObserver& passivity() const { return passivity_; }
 
   const fem::State& body_state() const { return body_state_; }
   // The visual frame's options as run (steps, compliance: the reference's is always exact).
@@ -126,6 +140,7 @@ class MultirateSimulator {
   double world_time_s_ = 0.0;                          // SetGeometricWorld's last wall time
   long last_frame_step_ = 0;
   std::function<void(const FrameSample&)> on_frame_;
+  PassivityObserver passivity_;
 };
 
 }  // namespace hapsim::device

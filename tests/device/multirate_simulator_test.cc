@@ -5,6 +5,8 @@
 //  - release: equality constraints in the linear model pull the tool while it lifts off (the
 //    sticking the paper reports), while unilateral contacts never pull, solved at 1 kHz by the
 //    lcp mode or by the reference;
+//  - the passivity energy is the work at the device port; a simulated hand closes the loop and
+//    comes to rest where its arm balances the device force;
 //  - runs are bit-reproducible; the haptic step allocates nothing, in the linear and lcp modes.
 // (The same comparison on the block_press scene is tests/device/block_press_accuracy_test.cc.)
 #include "device/multirate_simulator.h"
@@ -65,7 +67,8 @@ ScriptedTrajectory MakeScript(const ToolState& start, bool slide) {
 }
 
 std::vector<HapticSample> Simulate(const Scene& scene, HapticMode mode, contact::ContactLaw law,
-                                   const ScriptedTrajectory& script, long steps) {
+                                   const ScriptedTrajectory& script, long steps,
+                                   DeviceBackend* device = nullptr) {
   contact::VisualFrameOptions visual;
   visual.coupling = {1000, 2, 1, 0.005};
   visual.response.solve.law = law;
@@ -76,8 +79,10 @@ std::vector<HapticSample> Simulate(const Scene& scene, HapticMode mode, contact:
                                fem::CalcGravityForce(scene.body, {0, 0, -9.81}), scene.tool,
                                scene.start, visual, options);
   std::vector<HapticSample> samples;
+  ScriptedDevice scripted(script);
   simulator.Run(
-      script, steps, [&](const HapticSample& s) { samples.push_back(s); }, nullptr);
+      device ? device : &scripted, steps, [&](const HapticSample& s) { samples.push_back(s); },
+      nullptr);
   return samples;
 }
 
@@ -126,7 +131,7 @@ TEST(MultirateSimulator, EqualityConstraintsStickOnReleaseUnilateralDoNot) {
       Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 2000));
   RecordProperty("equality_min_force_z_N", std::to_string(equality_N));
   RecordProperty("linear_unilateral_min_force_z_N", std::to_string(linear_unilateral_N));
-  EXPECT_LT(equality_N, -0.1);      // pulls the tool down while it lifts
+  EXPECT_LT(equality_N, -0.1);     // pulls the tool down while it lifts
   EXPECT_GE(reference_N, -1e-12);  // never pulls
   EXPECT_GE(lcp_N, -1e-12);
   for (const HapticSample& s : lcp) {
@@ -136,6 +141,42 @@ TEST(MultirateSimulator, EqualityConstraintsStickOnReleaseUnilateralDoNot) {
   double max_push_N = 0.0;
   for (const HapticSample& s : lcp) max_push_N = std::max(max_push_N, s.contact_force_W_N.z());
   EXPECT_GT(max_push_N, 1.0);
+}
+
+// The passivity energy against its definition summed independently here, E = −Σ Δt F_k·v_k, with
+// v_k the script's velocity at step k (open loop: the handle is the script).
+TEST(MultirateSimulator, PassivityEnergyIsTheWorkAtTheDevicePort) {
+  const Scene scene = MakeScene();
+  const ScriptedTrajectory script = MakeScript(scene.start, true);
+  const auto samples =
+      Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 3000);
+  double energy_J = 0.0, work_scale_J = 0.0;
+  for (const HapticSample& s : samples) {
+    const DeviceState device = script.Sample(s.t_s);
+    energy_J -= 1e-3 * s.device_force_W_N.dot(device.v_W_m_s);
+    work_scale_J += 1e-3 * std::abs(s.device_force_W_N.dot(device.v_W_m_s));
+    ASSERT_NEAR(s.passivity_energy_J, energy_J, 1e-12 + 1e-9 * work_scale_J) << s.t_s;
+    ASSERT_EQ(s.device_x_W_m, device.x_W_m);
+  }
+  EXPECT_GT(work_scale_J, 1e-3);  // the press did work at the port (else the check is empty)
+}
+
+// Closed loop: a simulated hand pulled along the script by its arm (k, b) and pushed by the
+// device force. Holding the press, the hand comes to rest where its arm balances the force:
+// k (x_target − x) + F = 0, the hand's own static equilibrium.
+TEST(MultirateSimulator, SimulatedHandBalancesTheDeviceForce) {
+  const Scene scene = MakeScene();
+  const ScriptedTrajectory script = MakeScript(scene.start, false);  // held pressed 0.8–1.2 s
+  HandParams hand;                                                   // 0.3 kg, 300 N/m, 10 N s/m
+  SimulatedHand device(script, hand, 1e-3);
+  const auto samples =
+      Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 1200, &device);
+  const HapticSample& last = samples.back();
+  const Eigen::Vector3d target_m = script.Sample(last.t_s).x_W_m;
+  const Eigen::Vector3d arm_N = hand.k_N_m * (target_m - last.device_x_W_m);
+  EXPECT_GT(last.device_force_W_N.z(), 0.5);              // pressed: the body pushes back
+  EXPECT_GT(last.device_x_W_m.z() - target_m.z(), 1e-3);  // and the hand yields millimetres
+  EXPECT_NEAR((arm_N + last.device_force_W_N).norm(), 0.0, 0.02 * last.device_force_W_N.norm());
 }
 
 TEST(MultirateSimulator, RunsAreBitReproducible) {
