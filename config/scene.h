@@ -95,6 +95,8 @@
 //     margin_m: 0.001                  # ≥ 0: contacts are detected up to this gap
 //     compliance: warped               # warped | exact: the body's contact compliance
 //                                      # (contact/visual_frame.h ComplianceMethod)
+//     model_compliance_step: visual    # visual | haptic: the step the linear contact model's
+//                                      # body compliance is for (ModelComplianceStep)
 //   haptic:                            # optional (with a tool), defaults as shown
 //     rate_hz: 1000                    # > 0; rate_hz · dt_s must be an integer ≥ 1 (to 1e-9):
 //                                      # the number of haptic steps per visual frame
@@ -253,6 +255,7 @@ struct ContactScene {
   double restitution = 0.0;           // e in [0, 1]
   double margin_m = 1e-3;             // detection margin, m
   contact::ComplianceMethod compliance = contact::ComplianceMethod::kWarped;
+  contact::ModelComplianceStep model_compliance_step = contact::ModelComplianceStep::kVisual;
 };
 
 // What the haptic side renders: see device/haptic_mode.h.

@@ -16,6 +16,7 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   options.response.stabilization_beta = scene.contact.stabilization_beta;
   options.response.restitution = scene.contact.restitution;
   options.compliance = scene.contact.compliance;
+  options.model_compliance_step = scene.contact.model_compliance_step;
   for (const RigidObjectScene& rigid : scene.rigid_objects)
     options.rigid_objects.push_back(rigid.object);
   return options;

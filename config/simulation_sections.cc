@@ -27,6 +27,8 @@ namespace fs = std::filesystem;
 
 constexpr contact::ComplianceMethod kComplianceMethods[] = {contact::ComplianceMethod::kWarped,
                                                             contact::ComplianceMethod::kExact};
+constexpr contact::ModelComplianceStep kModelComplianceSteps[] = {
+    contact::ModelComplianceStep::kVisual, contact::ModelComplianceStep::kHaptic};
 constexpr ContactLaw kContactLaws[] = {ContactLaw::kEquality, ContactLaw::kUnilateral,
                                        ContactLaw::kFriction};
 constexpr HapticMode kHapticModes[] = {
@@ -207,7 +209,7 @@ CouplingParams ReadCoupling(const YamlMap& map) {
 
 ContactScene ReadContact(const YamlMap& map) {
   map.CheckKeys({"law", "friction_coefficient", "stabilization_beta", "restitution", "margin_m",
-                 "compliance"});
+                 "compliance", "model_compliance_step"});
   ContactScene contact;
   contact.law = map.GetEnumOr("law", Choices(kContactLaws), contact.law);
   if (contact.law == ContactLaw::kFriction) {
@@ -223,6 +225,8 @@ ContactScene ReadContact(const YamlMap& map) {
       map.GetDoubleOr("restitution", contact.restitution, ClosedInterval(0.0, 1.0));
   contact.margin_m = map.GetDoubleOr("margin_m", contact.margin_m, AtLeast(0.0));
   contact.compliance = map.GetEnumOr("compliance", Choices(kComplianceMethods), contact.compliance);
+  contact.model_compliance_step = map.GetEnumOr(
+      "model_compliance_step", Choices(kModelComplianceSteps), contact.model_compliance_step);
   return contact;
 }
 

@@ -22,6 +22,10 @@ const char* ToString(ComplianceMethod method) {
   return method == ComplianceMethod::kExact ? "exact" : "warped";
 }
 
+const char* ToString(ModelComplianceStep step) {
+  return step == ModelComplianceStep::kHaptic ? "haptic" : "visual";
+}
+
 VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_options,
                          Eigen::VectorXd body_external_force_N, ToolModel tool,
                          const VisualFrameOptions& options)
@@ -48,6 +52,11 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
     detector_ = std::make_unique<CollisionDetector>(*body, tool_.shape, options.detection);
     if (options.compliance == ComplianceMethod::kWarped)
       warped_compliance_ = std::make_unique<fem::WarpedCompliance>(*body, *stepper_);
+    if (options.model_compliance_step == ModelComplianceStep::kHaptic) {
+      haptic_stepper_ = std::make_unique<fem::TimeStepper>(*body, *fem_options, options.haptic_dt_s,
+                                                           stepper_->external_force_N());
+      haptic_compliance_ = std::make_unique<fem::WarpedCompliance>(*body, *haptic_stepper_);
+    }
     if (!options.rigid_objects.empty()) {
       const Matrix3Xi surface = fem::ExtractBoundarySurface(body->mesh);
       surface_nodes_.assign(surface.data(), surface.data() + surface.size());
@@ -165,6 +174,8 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     W_body_ = warped_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
   else
     W_body_ = stepper_->CalcCompliance(jacobian_.J_u);
+  if (haptic_compliance_)
+    W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
   const Eigen::MatrixXd W = CalcToolDelassus(jacobian_, tool_system_) + W_body_;
   lambda_.setZero(jacobian_.num_rows());
   Eigen::VectorXd mu_per_contact;

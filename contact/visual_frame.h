@@ -49,6 +49,15 @@ namespace hapsim::contact {
 enum class ComplianceMethod { kExact, kWarped };
 const char* ToString(ComplianceMethod method);
 
+// Which step the linear contact model's body compliance is for (DESIGN.md §4's open question):
+//   kVisual  the visual step's, W_body = J_u A_u(Δt_v)⁻¹ J_uᵀ, as the frame's own solve (the paper)
+//   kHaptic  the haptic step's, J_u A_u(Δt_h)⁻¹ J_uᵀ with A_u(Δt) = M + Δt D + Δt² K: how far the
+//            body yields within one haptic step under a force held over it. Warped from a rest
+//            factor at Δt_h (fem/warped_compliance.h), whatever `compliance` the frame uses.
+// scripts/bench.sh measures both against the reference (docs/RESULTS.md).
+enum class ModelComplianceStep { kVisual, kHaptic };
+const char* ToString(ModelComplianceStep step);
+
 struct VisualFrameOptions {
   double dt_s = 1.0 / 30.0;   // visual step
   double haptic_dt_s = 1e-3;  // step the linear contact model is built for
@@ -58,6 +67,7 @@ struct VisualFrameOptions {
   ResponseOptions response;
   double sanity_tolerance_m = 1e-4;  // nodes deeper than this inside the tool are moved out
   ComplianceMethod compliance = ComplianceMethod::kWarped;
+  ModelComplianceStep model_compliance_step = ModelComplianceStep::kVisual;
   // Stage 6 also exports the per-contact rows of every candidate contact for the haptic `lcp`
   // mode (contact_rows()). Needs normal rows only: not with the friction law.
   bool export_contact_rows = false;
@@ -168,7 +178,11 @@ class VisualFrame {
   bool objects_have_own_friction_;             // friction law and an object with its own μ
   std::unique_ptr<fem::TimeStepper> stepper_;  // with a body
   std::unique_ptr<fem::WarpedCompliance> warped_compliance_;  // with a body, kWarped only
-  std::unique_ptr<CollisionDetector> detector_;               // with a body
+  // ModelComplianceStep::kHaptic: a stepper at the haptic Δt (never stepped: it only holds the
+  // rest system matrix A_u(Δt_h)) and the warped compliance of that matrix.
+  std::unique_ptr<fem::TimeStepper> haptic_stepper_;
+  std::unique_ptr<fem::WarpedCompliance> haptic_compliance_;
+  std::unique_ptr<CollisionDetector> detector_;  // with a body
   RigidObjectContacts rigid_contacts_;
   // Rigid objects' state: motion this frame (zero for a still one), selection and grabbing.
   std::vector<ObjectMotion> object_motion_;
@@ -184,7 +198,8 @@ class VisualFrame {
   Eigen::VectorXd du_body_;
   std::vector<Contact> contacts_;
   ContactJacobian jacobian_;
-  Eigen::MatrixXd W_body_;  // J_u A_u⁻¹ J_uᵀ at the visual step, kept for the linear model
+  Eigen::MatrixXd W_body_;         // J_u A_u⁻¹ J_uᵀ at the visual step, the frame's solve
+  Eigen::MatrixXd W_body_haptic_;  // the same at the haptic step (ModelComplianceStep::kHaptic)
   Eigen::VectorXd b_, lambda_;
   std::vector<Eigen::Vector3d> object_velocity_;  // w of each contact (CalcObjectVelocities)
   Eigen::VectorXd c_post_;  // separating velocity of each row after the response

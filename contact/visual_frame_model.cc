@@ -41,10 +41,10 @@ void VisualFrame::MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start,
 
 // The model is linearised at the post-collision state, for the haptic step: the tool matrices
 // use the haptic Δt and the coupling at the new tool pose; the body's compliance is the one of
-// the visual step (the paper's choice; DESIGN.md §4 leaves open whether a haptic-step compliance
-// is better). Only active constraints (λ > 0) enter: an inactive unilateral contact would
-// otherwise act as an equality and pull the tool. The lcp rows take every contact: the 1 kHz
-// solve decides which are active.
+// the visual step (the paper's choice) or, with ModelComplianceStep::kHaptic, of the haptic step
+// (DESIGN.md §4's open question; docs/RESULTS.md measures both). Only active constraints (λ > 0)
+// enter: an inactive unilateral contact would otherwise act as an equality and pull the tool. The
+// lcp rows take every contact: the 1 kHz solve decides which are active.
 void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                                    const ToolState& visual_tool, const ToolState& tool,
                                    const fem::State& body) {
@@ -64,24 +64,25 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
       CalcCouplingWrench(options_.coupling, device, tool, CalcAngularVelocity(tool_, tool));
   const ToolStepSystem haptic =
       CalcToolStepSystem(tool_, tool, wrench, options_.gravity_m_s2, options_.haptic_dt_s);
+  const Eigen::MatrixXd& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
   Eigen::MatrixXd W = CalcToolDelassus(J, haptic);
   Eigen::VectorXd b(active_rows.size());
   for (size_t r = 0; r < active_rows.size(); ++r) {
     b[r] = b_all[active_rows[r]];
     for (size_t c = 0; c < active_rows.size(); ++c)
-      W(r, c) += W_body_(active_rows[r], active_rows[c]);
+      W(r, c) += W_body(active_rows[r], active_rows[c]);
   }
   // The body's velocity without contact over a haptic step: its post-frame velocity less what the
   // frame's contact force λ_vis holds back, u̇ − Δt_h A_u⁻¹ J_uᵀ λ_vis, so that J_u u̇_free =
   // J_u u̇ − Δt_h W_body λ_vis. A body resting under the tool (u̇ = 0) then yields only to a
   // change of force from λ_vis, not to the whole force each millisecond.
-  const Eigen::VectorXd held_m_s = options_.haptic_dt_s * (W_body_ * lambda_);
+  const Eigen::VectorXd held_m_s = options_.haptic_dt_s * (W_body * lambda_);
   Eigen::VectorXd body_rhs = b - J.J_u * body.v_m_s;
   for (size_t r = 0; r < active_rows.size(); ++r) body_rhs[r] += held_m_s[active_rows[r]];
   linear_model_ = MakeLinearContactModel(J, W, haptic, body_rhs);
   if (options_.export_contact_rows) {
     const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
-    contact_rows_ = MakeContactRows(J_all, W_body_, b_all - J_all.J_u * body.v_m_s + held_m_s);
+    contact_rows_ = MakeContactRows(J_all, W_body, b_all - J_all.J_u * body.v_m_s + held_m_s);
     contact_rows_.lambda_frame_N = lambda_;
   }
 }

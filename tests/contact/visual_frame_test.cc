@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cstdio>
 #include <vector>
 
 #include "fem/lattice_mesher.h"
@@ -68,6 +69,42 @@ TEST(VisualFrame, ToolAtRestOnAStiffBodyCarriesItsWeight) {
   EXPECT_LT(frame.contact_force_N().head<2>().norm(), 1e-4 * weight_N);
   EXPECT_LE(CalcPenetration(frame, body_state, tool), 1e-4);
   EXPECT_LT(tool.v_W_m_s.norm(), 1e-4);
+}
+
+// The linear model's body compliance at the haptic step (ModelComplianceStep::kHaptic). With
+// A(Δt) = M + Δt D + Δt² K, A(Δt_v) − A(Δt_h) ⪰ 0 for Δt_h < Δt_v, so the body compliance
+// J A⁻¹ Jᵀ at the haptic step is at least the visual one: the body yields more, and less of a
+// push on the tool (∂F_c/∂F̂) reaches the contact. When the two steps agree the two models are
+// the same.
+LinearContactModel ModelOfToolOnSoftSlab(ModelComplianceStep step, double haptic_dt_s) {
+  const fem::Model body = MakeSlab(0.02, 5e4, false);
+  VisualFrameOptions options = MakeOptions(1.0 / 30.0, ContactLaw::kUnilateral, 0.0);
+  options.haptic_dt_s = haptic_dt_s;
+  options.model_compliance_step = step;
+  VisualFrame frame(body, fem::FemOptions{}, fem::CalcGravityForce(body, {0, 0, -9.81}),
+                    MakeBoxTool(0.2), options);
+  fem::State body_state = fem::MakeRestState(body);
+  ToolState tool;
+  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.01);
+  for (int k = 0; k < 10; ++k) frame.Step(DeviceState{}, &body_state, &tool);
+  return frame.linear_model();
+}
+
+TEST(VisualFrame, HapticStepComplianceYieldsMoreAndAgreesAtEqualSteps) {
+  const double dt_s = 1.0 / 30.0;
+  const LinearContactModel visual = ModelOfToolOnSoftSlab(ModelComplianceStep::kVisual, 1e-3);
+  const LinearContactModel haptic = ModelOfToolOnSoftSlab(ModelComplianceStep::kHaptic, 1e-3);
+  // The tool rests on the slab, its contacts active: most of a push reaches them.
+  ASSERT_LT(visual.dFc_dF(2, 2), -0.5);
+  std::printf("dFc/dF zz: visual-step W %.6f, haptic-step W %.6f\n", visual.dFc_dF(2, 2),
+              haptic.dFc_dF(2, 2));
+  EXPECT_LT(std::abs(haptic.dFc_dF(2, 2)), std::abs(visual.dFc_dF(2, 2)) * (1.0 - 1e-3));
+  const LinearContactModel visual_equal = ModelOfToolOnSoftSlab(ModelComplianceStep::kVisual, dt_s);
+  const LinearContactModel haptic_equal = ModelOfToolOnSoftSlab(ModelComplianceStep::kHaptic, dt_s);
+  EXPECT_NEAR((haptic_equal.dFc_dF - visual_equal.dFc_dF).norm(), 0.0,
+              1e-9 * visual_equal.dFc_dF.norm());
+  EXPECT_NEAR((haptic_equal.F_c0_N - visual_equal.F_c0_N).norm(), 0.0,
+              1e-9 * visual_equal.F_c0_N.norm());
 }
 
 // Rigid wall (every node fixed), impact at 1 m/s. Contacts are speculative: in the first frame the
