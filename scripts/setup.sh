@@ -8,8 +8,9 @@ cd "$(dirname "$0")/.."
 # Why each package: Eigen (linear algebra), SuiteSparse (CHOLMOD sparse Cholesky), OpenBLAS
 # serial (CHOLMOD's supernodal kernels; about 2x faster than the reference BLAS, single-threaded
 # so benchmarks measure one core), yaml-cpp (scenes), CLI11 (command line), GoogleTest and
-# Google Benchmark (tests, benchmarks), nlohmann-json (JSON outputs), matplotlib (charts), FCL
-# (collision detection: bounding-volume hierarchy over the body surface, triangle-vs-tool tests),
+# Google Benchmark (tests, benchmarks), nlohmann-json (JSON outputs), matplotlib (charts), PyYAML
+# (the scene variants of scripts/bench.sh; a Debian package rather than a hand-written YAML
+# writer), FCL (collision detection: bounding-volume hierarchy over the body surface, triangle-vs-tool tests),
 # LCM (message types, UDP multicast transport between the visual and the haptic process, event
 # logs; liblcm-bin has lcm-gen, lcm-logger and lcm-logplayer), libssl-dev (OpenSSL's SHA-256 of
 # the files a run reads, recorded in its log), clang and libclang-rt-14-dev (libFuzzer and the
@@ -21,7 +22,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev libopenblas0-serial
   libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libfcl-dev
   liblcm-dev liblcm-bin libssl-dev
-  nlohmann-json3-dev python3 python3-matplotlib
+  nlohmann-json3-dev python3 python3-matplotlib python3-yaml
   clang libclang-rt-14-dev
   libopencv-viz-dev libopencv-imgcodecs-dev libopencv-videoio-dev libx11-dev
   xvfb xdotool x11-utils

@@ -69,13 +69,18 @@ assert abs(peak(logged) - peak(inproc)) < 0.05 * peak(inproc)
 PY
 }
 
+# A disturbed run is repeated up to three times. Under a sanitizer once: its frames fall behind the
+# haptic clock, so the forces cannot agree, and each attempt costs a minute or more.
+attempts=3
+[ -n "${HAPSIM_SANITIZED:-}" ] && attempts=1
+
 # 1. A whole run, logged. A host that stalls the machine can still make the kernel drop a
 # datagram (the log then misses a step, which replay reports) or delay the models beyond what
-# the tolerance below allows: either way the run is repeated, up to three times, and said so. A replay that differs
-# from a complete log fails at once; three failed attempts fail the test.
+# the tolerance below allows: either way the run is repeated ($attempts times at most), and said
+# so. A replay that differs from a complete log fails at once.
 "$hapsim" sim "$scene" --mode linear --out "$work/sim" > /dev/null
 good=0
-for attempt in 1 2 3; do
+for attempt in $(seq "$attempts"); do
   "$hapsim" run "$scene" --lcm-url "$url" --log "$work/run.lcm" \
     --haptic-summary "$work/haptic.json" > "$work/run.out" 2>&1 || fail "run: $(cat "$work/run.out")"
   [ -s "$work/run.lcm" ] || fail "no log written"
@@ -96,7 +101,7 @@ done
 # Three disturbed attempts: the host cannot give the loop real-time conditions now. That is not a
 # failure of the code; the test goes on with the other checks and ends as skipped (exit 77).
 inconclusive=""
-[ "$good" -eq 1 ] || inconclusive="three runs lost datagrams or were disturbed by the host"
+[ "$good" -eq 1 ] || inconclusive="$attempts run(s) lost datagrams or were disturbed by the host"
 
 # 2. A truncated log, as a recording cut off mid-write leaves it: exit 2 and a message naming it.
 # The last 10 bytes go, so the cut lies inside the last event whatever the sizes (every event's
@@ -151,7 +156,7 @@ grep -q "max_force_N: 2.0" "$work/clamped.yaml" || fail "could not make the clam
 # busy machine does not make it drop a datagram (that happened once on a loaded CI run).
 logger=(lcm-logger --lcm-url="$url" --quiet --force "$work/stock.lcm")
 if [ "$(id -u)" -eq 0 ] && command -v chrt > /dev/null; then logger=(chrt -f 10 "${logger[@]}"); fi
-for attempt in 1 2 3; do
+for attempt in $(seq "$attempts"); do
   "${logger[@]}" > /dev/null 2>&1 &
   logger_pid=$!
   sleep 0.5
@@ -164,7 +169,7 @@ for attempt in 1 2 3; do
   grep -qE "the log misses|is not in the log" "$work/stock_replay.out" ||
     fail "replay of the lcm-logger log: $(cat "$work/stock_replay.out")"
   echo "attempt $attempt: lcm-logger lost a datagram; running again"
-  [ "$attempt" -lt 3 ] || inconclusive="${inconclusive:+$inconclusive; }three lcm-logger runs lost datagrams"
+  [ "$attempt" -lt "$attempts" ] || inconclusive="${inconclusive:+$inconclusive; }$attempts lcm-logger run(s) lost datagrams"
 done
 /usr/bin/python3 - "$work/stock.csv" <<'PY'
 import csv, math, sys
@@ -182,7 +187,7 @@ PY
 # models' ages), so the reference is not exact either. Measured 0.007–0.047 N RMS over 18 runs;
 # tolerance 0.08 N, ~10% of the 0.85 N peak, well below what a broken protocol gives (a driver
 # whose script ran 0.2 s ahead of the loop: 0.24 N). A disturbed run is repeated, as in 1.
-for attempt in 1 2 3; do
+for attempt in $(seq "$attempts"); do
   "$hapsim" run "$scene" --device external --lcm-url "$url" --log "$work/external.lcm" \
     > "$work/external.out" 2>&1 &
   run_pid=$!
@@ -214,7 +219,7 @@ PY
     break
   fi
   echo "attempt $attempt: the external-driver run lost a datagram or disagreed; running again"
-  [ "$attempt" -lt 3 ] || inconclusive="${inconclusive:+$inconclusive; }three external-driver runs disturbed"
+  [ "$attempt" -lt "$attempts" ] || inconclusive="${inconclusive:+$inconclusive; }$attempts external-driver run(s) disturbed"
 done
 
 # 7. A stalled receive thread keeps every message: SIGSTOP holds the whole visual process for
@@ -238,7 +243,7 @@ echo "visual process stopped for 60 ms: its log still holds every step"
 # haptic process took the other's models and device states: a 4.9 N peak against 3.1 N, and logs
 # holding both runs). Four processes share the two cores here, so a disturbed attempt is
 # repeated as in 1.
-for attempt in 1 2 3; do
+for attempt in $(seq "$attempts"); do
   "$hapsim" run "$scene" --lcm-url "$url" --log "$work/a.lcm" --haptic-summary "$work/a.json" \
     > "$work/a.out" 2>&1 &
   a_pid=$!
@@ -271,7 +276,7 @@ for attempt in 1 2 3; do
   done
   [ "$agreed" -eq 1 ] && break
   echo "attempt $attempt: two runs at once lost a datagram or disagreed; running again"
-  [ "$attempt" -lt 3 ] || inconclusive="${inconclusive:+$inconclusive; }three pairs of runs disturbed"
+  [ "$attempt" -lt "$attempts" ] || inconclusive="${inconclusive:+$inconclusive; }$attempts pair(s) of runs disturbed"
 done
 echo "two runs at once on one URL: each kept to its own run"
 
@@ -428,11 +433,8 @@ agrees_with_in_process "$work/hostile.json" "$work/hostile.csv" | sed "s/^/under
   inconclusive="${inconclusive:+$inconclusive; }the run under a hostile publisher disagreed (host?)"
 
 # 11. The papers' 1 kHz modes: the world travels with the models; replay and forces as above,
-# with check 1's three attempts (a lost datagram or a disturbed run is repeated). Under a
-# sanitizer one attempt: its frames fall behind the haptic clock, so the forces cannot agree and
-# repeating costs minutes; the runs and their bit-exact replays are what it checks there.
-attempts=3
-[ -n "${HAPSIM_SANITIZED:-}" ] && attempts=1
+# with check 1's attempts (a lost datagram or a disturbed run is repeated); under a sanitizer the
+# runs and their bit-exact replays are what it checks.
 papers_mode_agrees() {  # summary, logged CSV, in-process CSV, label
   /usr/bin/python3 - "$@" <<'PY'
 import csv, json, math, sys
