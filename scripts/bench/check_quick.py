@@ -1,0 +1,103 @@
+#!/usr/bin/python3
+"""Checks the JSON of `scripts/bench.sh --quick` (ctest: bench_quick_test), each against a value
+the bench did not produce:
+
+- every experiment ran and every number in the results is finite (no NaN, no infinity);
+- modes: the reference has zero model age (every step is a full frame), and the paper's linear
+  model renders the device force closer to the reference than standard coupling at the same rate;
+- indentation: the Hertz and punch coefficients are stiffer than the closed forms (a conforming
+  displacement FEM, and a block bonded at its base, are stiffer than the half-space: error > 0)
+  and within the quick meshes' band (Hertz < 50 %, punch < 90 %), falling with refinement;
+- cantilever: the small-load tip deflection of the finest quick mesh within 15 % of beam theory,
+  and the linear element law missing the large-load axial shortening that the corotational one
+  captures;
+- stability: the measured explicit limit within 2 % of 2/ω_max, and implicit Euler bounded at
+  100 times that step.
+
+Usage: scripts/bench/check_quick.py OUT_DIR/results.json
+"""
+import json
+import math
+import sys
+
+EXPECTED = ["indentation", "modes", "cantilever", "stability", "economy"]
+
+
+def finite_everywhere(value, path, problems):
+    if isinstance(value, float) and not math.isfinite(value):
+        problems.append(f"{path} is {value}")
+    elif isinstance(value, dict):
+        for key, item in value.items():
+            finite_everywhere(item, f"{path}.{key}", problems)
+    elif isinstance(value, list):
+        for i, item in enumerate(value):
+            finite_everywhere(item, f"{path}[{i}]", problems)
+
+
+def check(results):
+    problems = []
+    experiments = results["experiments"]
+    for name in EXPECTED:
+        if name not in experiments:
+            problems.append(f"experiment {name} did not run")
+    finite_everywhere(experiments, "experiments", problems)
+    if problems:
+        return problems
+
+    modes = experiments["modes"]
+    if modes["reference"]["max_model_age_s"] != 0.0:
+        problems.append(f"reference model age {modes['reference']['max_model_age_s']} s, not 0")
+    for hz in sorted({r["visual_hz"] for r in modes["runs"]}):
+        error = {r["mode"]: r["rms_error_N"] for r in modes["runs"] if r["visual_hz"] == hz}
+        if not error["linear"] < error["coupling"]:
+            problems.append(f"modes at {hz:g} Hz: linear {error['linear']:.4f} N does not beat "
+                            f"coupling {error['coupling']:.4f} N")
+
+    for name, band in (("hertz", 0.5), ("punch", 0.9)):
+        runs = sorted(experiments["indentation"][name]["runs"], key=lambda r: r["cells"])
+        finest = runs[-1]["relative_error"]
+        if not 0.0 < finest < band:
+            problems.append(f"{name}: error {finest:+.3f} at the finest quick mesh, not in (0, "
+                            f"{band})")
+        if not runs[-1]["relative_error"] < runs[0]["relative_error"]:
+            problems.append(f"{name}: error does not fall with refinement: "
+                            f"{[round(r['relative_error'], 3) for r in runs]}")
+
+    cantilever = experiments["cantilever"]["runs"]
+    along_x = [r for r in cantilever if r["orientation"] == "x"]
+    small = max((r for r in along_x if r["load"] == "small"), key=lambda r: r["n"])
+    if not abs(small["vertical_error"]) < 0.15:
+        problems.append(f"cantilever: small-load error {small['vertical_error']:+.3f} at "
+                        f"{small['cells']}, not within 15 % of beam theory")
+    large = {r["elasticity"]: r for r in along_x if r["load"] == "large" and r["n"] == small["n"]}
+    if not (abs(large["linear"]["axial_error"]) > 0.9 > abs(large["corotational"]["axial_error"])
+            + 0.5):
+        problems.append("cantilever: axial shortening at large load not missed by linear "
+                        f"({large['linear']['axial_error']:+.2f}) and caught by corotational "
+                        f"({large['corotational']['axial_error']:+.2f})")
+
+    for point in experiments["stability"]["explicit"]["points"]:
+        if not abs(point["measured_over_theory"] - 1.0) < 0.02:
+            problems.append(f"explicit limit {point['measured_over_theory']:.4f} x 2/omega_max at "
+                            f"E = {point['youngs_modulus_Pa']:g} Pa")
+        if not point["implicit_bounded"]:
+            problems.append(f"implicit Euler unbounded at {point['implicit_dt_s']:g} s")
+    return problems
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    with open(sys.argv[1]) as f:
+        results = json.load(f)
+    problems = check(results)
+    for problem in problems:
+        print(f"check_quick: {problem}", file=sys.stderr)
+    if problems:
+        sys.exit(1)
+    print(f"check_quick: {len(EXPECTED)} experiments ran in {results['wall_s']:.0f} s; all checks "
+          "hold")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,123 @@
+"""Indentation of a thick block against closed forms, over mesh resolution (issue 12, item 2).
+
+Hertz: a rigid sphere of radius R pressed d into an elastic half-space, frictionless:
+    F = (4/3) E* R^(1/2) d^(3/2),   E* = E / (1 − ν²)          (Johnson, Contact Mechanics, §4.2)
+Boussinesq: a rigid flat circular punch of radius a:
+    F = K d,   K = 2 a E*                                        (Johnson, §3.7)
+Each run is `hapsim sim` of scenes/hertz_indentation.yaml or scenes/flat_punch.yaml (a slow
+quasi-static press, no gravity), the lattice `cells` varied. Per visual frame the tool's depth
+below the undeformed top and the frame's contact force give a force–depth curve; the law's one
+coefficient is fitted by least squares over the depth window, and its relative error is the
+experiment's error. A conforming displacement FEM is stiffer than the continuum, and a finite
+block bonded at its base stiffer than a half-space: the error should be positive and fall with
+the cell size.
+"""
+import math
+
+from common import draw_pareto, plt, save_figure
+
+# name, scene, block top z, tool offset (sphere centre or punch centre above its contact point),
+# depth window for the fit (m), the law's exponent p (F = C d^p) and its C from the scene's values
+E_PA, NU, SPHERE_R_M, PUNCH_A_M = 50000.0, 0.45, 0.01, 0.003
+E_STAR = E_PA / (1.0 - NU * NU)
+CASES = {
+    "hertz": {"scene": "scenes/hertz_indentation.yaml", "top_m": 0.03, "offset_m": SPHERE_R_M,
+              "window_m": (0.2e-3, 0.8e-3), "power": 1.5,
+              "coefficient": 4.0 / 3.0 * E_STAR * math.sqrt(SPHERE_R_M),
+              "law": "Hertz F = (4/3) E* R^1/2 d^3/2"},
+    "punch": {"scene": "scenes/flat_punch.yaml", "top_m": 0.03, "offset_m": 0.005,
+              "window_m": (0.05e-3, 0.3e-3), "power": 1.0, "coefficient": 2.0 * PUNCH_A_M * E_STAR,
+              "law": "Boussinesq F = 2 a E* d"},
+}
+
+
+def meshes(quick):
+    """(cells m: lattice 2m x 2m x m, grading ratio) per run."""
+    if quick:
+        return [(6, 10.0), (8, 10.0)]
+    return [(6, 10.0), (8, 10.0), (10, 10.0), (12, 10.0), (14, 10.0), (16, 10.0),
+            (10, 5.0), (10, 20.0)]
+
+
+def fit(frames, case):
+    """Least-squares C of F = C d^p over the depth window; the curve (d, F) of every frame."""
+    curve, num, den = [], 0.0, 0.0
+    low, high = case["window_m"]
+    for row in frames:
+        depth_m = case["top_m"] + case["offset_m"] - row["tool_z_m"]
+        force_N = row["contact_force_z_N"]
+        curve.append((depth_m, force_N))
+        if low <= depth_m <= high:
+            basis = depth_m ** case["power"]
+            num += force_N * basis
+            den += basis * basis
+    if den == 0.0:
+        raise RuntimeError(f"{case['scene']}: no frame reached the depth window {case['window_m']}")
+    return num / den, curve
+
+
+def run_case(bench, name, case):
+    results = []
+    for cells, ratio in meshes(bench.quick):
+        label = f"{name}_m{cells}_r{ratio:g}"
+        bench.progress(f"indentation: {label} ({20 * cells ** 3} tets)")
+        scene = bench.scene_variant(case["scene"], {
+            "body.mesh.box.cells": [2 * cells, 2 * cells, cells],
+            "body.mesh.box.graded": {"focus_m": [0.0, 0.0, 0.03], "ratio": ratio}}, label)
+        summary, frames, _ = bench.sim(scene, label)
+        coefficient, curve = fit(frames, case)
+        results.append({"cells": cells, "ratio": ratio, "tets": 20 * cells ** 3,
+                        "frame_ms": summary["frame_stage_median_ms"]["total"],
+                        "max_contacts": summary["max_contacts"],
+                        "fitted_coefficient": coefficient,
+                        "relative_error": coefficient / case["coefficient"] - 1.0,
+                        "curve": curve})
+    return results
+
+
+def chart(bench, name, case, results):
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+    top_d = max(d for r in results for d, _ in r["curve"])
+    ds = [top_d * i / 100 for i in range(101)]
+    left.plot([1e3 * d for d in ds], [case["coefficient"] * d ** case["power"] for d in ds], "k-",
+              lw=2, label=case["law"])
+    for r in results:
+        left.plot([1e3 * d for d, _ in r["curve"] if d > 0], [f for d, f in r["curve"] if d > 0],
+                  lw=1, label=f"m {r['cells']}, ratio {r['ratio']:g} ({r['tets']} tets)")
+    left.axvspan(1e3 * case["window_m"][0], 1e3 * case["window_m"][1], color="0.9", zorder=0)
+    left.set(xlabel="depth below the undeformed top (mm)", ylabel="contact force (N)",
+             title=f"{name}: force against depth (grey: fit window)")
+    left.legend(fontsize=7)
+    draw_pareto(right, [(r["frame_ms"], 100 * r["relative_error"]) for r in results],
+                [f"m{r['cells']} r{r['ratio']:g}" for r in results])
+    right.set(xscale="log", xlabel="median visual frame (ms)",
+              ylabel="error of the fitted coefficient (%)",
+              title=f"{name}: error against cost (line: Pareto front)")
+    for axis in (left, right):
+        axis.grid(True, alpha=0.3)
+    save_figure(fig, bench.path(f"{name}.png"))
+    return {"file": f"{name}.png",
+            "caption": f"{case['law']}: force against depth per mesh, and the fitted coefficient's "
+                       "error against the median visual frame."}
+
+
+def run(bench):
+    output = {"figures": [], "markdown": []}
+    md = output["markdown"]
+    for name, case in CASES.items():
+        results = run_case(bench, name, case)
+        output[name] = {"law": case["law"], "analytic_coefficient": case["coefficient"],
+                        "window_m": case["window_m"],
+                        "runs": [{k: v for k, v in r.items() if k != "curve"} for r in results]}
+        output["figures"].append(chart(bench, name, case, results))
+        md.append(f"**{name}** ({case['law']}, E {E_PA:g} Pa, ν {NU}; fit over depths "
+                  f"{1e3 * case['window_m'][0]:g}–{1e3 * case['window_m'][1]:g} mm):")
+        md.append("")
+        md.append("| lattice (2m × 2m × m), grading | tets | median frame (ms) | max contacts | "
+                  "error of the coefficient |")
+        md.append("|---|---:|---:|---:|---:|")
+        for r in results:
+            md.append(f"| m {r['cells']}, ratio {r['ratio']:g} | {r['tets']} | {r['frame_ms']:.1f} "
+                      f"| {r['max_contacts']} | {100 * r['relative_error']:+.1f} % |")
+        md.append("")
+    return output

@@ -1,0 +1,312 @@
+"""Stability maps 4 and 5: contact that releases and contact a fast tool can miss (issue 12, item 3;
+see stability.py).
+
+4. Equality against unilateral release: the straight press (5 mm) and lift of block_press with a
+   sharp rim (the scene's rounded rim makes the equality law blow up during the press, recorded
+   once), scripted device. The sticking force is the most negative device force z while lifting
+   (t ≥ 1.2 s) plus the tool's weight (the pull beyond gravity). Criterion: it sticks if that is
+   more than 0.05 N below the 1 kHz reference's (the tool's own coupling ringing at separation;
+   quick: the lcp mode's, which matches the reference).
+5. A stiff body under a fast tool: block_press with E 5e4–5e7 Pa, the device pressed 5 mm in
+   T = 0.8–0.01 s (scripted: a hand could not move that fast), the linear mode over E × speed and
+   the other modes at 5 MPa. The haptic tool's penetration is its depth below the undeformed top
+   minus the visual tool's (the body's own give). Criterion: it fails above 1 mm, and tunnels if it
+   is that deep while its contact model holds no contact.
+"""
+import math
+
+import numpy as np
+from matplotlib.patches import Patch
+
+from common import median, plt, save_figure
+from stability_common import (FAIL_COLOR, PRESS, STABLE_COLOR, cell_map, finite, haptic,
+                              press_scene)
+
+STICK_MARGIN_N = 0.05
+PENETRATION_LIMIT_M = 0.001
+
+
+# 4. equality against unilateral release --------------------------------------------------------
+
+def release_scene(bench, law, rounded=False):
+    """block_press pressed 5 mm straight down and lifted 4 mm above the start (no slide)."""
+    x0 = press_scene()["tool"]["position_m"]
+    z0 = x0[2]
+    script = [{"t_s": 0.0, "position_m": [0.0, 0.0, z0]},
+              {"t_s": 0.2, "position_m": [0.0, 0.0, z0]},
+              {"t_s": 1.0, "position_m": [0.0, 0.0, z0 - 0.005]},
+              {"t_s": 1.2, "position_m": [0.0, 0.0, z0 - 0.005]},
+              {"t_s": 2.0, "position_m": [0.0, 0.0, z0 + 0.004]},
+              {"t_s": 2.1, "position_m": [0.0, 0.0, z0 + 0.004]}]
+    edits = {"contact.law": law, "device.trajectory": script, "time.num_steps": 70}
+    if not rounded:
+        cylinder = dict(press_scene()["tool"]["shape"]["cylinder"])
+        cylinder.pop("edge_radius_m", None)
+        edits["tool.shape"] = {"cylinder": cylinder}
+    name = f"stab_release_{law}" + ("_rounded" if rounded else "")
+    return bench.scene_variant(PRESS, edits, name)
+
+
+def release_run(bench, law, mode, hz, rounded=False):
+    label = f"stab_release_{law}_{mode}_{hz:g}hz" + ("_rounded" if rounded else "")
+    scene = release_scene(bench, law, rounded)
+    options = ["--mode", mode] + ([] if mode == "reference" else ["--visual-hz", hz])
+    summary, frames, folder = bench.sim(scene, label, *options)
+    h = haptic(folder)
+    weight_N = press_scene()["tool"]["mass_kg"] * 9.81
+    lifting = h["t_s"] >= 1.2
+    i = int(np.argmin(h["force_z_N"][lifting]))
+    frame_lift = [r["contact_force_z_N"] for r in frames if r["t_s"] >= 1.2]
+    return {"law": law, "mode": mode, "visual_hz": hz, "rounded_rim": rounded,
+            "sticking_N": finite(h["force_z_N"][lifting][i] + weight_N),
+            "at_s": finite(h["t_s"][lifting][i]),
+            "min_frame_contact_force_z_N": finite(min(frame_lift)) if frame_lift else None,
+            "peak_force_N": finite(summary["peak_force_N"]),
+            "max_contacts": summary["max_contacts"]}
+
+
+def release_map(bench):
+    combos = [("equality", "linear"), ("unilateral", "linear"), ("unilateral", "lcp")]
+    rates = [20.0] if bench.quick else [10.0, 20.0, 25.0, 50.0, 100.0, 200.0]
+    if bench.quick:
+        combos = [("equality", "linear"), ("unilateral", "lcp")]
+    points = []
+    for law, mode in combos:
+        for hz in rates:
+            bench.progress(f"stability: release, {law} law, {mode}, visual {hz:g} Hz")
+            points.append(release_run(bench, law, mode, hz))
+    reference, rounded = None, None
+    if not bench.quick:
+        bench.progress("stability: release, reference (everything at 1 kHz; ~30 s)")
+        reference = release_run(bench, "unilateral", "reference", 1000.0)
+        bench.progress("stability: release, equality law on the scene's rounded rim, 50 Hz")
+        rounded = release_run(bench, "equality", "linear", 50.0, rounded=True)
+    if reference is not None:
+        baseline, baseline_name = reference["sticking_N"], "the 1 kHz reference"
+    else:
+        baseline = median([p["sticking_N"] for p in points if p["mode"] == "lcp"])
+        baseline_name = "the lcp mode (quick: no reference run)"
+    for p in points:
+        p["sticks"] = p["sticking_N"] < baseline - STICK_MARGIN_N
+    fig, axis = plt.subplots(figsize=(8, 4.8))
+    low = min([p["sticking_N"] for p in points] + [baseline]) - 0.1
+    axis.axhspan(low, baseline - STICK_MARGIN_N, color=FAIL_COLOR, alpha=0.8, lw=0,
+                 label=f"sticks: pulls > {STICK_MARGIN_N:g} N beyond "
+                       f"{baseline_name.split(' (')[0]}")
+    axis.axhline(baseline, color="k", ls="--", lw=1, label=f"{baseline_name}: {baseline:+.3f} N")
+    styles = {("equality", "linear"): ("C3", "o"), ("unilateral", "linear"): ("C0", "s"),
+              ("unilateral", "lcp"): ("C2", "^")}
+    for law, mode in combos:
+        chosen = [p for p in points if p["law"] == law and p["mode"] == mode]
+        color, marker = styles[(law, mode)]
+        axis.plot([p["visual_hz"] for p in chosen], [p["sticking_N"] for p in chosen],
+                  marker=marker, color=color, label=f"{law} law, --mode {mode}")
+    axis.axhline(0, color="0.5", lw=0.8)
+    axis.set(xscale="log", ylim=(low, 0.05), xlabel="visual rate (Hz)",
+             ylabel="sticking force: min(F_z) + m_tool g while lifting (N)",
+             title="Release: pull on the device beyond the tool's weight (sharp-rim block_press)")
+    axis.set_xticks(rates)
+    axis.set_xticklabels([f"{r:g}" for r in rates])
+    axis.minorticks_off()
+    axis.grid(True, alpha=0.3)
+    axis.legend(fontsize=7, loc="lower right")
+    save_figure(fig, bench.path("stability_release.png"))
+    figure = {"file": "stability_release.png",
+              "caption": "Equality against unilateral release: the most negative device force z "
+                         "beyond the tool's weight while the tool lifts off, against the visual "
+                         "rate, red below the reference's value by more than 0.05 N."}
+    return {"scene": PRESS + " (sharp rim, straight press 5 mm and lift, scripted device)",
+            "criterion": f"sticking_N < baseline − {STICK_MARGIN_N} N", "baseline_N": baseline,
+            "baseline": baseline_name, "reference": reference, "rounded_rim_equality": rounded,
+            "points": points}, figure
+
+
+def release_markdown(result):
+    points = result["points"]
+    rates = sorted({p["visual_hz"] for p in points})
+    combos = []
+    for p in points:
+        if (p["law"], p["mode"]) not in combos:
+            combos.append((p["law"], p["mode"]))
+    sticks = {c: [p["visual_hz"] for p in points if (p["law"], p["mode"]) == c and p["sticks"]]
+              for c in combos}
+    worst = {c: min((p for p in points if (p["law"], p["mode"]) == c),
+                    key=lambda p: p["sticking_N"]) for c in combos}
+    frame_min = min(p["min_frame_contact_force_z_N"] for p in points
+                    if p["min_frame_contact_force_z_N"] is not None)
+    lcp = [p["sticking_N"] for p in points if p["mode"] == "lcp"]
+    lcp_off = max(abs(x - result["baseline_N"]) for x in lcp) if lcp else None
+    said = "; ".join(f"{law}/{mode}: " + (", ".join(f"{hz:g}" for hz in hz_list) + " Hz"
+                                         if hz_list else "never")
+                     for (law, mode), hz_list in sticks.items())
+    md = [f"**Equality against unilateral release** ({result['scene']}; sticking force = most "
+          f"negative device force z while lifting plus the tool's weight; sticks if more than "
+          f"{STICK_MARGIN_N:g} N below {result['baseline']}, {result['baseline_N']:+.3f} N, which "
+          f"is the coupled tool ringing as it separates). Sticks at: {said}. Strongest pull: "
+          + "; ".join(f"{law}/{mode} {worst[(law, mode)]['sticking_N']:+.3f} N at "
+                      f"{worst[(law, mode)]['visual_hz']:g} Hz" for law, mode in combos)
+          + (f". The frames' own contact force never pulls (its minimum while lifting is "
+             f"{frame_min:+.3f} N): the pull is the linear model's between frames"
+             if frame_min >= 0 else f". The frames' own contact force pulls too, down to "
+             f"{frame_min:+.3f} N") + ". Why: the model "
+          "holds the frame's active contacts as equalities until the next frame, so while the "
+          "tool lifts they pull, longer at a low visual rate"
+          + ("; this happens with the unilateral law too, since the frame's active set is "
+             "frozen" if sticks.get(("unilateral", "linear")) else "")
+          + ". The lcp mode re-solves the unilateral problem every 1 ms"
+          + (f" and stays within {lcp_off:.3f} N of {result['baseline'].split(' (')[0]}."
+             if lcp_off is not None and result["reference"] is not None else ".")]
+    rounded = result.get("rounded_rim_equality")
+    if rounded:
+        md[-1] += (f" On the scene's own rounded rim the equality law fails outright, already in "
+                   f"the press: peak device force {rounded['peak_force_N']:.3g} N, the frame's "
+                   f"contact force down to {rounded['min_frame_contact_force_z_N']:.3g} N, "
+                   f"{rounded['max_contacts']} contacts at {rounded['visual_hz']:g} Hz (the "
+                   "rim's feature points; the sharp rim has at most "
+                   f"{max(p['max_contacts'] for p in points if p['law'] == 'equality')}).")
+    md += ["", "| law, mode | " + " | ".join(f"{hz:g} Hz" for hz in rates) + " |",
+           "|---|" + "---:|" * len(rates)]
+    for law, mode in combos:
+        row = {p["visual_hz"]: p for p in points if (p["law"], p["mode"]) == (law, mode)}
+        md.append(f"| {law}, {mode} | " + " | ".join(
+            (f"**{row[hz]['sticking_N']:+.3f}**" if row[hz]["sticks"]
+             else f"{row[hz]['sticking_N']:+.3f}") if hz in row else "" for hz in rates) + " |")
+    md += ["", "(N; bold: sticks)", ""]
+    return md
+
+
+# 5. stiff body under a fast tool ---------------------------------------------------------------
+
+def fast_run(bench, mode, E, press_s, depth_m=0.005):
+    base = press_scene()
+    z0 = base["tool"]["position_m"][2]
+    top_plus_half = base["body"]["mesh"]["box"]["max_m"][2] + \
+        base["tool"]["shape"]["cylinder"]["length_m"] / 2
+    dt = base["time"]["dt_s"]
+    end = 0.1 + press_s + 0.3
+    script = [{"t_s": 0.0, "position_m": [0.0, 0.0, z0]},
+              {"t_s": 0.1, "position_m": [0.0, 0.0, z0]},
+              {"t_s": 0.1 + press_s, "position_m": [0.0, 0.0, z0 - depth_m]},
+              {"t_s": end, "position_m": [0.0, 0.0, z0 - depth_m]}]
+    label = f"stab_fast_{mode}_E{E:g}_T{press_s:g}"
+    scene = bench.scene_variant(PRESS, {"body.material.youngs_modulus_Pa": E,
+                                        "device.trajectory": script,
+                                        "time.num_steps": int(math.ceil(end / dt))}, label)
+    summary, frames, folder = bench.sim(scene, label, "--mode", mode)
+    h = haptic(folder)
+    visual_sink = max(0.0, max(top_plus_half - r["tool_z_m"] for r in frames))
+    depth = top_plus_half - h["tool_z_m"]
+    penetration = max(0.0, float(depth.max()) - visual_sink)
+    tunnelled = bool(np.any((depth - visual_sink > PENETRATION_LIMIT_M) & (h["contacts"] == 0)))
+    return {"mode": mode, "youngs_modulus_Pa": E, "press_s": press_s,
+            "speed_m_s": depth_m / press_s, "travel_per_frame_m": depth_m / press_s * dt,
+            "haptic_penetration_m": penetration, "visual_sink_m": visual_sink,
+            "max_penetration_m": finite(summary["max_penetration_m"]),
+            "peak_force_N": finite(summary["peak_force_N"]), "tunnelled": tunnelled,
+            "fails": penetration > PENETRATION_LIMIT_M}
+
+
+def fast_map(bench):
+    if bench.quick:
+        moduli, times, others, compare_E = [5e6], [0.8, 0.01], ["lcp"], 5e6
+        other_times = [0.01]
+    else:
+        moduli, times, others, compare_E = [5e4, 5e5, 5e6, 5e7], [0.8, 0.2, 0.05, 0.02, 0.01], \
+            ["lcp", "coupling", "penalty"], 5e6
+        other_times = times
+    points = []
+    for E in moduli:
+        for T in times:
+            bench.progress(f"stability: fast tool, linear, E {E:g} Pa, press in {T:g} s")
+            points.append(fast_run(bench, "linear", E, T))
+    for mode in others:
+        for T in other_times:
+            bench.progress(f"stability: fast tool, {mode}, E {compare_E:g} Pa, press in {T:g} s")
+            points.append(fast_run(bench, mode, compare_E, T))
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12.5, 4.8))
+    linear = [p for p in points if p["mode"] == "linear"]
+    cell_map(left, linear, "speed_m_s", "youngs_modulus_Pa", lambda p: p["fails"],
+             lambda p: f"{1e3 * p['haptic_penetration_m']:.2f}",
+             lambda p: "tunnels" if p["tunnelled"] else "")
+    left.set(xlabel="press speed (m/s; 5 mm in 0.8–0.01 s)", ylabel="Young's modulus E (Pa)",
+             title="--mode linear (33 Hz): haptic tool penetration (mm)")
+    left.legend(handles=[Patch(color=STABLE_COLOR, label="≤ 1 mm"),
+                         Patch(color=FAIL_COLOR, label="> 1 mm (fails)")],
+                fontsize=7, loc="upper left", framealpha=0.9)
+    top = max(1e3 * p["haptic_penetration_m"] for p in points) * 1.15 + 0.5
+    bottom = -0.04 * top
+    right.axhspan(1e3 * PENETRATION_LIMIT_M, top, color=FAIL_COLOR, alpha=0.8, lw=0,
+                  label="penetration > 1 mm")
+    styles = {"linear": ("C0", "o", "-", 7), "lcp": ("C1", "^", "--", 9),
+              "coupling": ("C2", "s", ":", 5), "penalty": ("C3", "D", "-", 6)}
+    for mode in ["linear"] + others:
+        chosen = sorted([p for p in points if p["mode"] == mode and
+                         p["youngs_modulus_Pa"] == compare_E], key=lambda p: p["speed_m_s"])
+        color, marker, line, size = styles[mode]
+        right.plot([p["speed_m_s"] for p in chosen],
+                   [1e3 * p["haptic_penetration_m"] for p in chosen], marker=marker, ls=line,
+                   color=color, ms=size, mfc="none" if mode == "lcp" else color,
+                   label=f"--mode {mode}")
+        for p in chosen:
+            if p["tunnelled"]:
+                right.plot(p["speed_m_s"], 1e3 * p["haptic_penetration_m"], "kx", ms=9)
+    right.plot([], [], "kx", ls="", label="tunnelled (no contact in its model)")
+    right.set(xscale="log", ylim=(bottom, top), xlabel="press speed (m/s)",
+              ylabel="haptic tool penetration (mm)",
+              title=f"E = {compare_E:g} Pa: penetration per mode")
+    right.grid(True, which="both", alpha=0.3)
+    right.legend(fontsize=7, loc="upper left")
+    save_figure(fig, bench.path("stability_fast_tool.png"))
+    figure = {"file": "stability_fast_tool.png",
+              "caption": "A stiff body under a fast tool (block_press, device pressed 5 mm in "
+                         "0.8–0.01 s): the haptic tool's penetration beyond the visual tool's "
+                         "sink, over E × speed for the linear mode and per mode at 5 MPa; red "
+                         "above 1 mm."}
+    return {"scene": PRESS + " (device pressed 5 mm in press_s, scripted)",
+            "criterion": f"haptic_penetration_m > {PENETRATION_LIMIT_M}", "points": points}, figure
+
+
+def fast_markdown(result):
+    points = result["points"]
+    linear = [p for p in points if p["mode"] == "linear"]
+    fails = [p for p in linear if p["fails"]]
+    slowest_fail = min((p["speed_m_s"] for p in fails), default=None)
+    fastest_ok = max((p["speed_m_s"] for p in linear if not p["fails"]), default=None)
+    modes = []
+    for p in points:
+        if p["mode"] not in modes:
+            modes.append(p["mode"])
+    moduli = sorted({p["youngs_modulus_Pa"] for p in linear})
+    worst_pen = {mode: max(p["haptic_penetration_m"] for p in points if p["mode"] == mode)
+                 for mode in modes}
+    least_pen = {mode: min(p["haptic_penetration_m"] for p in points if p["mode"] == mode)
+                 for mode in modes}
+    why = {"lcp": " (its 1 kHz problem keeps the frame's inactive rows within the margin)",
+           "coupling": " (the device feels the visual tool, which the frame's constraints hold)",
+           "penalty": f", and at least {1e3 * least_pen.get('penalty', 0.0):.2f} mm even slowly: "
+                      "it sinks by F/k into the frame's surface whatever the speed (a soft "
+                      "0.6 N/mm spring, not tunnelling)"}
+    md = [f"**Stiff body under a fast tool** ({result['scene']}; the haptic tool's penetration "
+          "is its depth below the undeformed top minus the visual tool's; fails above "
+          f"{1e3 * PENETRATION_LIMIT_M:g} mm; tunnels if that deep with no contact in its "
+          "model). The linear mode fails "
+          + (f"from {slowest_fail:g} m/s ("
+             + (f"fastest held: {fastest_ok:g} m/s)" if fastest_ok is not None else "none held)")
+             + (f", at every E from {min(moduli):g} to {max(moduli):g} Pa" if len(moduli) > 1
+                else "") + ": " if fails else "nowhere on the grid: ")
+          + "its model holds only the contacts active at the last frame, so a tool that arrives "
+          "between frames meets no row and sinks until the next frame pushes it out (β per "
+          "frame). The visual frame's own penetration (max_penetration_m) stays at "
+          f"{1e3 * max(p['max_penetration_m'] or 0.0 for p in points):.2f} mm."
+          + "".join(f" {mode}: at most {1e3 * worst_pen[mode]:.2f} mm" + why.get(mode, "") + "."
+                    for mode in modes if mode != "linear"), "",
+          "| mode | E (Pa) | press (s) | speed (m/s) | haptic penetration (mm) | tunnelled | "
+          "visual sink (mm) | peak force (N) |", "|---|---:|---:|---:|---:|---|---:|---:|"]
+    for p in points:
+        pen = f"{1e3 * p['haptic_penetration_m']:.2f}"
+        md.append(f"| {p['mode']} | {p['youngs_modulus_Pa']:g} | {p['press_s']:g} | "
+                  f"{p['speed_m_s']:.3g} | " + (f"**{pen}**" if p["fails"] else pen)
+                  + f" | {'yes' if p['tunnelled'] else 'no'} | {1e3 * p['visual_sink_m']:.2f} | "
+                  f"{p['peak_force_N']:.2f} |")
+    md.append("")
+    return md
