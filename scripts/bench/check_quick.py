@@ -12,7 +12,11 @@ the bench did not produce:
   and the linear element law missing the large-load axial shortening that the corotational one
   captures;
 - stability: the measured explicit limit within 2 % of 2/ω_max, and implicit Euler bounded at
-  100 times that step.
+  100 times that step;
+- economy: every scene it ran chose a configuration whose error against the finest run is within
+  the tolerance, which is max(5 % of that run's peak device force, 0.05 N) recomputed here from the
+  peak, and no dearer than the finest; the finest run's own error is zero (the same configuration
+  compared with itself: the runs are deterministic).
 
 Usage: scripts/bench/check_quick.py OUT_DIR/results.json
 """
@@ -82,6 +86,31 @@ def check(results):
                             f"E = {point['youngs_modulus_Pa']:g} Pa")
         if not point["implicit_bounded"]:
             problems.append(f"implicit Euler unbounded at {point['implicit_dt_s']:g} s")
+    problems += check_economy(experiments["economy"])
+    return problems
+
+
+def check_economy(economy):
+    problems = []
+    if not economy["scenes"]:
+        problems.append("economy: no scene ran")
+    fraction, floor_N = economy["tolerance"]["fraction_of_peak"], economy["tolerance"]["floor_N"]
+    for name, scene in economy["scenes"].items():
+        tolerance_N = max(fraction * scene["peak_force_N"], floor_N)
+        if not math.isclose(tolerance_N, scene["tolerance_N"], rel_tol=1e-12):
+            problems.append(f"economy: {name}: tolerance {scene['tolerance_N']} N, not "
+                            f"{tolerance_N} N")
+        chosen, finest = scene["chosen"], scene["finest"]
+        if not chosen["rms_error_N"] <= tolerance_N:
+            problems.append(f"economy: {name}: chosen RMS error {chosen['rms_error_N']:.4f} N "
+                            f"outside the tolerance {tolerance_N:.4f} N")
+        if not chosen["cost_ms_per_s"] <= finest["cost_ms_per_s"]:
+            problems.append(f"economy: {name}: the chosen configuration costs "
+                            f"{chosen['cost_ms_per_s']:.3g} ms/s, more than the finest's "
+                            f"{finest['cost_ms_per_s']:.3g}")
+        if finest["rms_error_N"] != 0.0:
+            problems.append(f"economy: {name}: the finest run's error against itself is "
+                            f"{finest['rms_error_N']} N, not 0")
     return problems
 
 

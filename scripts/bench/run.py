@@ -22,6 +22,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cantilever  # noqa: E402
 import common  # noqa: E402
+import economy  # noqa: E402
 import indentation  # noqa: E402
 import modes  # noqa: E402
 import stability  # noqa: E402
@@ -32,6 +33,7 @@ EXPERIMENTS = {
     "cantilever": ("Cantilever: mesh, lattice orientation, linear against corotational",
                    cantilever),
     "stability": ("Stability maps: where each method fails", stability),
+    "economy": ("Model no more than a scene needs: the cheapest configuration per scene", economy),
 }
 
 

@@ -1,0 +1,113 @@
+"""The economy experiment's part of RESULTS.md (economy.py): per scene, the chart of each knob's
+sweep (error against the finest configuration over the visual compute per simulated second) with
+the chosen configuration ringed, and the tables of the choices and the sweeps.
+"""
+from common import plt, save_figure
+
+KNOB_NAMES = {"mesh": "mesh", "elasticity": "element law", "compliance": "compliance",
+              "law": "contact law", "visual_hz": "visual rate", "combined": "combined"}
+COLORS = {"mesh": "C0", "elasticity": "C1", "compliance": "C2", "law": "C4", "visual_hz": "C3",
+          "combined": "k"}
+
+def chart(bench, specs, scenes):
+    names = list(scenes)
+    cols = min(4, len(names))
+    rows = (len(names) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.2 * rows), squeeze=False)
+    for axis in axes.flat[len(names):]:
+        axis.axis("off")
+    for axis, name in zip(axes.flat, names):
+        result, spec = scenes[name], specs[name]
+        points = [r for sweep in result["sweeps"].values() for r in sweep
+                  if "failed" not in r and r["config"] != result["finest"]["config"]]
+        extra = [dict(r, knob="combined") for r in result["combined_runs"]
+                 if "failed" not in r and r["config"] != result["finest"]["config"]]
+        positive = [r["rms_error_N"] for r in points + extra if r["rms_error_N"] > 0]
+        floor = min(positive + [result["tolerance_N"]]) / 3.0
+        for knob in spec["knobs"] + ["combined"]:
+            mine = [r for r in points + extra if r["knob"] == knob]
+            if not mine:
+                continue
+            axis.scatter([r["cost_ms_per_s"] for r in mine],
+                         [max(r["rms_error_N"], floor) for r in mine], color=COLORS[knob],
+                         marker="s" if knob == "combined" else "o", s=22, zorder=3,
+                         label=KNOB_NAMES[knob])
+            for r in mine:
+                axis.annotate(r["label"], (r["cost_ms_per_s"], max(r["rms_error_N"], floor)),
+                              textcoords="offset points", xytext=(4, 3), fontsize=6.5,
+                              color=COLORS[knob])
+        chosen = result["chosen"]
+        axis.scatter([chosen["cost_ms_per_s"]], [max(chosen["rms_error_N"], floor)], s=180,
+                     facecolors="none", edgecolors="r", lw=2, zorder=4, label="chosen")
+        axis.axhline(result["tolerance_N"], color="r", ls="--", lw=1)
+        axis.annotate(f"tolerance {result['tolerance_N']:.3g} N", (0.02, result["tolerance_N"]),
+                      xycoords=("axes fraction", "data"), textcoords="offset points",
+                      xytext=(0, 3), fontsize=7, color="r")
+        axis.axvline(result["finest"]["cost_ms_per_s"], color="k", ls=":", lw=1)
+        axis.annotate("finest", (result["finest"]["cost_ms_per_s"], 0.03),
+                      xycoords=("data", "axes fraction"), rotation=90, fontsize=7, ha="right")
+        axis.set(xscale="log", yscale="log",
+                 xlabel="visual compute per simulated second (ms/s)",
+                 ylabel="device force RMS error vs finest (N)",
+                 title=(f"{name}: chosen {chosen['saving']:.1f}× cheaper"
+                        if chosen["within_tolerance"] else f"{name}: finest kept"))
+        axis.title.set_fontsize(10)
+        axis.grid(True, which="both", alpha=0.3)
+        axis.legend(fontsize=6.5, loc="lower left" if len(names) > 1 else "best")
+    save_figure(fig, bench.path("economy.png"))
+    return {"file": "economy.png",
+            "caption": "Per scene, the device-force error against the finest configuration over "
+                       "the visual compute per simulated second, one knob moved at a time "
+                       "(colours; labels: the knob's value) and the knobs' choices combined "
+                       "(squares); red ring: the chosen configuration, dashed: the tolerance, "
+                       "dotted: the finest configuration's cost."}
+
+
+def markdown(scenes, skipped, tolerance):
+    md = ["Per scene, one knob at a time moved from the finest configuration (refined mesh, "
+          "corotational, exact compliance, the scene's contact law, the highest visual rate), "
+          "each knob set to its cheapest value whose device-force RMS error against the finest "
+          f"run stays within the tolerance, max({100 * tolerance['fraction_of_peak']:g} % of the finest run's "
+          f"peak device force, {tolerance['floor_N']:g} N), then the knobs' choices run together and "
+          "checked; cost is the visual process's compute per simulated second (median frame × "
+          "visual rate; the saving by the mean frame in brackets).", "",
+          "| scene | finest (cost) | cheapest configuration | error RMS / max (N) | cost | "
+          "saving |", "|---|---|---|---:|---:|---:|"]
+    for name, r in scenes.items():
+        c = r["chosen"]
+        backed = "".join(f"; backed off {b['knob']} {b['from']} → {b['to']}"
+                         for b in c["backoffs"])
+        kept = "" if c["within_tolerance"] else " (combination off tolerance: finest kept)"
+        md.append(f"| {name} | {r['finest']['description']} ({r['finest']['cost_ms_per_s']:.3g} "
+                  f"ms/s) | {c['description']}{backed}{kept} | {c['rms_error_N']:.3f} / "
+                  f"{c['max_error_N']:.3f} (tol. {r['tolerance_N']:.3f}) | "
+                  f"{c['cost_ms_per_s']:.3g} ms/s | {c['saving']:.1f}× ({c['mean_saving']:.1f}×) |")
+    md += ["", "Each knob's sweep from the finest configuration: value, RMS error (N), cost "
+           "(ms/s); ✓ within the tolerance, **bold** the value taken:", "",
+           "| scene | knob | sweep |", "|---|---|---|"]
+    for name, r in scenes.items():
+        for knob, sweep in r["sweeps"].items():
+            cells = []
+            for s in sweep:
+                if "failed" in s:
+                    cells.append(f"{s['label']}: failed")
+                    continue
+                text = (f"{s['label']}: {s['rms_error_N']:.3f}, {s['cost_ms_per_s']:.3g}"
+                        + (" ✓" if s["rms_error_N"] <= r["tolerance_N"] else ""))
+                taken = r["chosen"]["config"][knob] == s["value"]
+                cells.append(f"**{text}**" if taken else text)
+            md.append(f"| {name} | {KNOB_NAMES[knob]} | " + "; ".join(cells) + " |")
+        fixed = r["fixed_knobs"]
+        if not r["fem_built"]:
+            md.append(f"| {name} | mesh, element law, compliance | not swept: no FEM built |")
+        for knob, why in fixed.items():
+            if not r["fem_built"] and knob in ("mesh", "elasticity", "compliance"):
+                continue
+            md.append(f"| {name} | {KNOB_NAMES[knob]} | not swept: {why} |")
+    md.append("")
+    notes = [f"{name}: {r['shortened']}" for name, r in scenes.items() if r["shortened"]]
+    if notes:
+        md += ["Scripts shortened (time.num_steps) to fit the bench: " + "; ".join(notes) + ".",
+               ""]
+    md += ["Skipped: " + "; ".join(f"{name} ({why})" for name, why in skipped.items()) + ".", ""]
+    return md
