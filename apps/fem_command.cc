@@ -99,10 +99,13 @@ nlohmann::json MakeSummary(const config::Scene& scene, const config::Body& body,
       {"num_factorizations", record.num_factorizations},
       {"probes", probes}};
   if (options.integrator == fem::IntegratorKind::kExplicitEuler) {
-    // Where the explicit step must fail: Δt < 2 / ω_max (without damping).
+    // Where the explicit step must fail: above 2 / ω_max, less with the material's damping.
     const fem::MaxFrequencyEstimate estimate = fem::EstimateMaxFrequency(body.model);
+    const fem::Material& material = body.model.material;
     summary["omega_max_rad_s"] = estimate.omega_max_rad_s;
-    summary["explicit_stable_dt_s"] = 2.0 / estimate.omega_max_rad_s;
+    summary["explicit_stable_dt_undamped_s"] = 2.0 / estimate.omega_max_rad_s;
+    summary["explicit_stable_dt_s"] = fem::CalcExplicitStableStep(
+        estimate.omega_max_rad_s, material.rayleigh_alpha_1_s, material.rayleigh_beta_s);
   }
   return summary;
 }

@@ -430,6 +430,12 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
   if (scene->haptic.mode == HapticMode::kGodObject && !scene->tool->point)
     root.GetMap("haptic").FailKey(
         "mode", "the godobject mode renders a 3-DOF point: give tool.shape.point {radius_m}");
+  if (scene->contact.model_compliance_step == contact::ModelComplianceStep::kHaptic &&
+      !device::UsesLinearContactModel(scene->haptic.mode))
+    root.GetMap("contact").FailKey(
+        "model_compliance_step",
+        std::string("'haptic' sets the linear contact model's compliance, which the ") +
+            device::ToString(scene->haptic.mode) + " mode does not use (linear, lcp, reference)");
   const YamlMap device = root.GetMap("device");
   device.CheckKeys({"trajectory", "hand"});
   scene->trajectory = ReadWaypoints(device, "trajectory", /*with_button=*/true);

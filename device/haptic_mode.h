@@ -33,6 +33,12 @@ inline bool IsGeometricMode(HapticMode mode) {
   return mode == HapticMode::kPenalty || mode == HapticMode::kMaterial ||
          mode == HapticMode::kImpact;
 }
+// The modes whose 1 kHz force comes from the frame's linear contact model (its rows for lcp; the
+// reference builds one every step): the only ones that read the model's body compliance.
+inline bool UsesLinearContactModel(HapticMode mode) {
+  return mode == HapticMode::kLinear || mode == HapticMode::kLcp ||
+         mode == HapticMode::kReference;
+}
 // The modes that render the frame's world at 1 kHz (each contact model carries it).
 inline bool NeedsWorld(HapticMode mode) {
   return IsGeometricMode(mode) || mode == HapticMode::kGodObject;

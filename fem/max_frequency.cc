@@ -44,4 +44,12 @@ MaxFrequencyEstimate EstimateMaxFrequency(const Model& model, double tolerance,
   return estimate;
 }
 
+double CalcExplicitStableStep(double omega_max_rad_s, double rayleigh_alpha_1_s,
+                              double rayleigh_beta_s) {
+  const double omega = omega_max_rad_s;
+  const double xi = rayleigh_alpha_1_s / (2.0 * omega) + 0.5 * rayleigh_beta_s * omega;
+  // sqrt(1 + ξ²) − ξ written as 1 / (sqrt(1 + ξ²) + ξ): no cancellation when ξ is large.
+  return 2.0 / (omega * (std::sqrt(1.0 + xi * xi) + xi));
+}
+
 }  // namespace hapsim::fem

@@ -144,6 +144,10 @@ def markdown(runs, reference, modes, rates):
                   + (", ".join(f"{hz:g}" for hz in rates if hz not in better) or "no rate")
                   + (" Hz." if len(better) < len(rates) else "."))
         md.append("")
+    md.append("Not here: godobject (paper 004) renders a 3-DOF point, and block_press's tool is "
+              "a cylinder; its error against the reference is measured on the probe scene by "
+              "scripts/bench_modes.sh (docs/BENCHMARKS.md).")
+    md.append("")
     md.append("Median visual frame (ms): " + ", ".join(
         f"{hz:g} Hz {median([r['frame_ms'] for r in runs if r['visual_hz'] == hz]):.1f}"
         for hz in rates) + ".")

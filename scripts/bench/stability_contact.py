@@ -84,12 +84,15 @@ def release_map(bench):
     if reference is not None:
         baseline, baseline_name = reference["sticking_N"], "the 1 kHz reference"
     else:
-        baseline = median([p["sticking_N"] for p in points if p["mode"] == "lcp"])
+        baseline = median([p["sticking_N"] for p in points
+                           if p["mode"] == "lcp" and p["sticking_N"] is not None])
         baseline_name = "the lcp mode (quick: no reference run)"
+    # A run without a finite device force (None) fails the release as surely as one that sticks.
     for p in points:
-        p["sticks"] = p["sticking_N"] < baseline - STICK_MARGIN_N
+        p["sticks"] = p["sticking_N"] is None or p["sticking_N"] < baseline - STICK_MARGIN_N
+    measured = [p for p in points if p["sticking_N"] is not None]
     fig, axis = plt.subplots(figsize=(8, 4.8))
-    low = min([p["sticking_N"] for p in points] + [baseline]) - 0.1
+    low = min([p["sticking_N"] for p in measured] + [baseline]) - 0.1
     axis.axhspan(low, baseline - STICK_MARGIN_N, color=FAIL_COLOR, alpha=0.8, lw=0,
                  label=f"sticks: pulls > {STICK_MARGIN_N:g} N beyond "
                        f"{baseline_name.split(' (')[0]}")
@@ -97,7 +100,7 @@ def release_map(bench):
     styles = {("equality", "linear"): ("C3", "o"), ("unilateral", "linear"): ("C0", "s"),
               ("unilateral", "lcp"): ("C2", "^")}
     for law, mode in combos:
-        chosen = [p for p in points if p["law"] == law and p["mode"] == mode]
+        chosen = [p for p in measured if p["law"] == law and p["mode"] == mode]
         color, marker = styles[(law, mode)]
         axis.plot([p["visual_hz"] for p in chosen], [p["sticking_N"] for p in chosen],
                   marker=marker, color=color, label=f"{law} law, --mode {mode}")
@@ -121,6 +124,10 @@ def release_map(bench):
             "points": points}, figure
 
 
+def sticking_text(value_N):
+    return "no finite force" if value_N is None else f"{value_N:+.3f}"
+
+
 def release_markdown(result):
     points = result["points"]
     rates = sorted({p["visual_hz"] for p in points})
@@ -131,10 +138,11 @@ def release_markdown(result):
     sticks = {c: [p["visual_hz"] for p in points if (p["law"], p["mode"]) == c and p["sticks"]]
               for c in combos}
     worst = {c: min((p for p in points if (p["law"], p["mode"]) == c),
-                    key=lambda p: p["sticking_N"]) for c in combos}
+                    key=lambda p: -math.inf if p["sticking_N"] is None else p["sticking_N"])
+             for c in combos}
     frame_min = min(p["min_frame_contact_force_z_N"] for p in points
                     if p["min_frame_contact_force_z_N"] is not None)
-    lcp = [p["sticking_N"] for p in points if p["mode"] == "lcp"]
+    lcp = [p["sticking_N"] for p in points if p["mode"] == "lcp" and p["sticking_N"] is not None]
     lcp_off = max(abs(x - result["baseline_N"]) for x in lcp) if lcp else None
     said = "; ".join(f"{law}/{mode}: " + (", ".join(f"{hz:g}" for hz in hz_list) + " Hz"
                                          if hz_list else "never")
@@ -143,7 +151,7 @@ def release_markdown(result):
           f"negative device force z while lifting plus the tool's weight; sticks if more than "
           f"{STICK_MARGIN_N:g} N below {result['baseline']}, {result['baseline_N']:+.3f} N, which "
           f"is the coupled tool ringing as it separates). Sticks at: {said}. Strongest pull: "
-          + "; ".join(f"{law}/{mode} {worst[(law, mode)]['sticking_N']:+.3f} N at "
+          + "; ".join(f"{law}/{mode} {sticking_text(worst[(law, mode)]['sticking_N'])} N at "
                       f"{worst[(law, mode)]['visual_hz']:g} Hz" for law, mode in combos)
           + (f". The frames' own contact force never pulls (its minimum while lifting is "
              f"{frame_min:+.3f} N): the pull is the linear model's between frames"
@@ -169,8 +177,9 @@ def release_markdown(result):
     for law, mode in combos:
         row = {p["visual_hz"]: p for p in points if (p["law"], p["mode"]) == (law, mode)}
         md.append(f"| {law}, {mode} | " + " | ".join(
-            (f"**{row[hz]['sticking_N']:+.3f}**" if row[hz]["sticks"]
-             else f"{row[hz]['sticking_N']:+.3f}") if hz in row else "" for hz in rates) + " |")
+            (f"**{sticking_text(row[hz]['sticking_N'])}**" if row[hz]["sticks"]
+             else sticking_text(row[hz]["sticking_N"])) if hz in row else "" for hz in rates)
+            + " |")
     md += ["", "(N; bold: sticks)", ""]
     return md
 

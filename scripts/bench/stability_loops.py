@@ -138,7 +138,10 @@ def coupling_markdown(result):
         stable_kt, unstable_kt = boundary(points, "k_times_T_N_s_m")
         if not unstable:
             where = "nowhere on the grid"
-        elif stable_kt is None or stable_kt < unstable_kt:
+        elif stable_kt is None:
+            where = (f"in every cell ({len(points)}), from k·T_vis = {unstable_kt:g} N s/m "
+                     "(T_vis = 1/rate)")
+        elif stable_kt < unstable_kt:
             where = (f"in {len(unstable)} of {len(points)} cells: stable up to k·T_vis = "
                      f"{stable_kt:g} N s/m, unstable from {unstable_kt:g} N s/m (T_vis = 1/rate)")
         elif stable_kt == unstable_kt:

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "config/scene.h"
+#include "config/simulation_builder.h"
 #include "core/error.h"
 #include "core/scripted_trajectory.h"
 #include "tests/config/scene_test_support.h"
@@ -226,6 +227,12 @@ const BadCase kBadCases[] = {
      "allowed keys here: law, friction_coefficient"},
     {"UnknownCompliance", "margin_m: 0.002", "margin_m: 0.002\n  compliance: cached", 16,
      "contact.compliance", "one of: warped, exact"},
+    {"UnknownModelComplianceStep", "margin_m: 0.002",
+     "margin_m: 0.002\n  model_compliance_step: frame", 16, "contact.model_compliance_step",
+     "one of: visual, haptic"},
+    {"HapticStepComplianceUnusedByTheMode", "margin_m: 0.002",
+     "margin_m: 0.002\n  model_compliance_step: haptic", 16, "contact.model_compliance_step",
+     "which the coupling mode does not use"},
     // haptic
     {"ZeroRate", "rate_hz: 500", "rate_hz: 0", 17, "haptic.rate_hz", "must be > 0"},
     {"FractionalStepsPerFrame", "rate_hz: 500", "rate_hz: 1000.5", 17, "haptic.rate_hz",
@@ -303,6 +310,27 @@ std::string WithoutLines(int first, int last) {
     start = end;
   }
   return kept;
+}
+
+// A mode given on the command line is held to the same rule as the scene's: the haptic-step
+// compliance only where the linear contact model is rendered.
+TEST(SimSceneTest, HapticStepComplianceOnlyWithTheLinearModelsModes) {
+  const std::string yaml =
+      std::string(kMinimalToolScene) + "contact: {model_compliance_step: haptic}\n";
+  const Scene scene = ParseScene(yaml, kLabel, "");
+  for (const char* mode : {"", "linear", "lcp", "reference"})
+    EXPECT_NO_THROW(ResolveHapticMode(scene, mode, "--mode", /*allow_reference=*/true)) << mode;
+  for (const char* mode : {"coupling", "penalty", "material", "impact"}) {
+    try {
+      ResolveHapticMode(scene, mode, "--mode", /*allow_reference=*/true);
+      ADD_FAILURE() << "--mode " << mode << " was accepted with the haptic-step compliance";
+    } catch (const InputError& error) {
+      EXPECT_EQ(error.key(), "contact.model_compliance_step") << mode;
+      EXPECT_NE(std::string(error.what()).find(std::string("the ") + mode + " mode does not use"),
+                std::string::npos)
+          << error.what();
+    }
+  }
 }
 
 TEST(SimSceneTest, ToolNeedsCouplingAndDevice) {

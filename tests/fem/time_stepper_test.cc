@@ -295,6 +295,43 @@ TEST(TimeStepper, ImplicitEulerNeverGainsEnergy) {
   }
 }
 
+// With stiffness damping the explicit limit falls below 2/ω_max (CalcExplicitStableStep): at
+// β = 2/ω_max (ξ = 1 at the top mode) it is (2/ω)(√2 − 1), 41% of the undamped one. Steps are
+// taken on both sides of it and at the undamped limit; the formula is not what decides the test,
+// the growth of the energy is.
+TEST(TimeStepper, ExplicitEulerWithStiffnessDampingFailsBelowTheUndampedLimit) {
+  const double omega = EstimateMaxFrequency(MakeSmallCantilever()).omega_max_rad_s;
+  const double beta_s = 2.0 / omega;
+  const Model model = MakeSmallCantilever(0.0, beta_s);
+  const double damped_s = CalcExplicitStableStep(omega, 0.0, beta_s);
+  EXPECT_NEAR(damped_s * omega / 2.0, std::sqrt(2.0) - 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(CalcExplicitStableStep(omega, 0.0, 0.0), 2.0 / omega);
+
+  const State initial = MakeDeflectedState(model, 0.3);
+  const Eigen::VectorXd no_load_N = Eigen::VectorXd::Zero(model.num_dofs());
+  const double E0 = TotalEnergy(model, initial);
+  // Largest energy over 400 steps, relative to E0 (infinite once it is no longer finite).
+  const auto worst_energy = [&](double dt_s) {
+    TimeStepper stepper(model, MakeOptions(IntegratorKind::kExplicitEuler, SolverKind::kCholmod),
+                        dt_s, no_load_N);
+    State state = initial;
+    double worst = 0.0;
+    for (int step = 0; step < 400 && std::isfinite(worst) && worst < 1e6; ++step) {
+      stepper.Step(&state);
+      const double energy = TotalEnergy(model, state) / E0;
+      worst = std::isfinite(energy) ? std::max(worst, energy) : INFINITY;
+    }
+    return worst;
+  };
+  // Below the damped limit the damping only takes energy out: never above E0 (plus the band the
+  // undamped test allows for the explicit step's energy error).
+  EXPECT_LE(worst_energy(0.9 * damped_s), 1.0 + kExplicitEnergyBand);
+  // Above it the top mode grows by |λ| ≈ 1.6 per step at 1.2 times (root of
+  // λ² − (2 − (hω)² − hc) λ + 1 − hc = 0), far more at the undamped limit.
+  EXPECT_GT(worst_energy(1.2 * damped_s), 1e6);
+  EXPECT_GT(worst_energy(0.9 * 2.0 / omega), 1e6);
+}
+
 TEST(TimeStepper, ExplicitEulerBlowsUpAboveTwoOverOmegaMax) {
   const Model model = MakeSmallCantilever();
   const MaxFrequencyEstimate estimate = EstimateMaxFrequency(model);
