@@ -2,7 +2,7 @@
 
 For every shipped scene with a tool and a scripted device, the finest configuration is run first:
 the scene's deformable mesh refined, corotational elasticity, the exact contact compliance, the
-scene's contact law and the highest visual rate the haptic rate allows (200 Hz at 1 kHz), in the
+scene's contact law and a visual rate of 100 Hz (or the scene's own, if higher), in the
 scene's haptic mode (linear, the paper's; the probe keeps its god-object). Then one knob at a time
 is moved from there towards the cheaper end:
 
@@ -62,7 +62,11 @@ QUICK_PLAN = {"block_press": {"fine": 1.0, "num_steps": 40, "visual_hz": 100.0,
                               "why": "quick: 1.2 s (rest and press), shipped mesh, 100 Hz finest, "
                                      "two knobs"}}
 MESH_FACTORS = [0.5, 0.75, 1.0]
-RATES_HZ = [10.0, 20.0, 25.0, 50.0, 100.0, 200.0]
+# The finest rate is 100 Hz, not the 200 Hz a 1 kHz haptic rate allows: on block_press the linear
+# model is 0.011 N RMS from the 1 kHz reference at 100 Hz (the modes experiment), a fifth of the
+# smallest tolerance here (0.05 N), and 200 Hz would double the cost of every run but the rate
+# sweep's.
+RATES_HZ = [10.0, 20.0, 25.0, 50.0, 100.0]
 TOLERANCE_FRACTION, TOLERANCE_FLOOR_N = 0.05, 0.05
 MAX_BACKOFFS = 3
 KNOBS = ["mesh", "elasticity", "compliance", "law", "visual_hz"]
