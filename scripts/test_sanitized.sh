@@ -39,7 +39,9 @@ run_asan() {
   # detect_leaks: LeakSanitizer too. The allocation-counting tests skip themselves (the
   # sanitizer owns the allocator). Left out: BlockPressAccuracy, the one 60 s accuracy sweep
   # (540 s under ASan, a third of the CI budget); it runs the multirate simulator's code that
-  # the MultirateSimulator tests run here too.
+  # the MultirateSimulator tests run here too. And bench_quick_test: a minute of `hapsim sim`
+  # and `hapsim fem` runs sized for a Release build (several times that under ASan), whose code
+  # paths the unit and command tests run here. (Its script skips itself under HAPSIM_SANITIZED.)
   # The window tests (view_test, train_test) run without LeakSanitizer: Mesa's software OpenGL
   # leaves 112 bytes allocated from its JIT-compiled code (a stack of calloc and an unknown
   # module, nothing to name in a suppression); every other ASan check stays on. Under ASan the
@@ -48,7 +50,8 @@ run_asan() {
   (cd build-asan &&
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1 \
       UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-      ctest --output-on-failure -j"$jobs" --timeout 900 -E '^BlockPressAccuracy\.|^view_test$|^train_test$') ||
+      ctest --output-on-failure -j"$jobs" --timeout 900 \
+        -E '^BlockPressAccuracy\.|^bench_quick_test$|^view_test$|^train_test$') ||
     status=1
   (cd build-asan &&
     HAPSIM_SANITIZED=1 ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:strict_string_checks=1 \
