@@ -11,11 +11,12 @@ COLORS = {"mesh": "C0", "elasticity": "C1", "compliance": "C2", "law": "C4", "vi
 
 def chart(bench, specs, scenes):
     names = list(scenes)
-    cols = min(4, len(names))
-    rows = (len(names) + cols - 1) // cols
+    cols = min(4, len(names) + 1)  # one panel more, for the legend the scenes share
+    rows = (len(names) + cols) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 4.2 * rows), squeeze=False)
     for axis in axes.flat[len(names):]:
         axis.axis("off")
+    legend = {}  # label → handle, over every scene's panel
     for axis, name in zip(axes.flat, names):
         result, spec = scenes[name], specs[name]
         points = [r for sweep in result["sweeps"].values() for r in sweep
@@ -40,9 +41,9 @@ def chart(bench, specs, scenes):
         axis.scatter([chosen["cost_ms_per_s"]], [max(chosen["rms_error_N"], floor)], s=180,
                      facecolors="none", edgecolors="r", lw=2, zorder=4, label="chosen")
         axis.axhline(result["tolerance_N"], color="r", ls="--", lw=1)
-        axis.annotate(f"tolerance {result['tolerance_N']:.3g} N", (0.02, result["tolerance_N"]),
+        axis.annotate(f"tolerance {result['tolerance_N']:.3g} N", (0.98, result["tolerance_N"]),
                       xycoords=("axes fraction", "data"), textcoords="offset points",
-                      xytext=(0, 3), fontsize=7, color="r")
+                      xytext=(0, 3), fontsize=7, color="r", ha="right")
         axis.axvline(result["finest"]["cost_ms_per_s"], color="k", ls=":", lw=1)
         axis.annotate("finest", (result["finest"]["cost_ms_per_s"], 0.03),
                       xycoords=("data", "axes fraction"), rotation=90, fontsize=7, ha="right")
@@ -54,7 +55,10 @@ def chart(bench, specs, scenes):
                         else f"{name}: the finest is needed"))
         axis.title.set_fontsize(10)
         axis.grid(True, which="both", alpha=0.3)
-        axis.legend(fontsize=6.5, loc="lower left" if len(names) > 1 else "best")
+        for handle, label in zip(*axis.get_legend_handles_labels()):
+            legend.setdefault(label, handle)
+    axes.flat[len(names)].legend(list(legend.values()), list(legend.keys()), loc="center",
+                                 fontsize=9, title="moved from the finest configuration")
     save_figure(fig, bench.path("economy.png"))
     return {"file": "economy.png",
             "caption": "Per scene, the device-force error against the finest configuration over "
