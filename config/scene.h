@@ -295,6 +295,13 @@ std::optional<ContactLaw> ParseContactLaw(const std::string& name);
 std::optional<HapticMode> ParseHapticMode(const std::string& name);
 std::optional<contact::ComplianceMethod> ParseComplianceMethod(const std::string& name);
 
+// Why `mode` cannot take contact.model_compliance_step `step`, or nullopt if it can: the
+// haptic-step compliance is built (and paid for every frame) for the linear contact model, which
+// only linear, lcp and reference read. The scene's own mode is checked as it is read; a mode
+// given on the command line by ResolveHapticMode.
+std::optional<std::string> WhyModelComplianceStepRefused(contact::ModelComplianceStep step,
+                                                         HapticMode mode);
+
 struct Scene {
   std::string file;  // the path it was loaded from
   std::string name;

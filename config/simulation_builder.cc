@@ -1,5 +1,6 @@
 #include "config/simulation_builder.h"
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -56,13 +57,9 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
   if (mode == device::HapticMode::kLcp && scene.contact.law == contact::ContactLaw::kFriction)
     throw InputError(file, 0, key,
                      "lcp solves normal rows only; the scene's contact law is friction");
-  // The haptic-step compliance is built (and paid for every frame) for the linear contact model;
-  // the other modes never read it, so asking for it there is a mistake worth naming.
-  if (scene.contact.model_compliance_step == contact::ModelComplianceStep::kHaptic &&
-      !device::UsesLinearContactModel(mode))
-    throw InputError(scene.file, 0, "contact.model_compliance_step",
-                     std::string("'haptic' sets the linear contact model's compliance, which the ") +
-                         device::ToString(mode) + " mode does not use (linear, lcp, reference)");
+  if (const std::optional<std::string> why =
+          WhyModelComplianceStepRefused(scene.contact.model_compliance_step, mode))
+    throw InputError(scene.file, 0, "contact.model_compliance_step", *why);
   return mode;
 }
 

@@ -430,12 +430,9 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
   if (scene->haptic.mode == HapticMode::kGodObject && !scene->tool->point)
     root.GetMap("haptic").FailKey(
         "mode", "the godobject mode renders a 3-DOF point: give tool.shape.point {radius_m}");
-  if (scene->contact.model_compliance_step == contact::ModelComplianceStep::kHaptic &&
-      !device::UsesLinearContactModel(scene->haptic.mode))
-    root.GetMap("contact").FailKey(
-        "model_compliance_step",
-        std::string("'haptic' sets the linear contact model's compliance, which the ") +
-            device::ToString(scene->haptic.mode) + " mode does not use (linear, lcp, reference)");
+  if (const std::optional<std::string> why = WhyModelComplianceStepRefused(
+          scene->contact.model_compliance_step, scene->haptic.mode))
+    root.GetMap("contact").FailKey("model_compliance_step", *why);
   const YamlMap device = root.GetMap("device");
   device.CheckKeys({"trajectory", "hand"});
   scene->trajectory = ReadWaypoints(device, "trajectory", /*with_button=*/true);
@@ -450,6 +447,14 @@ std::optional<ContactLaw> ParseContactLaw(const std::string& name) {
 
 std::optional<contact::ComplianceMethod> ParseComplianceMethod(const std::string& name) {
   return Parse(kComplianceMethods, name);
+}
+
+std::optional<std::string> WhyModelComplianceStepRefused(contact::ModelComplianceStep step,
+                                                         HapticMode mode) {
+  if (step != contact::ModelComplianceStep::kHaptic || device::UsesLinearContactModel(mode))
+    return std::nullopt;
+  return std::string("'haptic' sets the linear contact model's compliance, which the ") +
+         device::ToString(mode) + " mode does not use (linear, lcp, reference)";
 }
 
 std::optional<HapticMode> ParseHapticMode(const std::string& name) {

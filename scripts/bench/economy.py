@@ -89,6 +89,11 @@ def first_deformable(scene):
     return None
 
 
+def mesh_kind(mesh):
+    """Which of a scene's mesh sources a deformable object uses: box, ellipsoid or file."""
+    return next(k for k in ("box", "ellipsoid", "file") if k in mesh)
+
+
 def has_rigid_objects(scene):
     return any("rigid" in item for item in scene.get("objects", []))
 
@@ -123,7 +128,7 @@ def spec_for(name, path, scene, plan):
     body = first_deformable(scene)
     kind = None
     if body is not None:
-        kind = next(k for k in ("box", "ellipsoid", "file") if k in body["mesh"])
+        kind = mesh_kind(body["mesh"])
     law = scene.get("contact", {}).get("law", "unilateral")
     rates = sorted({hz for hz in RATES_HZ + [own_hz] if divides(haptic_hz, hz)})
     finest_hz = plan.get("visual_hz", rates[-1])
@@ -151,8 +156,7 @@ def spec_for(name, path, scene, plan):
     mode = scene.get("haptic", {}).get("mode", "linear")
     return {"name": name, "path": path, "scene": scene, "plan": plan, "values": values,
             "knobs": knobs, "finest": finest, "mesh_kind": kind, "fem": body is not None,
-            "mode": "linear" if mode == "reference" else mode, "own_hz": own_hz,
-            "haptic_hz": haptic_hz, "num_steps": plan.get("num_steps"),
+            "mode": "linear" if mode == "reference" else mode, "num_steps": plan.get("num_steps"),
             "duration_s": float(scene["time"]["dt_s"]) * (plan.get("num_steps")
                                                          or scene["time"]["num_steps"])}
 
@@ -182,6 +186,14 @@ def absolute(path):
     return path if os.path.isabs(path) else os.path.join(REPO, "scenes", path)
 
 
+def variant_mesh(mesh, factor):
+    """A deformable object's mesh scaled by factor, its file (if any) made absolute."""
+    mesh = scaled_mesh(mesh, mesh_kind(mesh), factor)
+    if "file" in mesh:
+        mesh["file"] = absolute(mesh["file"])
+    return mesh
+
+
 def edits_for(spec, config):
     """The scene edits of a configuration (mesh, element law, contact law, a shorter script)."""
     scene = spec["scene"]
@@ -194,11 +206,7 @@ def edits_for(spec, config):
     if "mesh" in shape:
         edits["tool.shape.mesh.file"] = absolute(shape["mesh"]["file"])
     if "body" in scene:
-        body = scene["body"]
-        mesh = scaled_mesh(body["mesh"], spec["mesh_kind"], config["mesh"])
-        if "file" in mesh:
-            mesh["file"] = absolute(mesh["file"])
-        edits["body.mesh"] = mesh
+        edits["body.mesh"] = variant_mesh(scene["body"]["mesh"], config["mesh"])
         edits["body.elasticity"] = config["elasticity"]
     if "objects" in scene:
         objects = copy.deepcopy(scene["objects"])
@@ -209,11 +217,7 @@ def edits_for(spec, config):
                                                                   ["file"])
             if "deformable" in item:
                 body = item["deformable"]
-                body["mesh"] = scaled_mesh(body["mesh"], next(
-                    k for k in ("box", "ellipsoid", "file") if k in body["mesh"]),
-                    config["mesh"])
-                if "file" in body["mesh"]:
-                    body["mesh"]["file"] = absolute(body["mesh"]["file"])
+                body["mesh"] = variant_mesh(body["mesh"], config["mesh"])
                 if first:
                     body["elasticity"] = config["elasticity"]
                 first = False
@@ -403,6 +407,6 @@ def run(bench):
         scenes[name] = run_scene(bench, spec)
     output = {"tolerance": {"fraction_of_peak": TOLERANCE_FRACTION, "floor_N": TOLERANCE_FLOOR_N},
               "scenes": scenes, "skipped": skipped,
-              "figures": [chart(bench, specs, scenes)], "markdown": []}
+              "figures": [chart(bench, scenes)], "markdown": []}
     output["markdown"] = markdown(scenes, skipped, output["tolerance"])
     return output

@@ -9,7 +9,7 @@ KNOB_NAMES = {"mesh": "mesh", "elasticity": "element law", "compliance": "compli
 COLORS = {"mesh": "C0", "elasticity": "C1", "compliance": "C2", "law": "C4", "visual_hz": "C3",
           "combined": "k"}
 
-def chart(bench, specs, scenes):
+def chart(bench, scenes):
     names = list(scenes)
     cols = min(4, len(names) + 1)  # one panel more, for the legend the scenes share
     rows = (len(names) + cols) // cols
@@ -18,14 +18,14 @@ def chart(bench, specs, scenes):
         axis.axis("off")
     legend = {}  # label → handle, over every scene's panel
     for axis, name in zip(axes.flat, names):
-        result, spec = scenes[name], specs[name]
+        result = scenes[name]
         points = [r for sweep in result["sweeps"].values() for r in sweep
                   if "failed" not in r and r["config"] != result["finest"]["config"]]
         extra = [dict(r, knob="combined") for r in result["combined_runs"]
                  if "failed" not in r and r["config"] != result["finest"]["config"]]
         positive = [r["rms_error_N"] for r in points + extra if r["rms_error_N"] > 0]
         floor = min(positive + [result["tolerance_N"]]) / 3.0
-        for knob in spec["knobs"] + ["combined"]:
+        for knob in result["knobs"] + ["combined"]:
             mine = [r for r in points + extra if r["knob"] == knob]
             if not mine:
                 continue
