@@ -205,6 +205,10 @@ void ViewLive(const ViewOptions& options) {
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   LiveRun live(&lcm, run_id, "hapsim view");
   ReceiveThread receiver(&lcm);
+  // Said once subscribed: a run started after this line is seen from its first message (one
+  // started before it shows only from the RUN_INFO it repeats about every second).
+  std::printf("hapsim view: listening on %s\n", options.lcm_url.c_str());
+  std::fflush(stdout);
   const std::optional<hapsim_lcm::run_info_t> info = live.WaitForRunInfo(options.wait_s);
   if (!info)
     throw std::runtime_error("no run heard on " + options.lcm_url + " within " +

@@ -41,7 +41,8 @@ run_asan() {
   # (540 s under ASan, a third of the CI budget); it runs the multirate simulator's code that
   # the MultirateSimulator tests run here too. And bench_quick_test: a minute of `hapsim sim`
   # and `hapsim fem` runs sized for a Release build (several times that under ASan), whose code
-  # paths the unit and command tests run here. (Its script skips itself under HAPSIM_SANITIZED.)
+  # paths the unit and command tests run here. (Its script skips itself under HAPSIM_SANITIZED,
+  # which tests/CMakeLists.txt sets for the script tests of a sanitized build.)
   # The window tests (view_test, train_test) run without LeakSanitizer: Mesa's software OpenGL
   # leaves 112 bytes allocated from its JIT-compiled code (a stack of calloc and an unknown
   # module, nothing to name in a suppression); every other ASan check stays on. Under ASan the
@@ -54,7 +55,7 @@ run_asan() {
         -E '^BlockPressAccuracy\.|^bench_quick_test$|^view_test$|^train_test$') ||
     status=1
   (cd build-asan &&
-    HAPSIM_SANITIZED=1 ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:strict_string_checks=1 \
+    ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:strict_string_checks=1 \
       UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       ctest --output-on-failure --timeout 900 -R '^view_test$|^train_test$') || status=1
   echo "test_sanitized: ASan+UBSan suite took $((SECONDS - start)) s in all"

@@ -31,6 +31,14 @@ start_xvfb
 "$hapsim" view --lcm-url "$url" --screenshot "$work/live.png" --at 1.5 --size 800x600 \
   > "$work/live.out" 2>&1 &
 viewer=$!
+# The run starts once the viewer listens: a viewer still starting (seconds under a sanitizer on a
+# busy host) would miss the run's first haptic states and show a different state at 1.5 s.
+for _ in $(seq 600); do
+  grep -q "listening on" "$work/live.out" 2> /dev/null && break
+  kill -0 "$viewer" 2> /dev/null || fail "live view: $(cat "$work/live.out")"
+  sleep 0.1
+done
+grep -q "listening on" "$work/live.out" || fail "the live viewer did not listen within 60 s"
 "$hapsim" run scenes/block_press.yaml --lcm-url "$url" --log "$work/run.lcm" > "$work/run.out" 2>&1 ||
   fail "hapsim run: $(cat "$work/run.out")"
 wait "$viewer" || fail "live view: $(cat "$work/live.out")"
@@ -43,7 +51,7 @@ for t in 0 1.5; do
 done
 shown() { grep -o "(frame [0-9]*, haptic step [0-9]*, device sample [0-9]*)" "$1"; }
 [ -n "$(shown "$work/live.out")" ] && [ "$(shown "$work/live.out")" = "$(shown "$work/log.out")" ] ||
-  fail "live and log pictures show different messages: $(shown "$work/live.out") vs $(shown "$work/log.out")"
+  fail "live and log pictures show different messages: '$(cat "$work/live.out")' vs '$(cat "$work/log.out")'"
 echo "live and log at 1.5 s: $(shown "$work/log.out")"
 
 # 2. What the pictures show, and 1's comparison.
