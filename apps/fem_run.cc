@@ -2,7 +2,6 @@
 
 #include <stdexcept>
 
-#include "fem/cg_solver.h"
 
 namespace hapsim::apps {
 
@@ -30,8 +29,7 @@ FemRunRecord RunFem(const config::Body& body, const fem::FemOptions& options, do
     record.probe_displacements_m.push_back(std::move(probes_m));
     if (on_step) on_step(k + 1);
   }
-  if (const auto* cg = dynamic_cast<const fem::ConjugateGradientSolver*>(stepper.solver()))
-    record.num_factorizations = cg->num_factorizations();
+  record.num_factorizations = stepper.solver()->num_factorizations();
   return record;
 }
 

@@ -16,8 +16,7 @@ class ConjugateGradientSolver final : public LinearSolver {
   SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
                     Eigen::VectorXd* x) override;
 
-  // Numeric factorisations done so far (kLaggedCholesky).
-  int num_factorizations() const { return num_factorizations_; }
+  int num_factorizations() const override { return num_factorizations_; }
   CholmodFactor* factor() override { return factor_.is_factored() ? &factor_ : nullptr; }
 
  private:

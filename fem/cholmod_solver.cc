@@ -8,6 +8,7 @@ SolveReport CholmodSolver::Solve(const Eigen::SparseMatrix<double>& A, const Eig
                                  Eigen::VectorXd* x) {
   SolveReport report;
   report.iterations = 1;
+  ++num_factorizations_;  // attempted: it costs the same whether or not A is definite
   if (!factor_.Factorize(A)) {
     report.relative_residual = 1.0;  // not positive definite: no solution
     return report;

@@ -12,9 +12,11 @@ class CholmodSolver final : public LinearSolver {
   SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
                     Eigen::VectorXd* x) override;
   CholmodFactor* factor() override { return &factor_; }
+  int num_factorizations() const override { return num_factorizations_; }
 
  private:
   CholmodFactor factor_;
+  int num_factorizations_ = 0;
   Eigen::VectorXd residual_;  // scratch
 };
 

@@ -29,6 +29,10 @@ class LinearSolver {
   // The Cholesky factor the solver holds, or nullptr: CholmodSolver's is of the last A, CG with
   // a lagged Cholesky preconditioner holds one of an earlier A. Contact compliance uses it.
   virtual CholmodFactor* factor() { return nullptr; }
+
+  // Numeric sparse Cholesky factorisations done so far: one per Solve for CholmodSolver, those
+  // of the lagged preconditioner for CG (0 with block Jacobi).
+  virtual int num_factorizations() const = 0;
 };
 
 std::unique_ptr<LinearSolver> MakeLinearSolver(const SolverOptions& options);
