@@ -35,9 +35,52 @@ double CalcNormalResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, 
   return scale > 0.0 ? residual / scale : residual;
 }
 
+}  // namespace
+
+double CalcTangentStep(double W_11, double W_12, double W_22) {
+  return std::max(W_11, W_22) + std::abs(W_12);
+}
+
+Eigen::Vector2d ProjectOntoDisc(const Eigen::Vector2d& lambda_t, double radius) {
+  const double norm = lambda_t.norm();
+  return norm > radius ? Eigen::Vector2d((norm > 0.0 ? radius / norm : 0.0) * lambda_t)
+                       : lambda_t;
+}
+
+double CalcFrictionResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
+                            double mu, const Eigen::VectorXd* mu_per_contact,
+                            const Eigen::VectorXd& lambda) {
+  const Eigen::VectorXd c = dt_s * W * lambda - rhs;
+  double residual = 0.0;
+  for (Eigen::Index normal = 0; normal < lambda.size(); normal += 3) {
+    const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
+    const double omega_s =
+        dt_s * CalcTangentStep(W(normal + 1, normal + 1), 0.5 * (W(normal + 1, normal + 2) +
+                                                                 W(normal + 2, normal + 1)),
+                               W(normal + 2, normal + 2));
+    const Eigen::Vector2d lambda_t = lambda.segment<2>(normal + 1);
+    const Eigen::Vector2d moved = ProjectOntoDisc(lambda_t - c.segment<2>(normal + 1) / omega_s,
+                                                  mu_contact * lambda[normal]);
+    residual = std::max({residual,
+                         std::abs(std::min(lambda[normal], c[normal] / (dt_s * W(normal, normal)))),
+                         (moved - lambda_t).norm()});
+  }
+  const double scale = lambda.lpNorm<Eigen::Infinity>();
+  return scale > 0.0 ? residual / scale : residual;
+}
+
+namespace {
+
 // Projected Gauss–Seidel. For each contact: the normal row gets λ_n ← max(0, λ_n − r_n/(ΔtW_nn));
-// with friction, then each tangent row is relaxed and (λ_t1, λ_t2) projected onto the disc of
-// radius μ λ_n (Jean & Moreau's non-smooth contact dynamics, in its simplest blocked form).
+// with friction, then the tangent pair moves together by one step against its residual and is
+// projected onto the disc of radius μ λ_n (Jean & Moreau's non-smooth contact dynamics, in its
+// simplest blocked form):
+//   λ_t ← Proj_{|·| ≤ μλ_n}(λ_t − r_t / (Δt ω)),   ω = CalcTangentStep(W_tt).
+// One step size for both tangents is what makes the fixed point Coulomb's law: inside the disc
+// r_t = 0 (stick); on its rim r_t = −k λ_t with k > 0, friction opposite the sliding velocity.
+// (Relaxing the two rows each by its own diagonal, as this solver once did, leaves a fixed point
+// with λ_t ∥ −diag(W_tt)⁻¹ r_t, not opposite the slip when W_t1t1 ≠ W_t2t2.) The residual is
+// CalcFrictionResidual's, so the tangential part is converged too, not only the normal rows.
 ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
                                              double dt_s, int stride, double mu,
                                              const Eigen::VectorXd* mu_per_contact,
@@ -47,25 +90,23 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
   const Eigen::Index rows = rhs.size();
   for (report.iterations = 1; report.iterations <= options.max_iterations; ++report.iterations) {
     for (Eigen::Index normal = 0; normal < rows; normal += stride) {
-      for (int d = 0; d < stride; ++d) {
-        const Eigen::Index row = normal + d;
-        // Residual of row `row` of ΔtWλ = rhs, solved for λ_row with the others fixed.
-        const double r = dt_s * W.row(row).dot(*lambda) - rhs[row];
-        (*lambda)[row] -= r / (dt_s * W(row, row));
-      }
-      (*lambda)[normal] = std::max(0.0, (*lambda)[normal]);
+      // Residual of the normal row of ΔtWλ = rhs, solved for λ_n with the others fixed.
+      const double r_n = dt_s * W.row(normal).dot(*lambda) - rhs[normal];
+      (*lambda)[normal] = std::max(0.0, (*lambda)[normal] - r_n / (dt_s * W(normal, normal)));
       if (stride == 3) {
         const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
-        const double limit = mu_contact * (*lambda)[normal];
-        const double tangential = std::hypot((*lambda)[normal + 1], (*lambda)[normal + 2]);
-        if (tangential > limit) {
-          const double scale = tangential > 0.0 ? limit / tangential : 0.0;
-          (*lambda)[normal + 1] *= scale;
-          (*lambda)[normal + 2] *= scale;
-        }
+        const Eigen::Vector2d r_t(dt_s * W.row(normal + 1).dot(*lambda) - rhs[normal + 1],
+                                  dt_s * W.row(normal + 2).dot(*lambda) - rhs[normal + 2]);
+        const double omega_s =
+            dt_s * CalcTangentStep(W(normal + 1, normal + 1),
+                                   0.5 * (W(normal + 1, normal + 2) + W(normal + 2, normal + 1)),
+                                   W(normal + 2, normal + 2));
+        lambda->segment<2>(normal + 1) = ProjectOntoDisc(
+            lambda->segment<2>(normal + 1) - r_t / omega_s, mu_contact * (*lambda)[normal]);
       }
     }
-    report.residual = CalcNormalResidual(W, rhs, dt_s, stride, *lambda);
+    report.residual = stride == 3 ? CalcFrictionResidual(W, rhs, dt_s, mu, mu_per_contact, *lambda)
+                                  : CalcNormalResidual(W, rhs, dt_s, stride, *lambda);
     if (report.residual <= options.tolerance) {
       report.converged = true;
       break;

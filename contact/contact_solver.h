@@ -44,4 +44,20 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
                                         const ContactSolveOptions& options, Eigen::VectorXd* lambda,
                                         const Eigen::VectorXd* friction_per_contact = nullptr);
 
+// The pieces of the friction law both friction solvers (the frame's, above, and the haptic
+// step's HapticFrictionSolver) share, so that they have one fixed point:
+//  - the step 1/ω for a contact's tangent pair, ω = max(W_11, W_22) + |W_12| over its 2 × 2
+//    tangential block of W (Gershgorin: ω ≥ the block's largest eigenvalue, so the projected
+//    step never overshoots);
+//  - the projection of a tangential impulse onto the disc |λ_t| ≤ radius;
+//  - the fixed-point residual of a friction solution: per contact |min(λ_n, c_n/(ΔtW_nn))| and
+//    |λ_t − Proj(λ_t − c_t/(Δt ω))|, c = ΔtWλ − rhs, relative to max |λ| (absolute at λ = 0).
+//    Zero exactly when Coulomb's law holds: λ_n ≥ 0 ⟂ c_n ≥ 0, |λ_t| ≤ μλ_n, c_t = 0 inside the
+//    disc and λ_t opposite c_t on its rim.
+double CalcTangentStep(double W_11, double W_12, double W_22);
+Eigen::Vector2d ProjectOntoDisc(const Eigen::Vector2d& lambda_t, double radius);
+double CalcFrictionResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
+                            double mu, const Eigen::VectorXd* mu_per_contact,
+                            const Eigen::VectorXd& lambda);
+
 }  // namespace hapsim::contact

@@ -1,5 +1,6 @@
 #include "contact/haptic_contact_rows.h"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace hapsim::contact {
@@ -32,6 +33,35 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
     for (int r = 0; r < n; ++r)
       out.W_body(r, c) = 0.5 * (W_body_all(rows[r], rows[c]) + W_body_all(rows[c], rows[r]));
   return out;
+}
+
+ContactRows MakeFrictionContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body,
+                                    const Eigen::VectorXd& body_rhs,
+                                    const Eigen::VectorXd& friction_coefficient) {
+  if (J.rows_per_contact != 3)
+    throw std::invalid_argument("MakeFrictionContactRows: needs 3 rows per contact (friction)");
+  if (friction_coefficient.size() * 3 != J.num_rows())
+    throw std::invalid_argument("MakeFrictionContactRows: one friction coefficient per contact");
+  if (!(friction_coefficient.array() >= 0.0).all())
+    throw std::invalid_argument("MakeFrictionContactRows: a friction coefficient is negative");
+  ContactJacobian normal_layout = J;  // the row selection and its checks do not look at the law
+  normal_layout.rows_per_contact = 1;
+  ContactRows out = MakeContactRows(normal_layout, W_body, body_rhs);
+  out.rows_per_contact = 3;
+  out.friction_coefficient = friction_coefficient;
+  return out;
+}
+
+bool HasConsistentShape(const ContactRows& rows) {
+  const Eigen::Index n = rows.num_rows();
+  if (rows.J_w.rows() != n || rows.W_body.rows() != n || rows.W_body.cols() != n ||
+      rows.body_rhs.size() != n ||
+      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n))
+    return false;
+  if (rows.rows_per_contact == 1) return rows.friction_coefficient.size() == 0;
+  return rows.rows_per_contact == 3 && rows.friction_coefficient.size() * 3 == n &&
+         (rows.friction_coefficient.array() >= 0.0).all() &&
+         rows.friction_coefficient.allFinite();
 }
 
 }  // namespace hapsim::contact

@@ -22,8 +22,19 @@ struct ContactRows {
   // set, are the solver's first guess when the rows change: far closer than "every row that asks
   // for a push", which on block_press holds twice the ~70 active rows and cost 1.1 ms to shrink.
   Eigen::VectorXd lambda_frame_N;
+  // Friction (issue 13): with rows_per_contact 3 the rows come in threes per contact (normal,
+  // t1, t2, as CalcContactJacobian orders them) and friction_coefficient holds one μ ≥ 0 per
+  // contact; HapticFrictionSolver solves them. With 1 (normal rows only) it is empty.
+  int rows_per_contact = 1;
+  Eigen::VectorXd friction_coefficient;
   int num_rows() const { return static_cast<int>(J_v.rows()); }
 };
+
+// The checks both haptic solvers make of rows they are handed: W_body square of num_rows,
+// body_rhs, J_w and lambda_frame_N (if given) of num_rows rows, friction_coefficient one finite
+// μ ≥ 0 per contact with rows_per_contact 3 (a whole number of contacts) and empty with 1.
+// (The other entries' finiteness and W_body's symmetry are checked where a solver copies them.)
+bool HasConsistentShape(const ContactRows& rows);
 
 // Builds the rows from the visual frame's data, the same inputs as MakeLinearContactModel: the
 // Jacobian of the chosen contacts (rows_per_contact must be 1), the body's Delassus part over
@@ -38,5 +49,12 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
 // the active rows.
 ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body_all,
                             const std::vector<int>& rows, const Eigen::VectorXd& body_rhs);
+
+// The rows of a friction Jacobian (rows_per_contact 3), every contact, with one μ per contact:
+// for HapticFrictionSolver. W_body (over the same rows) is symmetrised as above. Throws
+// std::invalid_argument on a normal-only Jacobian, inconsistent sizes or a μ < 0.
+ContactRows MakeFrictionContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body,
+                                    const Eigen::VectorXd& body_rhs,
+                                    const Eigen::VectorXd& friction_coefficient);
 
 }  // namespace hapsim::contact

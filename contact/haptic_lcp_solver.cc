@@ -505,9 +505,7 @@ Eigen::Ref<const Eigen::VectorXd> HapticLcpSolver::last_impulses() const {
 bool HapticLcpSolver::Prepare(const ContactRows& rows, const ToolStepSystem& tool) {
   Workspace& ws = *ws_;
   const int n = rows.num_rows();
-  if (n == 0 || n > ws.max_rows || rows.J_w.rows() != n || rows.W_body.rows() != n ||
-      rows.W_body.cols() != n || rows.body_rhs.size() != n ||
-      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n) ||
+  if (n == 0 || n > ws.max_rows || rows.rows_per_contact != 1 || !HasConsistentShape(rows) ||
       !(tool.dt_s > 0.0))
     return false;
   ws.S.setZero();
@@ -537,9 +535,8 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   last_num_factorizations_ = 0;
   ws.num_factorizations = 0;
   const int n = rows.num_rows();
-  if (n > ws.max_rows || rows.J_w.rows() != n || rows.W_body.rows() != n ||
-      rows.W_body.cols() != n || rows.body_rhs.size() != n || !(tool.dt_s > 0.0) ||
-      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n))
+  if (n > ws.max_rows || rows.rows_per_contact != 1 || !HasConsistentShape(rows) ||
+      !(tool.dt_s > 0.0))
     return false;
   const double dt_s = tool.dt_s;
   const Eigen::Matrix3d A_v_inv = tool.A_v.inverse();

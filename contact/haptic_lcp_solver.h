@@ -77,7 +77,8 @@ class HapticLcpSolver {
   // Solves the LCP for `rows`, the tool system `tool` of this haptic step (A_v, A_L, M⁻¹, Δt)
   // and F̂, T̂ (world, N and N m, CalcDiscreteTimeWrench), and writes F_c = J_vᵀλ (N) and
   // T_c = J_ωᵀλ (N m, about the tool's COM), world. Returns false, with zero force and torque,
-  // if rows.num_rows() > max_rows() or the rows are inconsistent in size, not finite or
+  // if rows.num_rows() > max_rows(), the rows have friction rows (HapticFrictionSolver's), are
+  // inconsistent in size (HasConsistentShape), not finite or
   // W_body not symmetric, or the active-set iteration failed (singular W, or no convergence
   // within 3n + 10 entering rows); never allocates, never throws.
   bool Solve(const ContactRows& rows, const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,

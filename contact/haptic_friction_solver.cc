@@ -1,0 +1,254 @@
+#include "contact/haptic_friction_solver.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "contact/contact_solver.h"
+
+namespace hapsim::contact {
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using MatrixX6d = Eigen::Matrix<double, Eigen::Dynamic, 6>;
+
+// W_body is accepted as symmetric when |W_ij − W_ji| ≤ this × max |W| (as HapticLcpSolver).
+constexpr double kSymmetryTolerance = 1e-9;
+
+}  // namespace
+
+// All scratch, sized once for max_rows. n rows, m = n/3 contacts; λ and the sums kept with it.
+struct HapticFrictionSolver::Workspace {
+  Workspace(int max_rows_in, int max_sweeps_in)
+      : max_rows(max_rows_in),
+        max_sweeps(max_sweeps_in),
+        W(max_rows_in, max_rows_in),
+        U(max_rows_in, 6),
+        body_rhs(max_rows_in),
+        mu(max_rows_in / 3 + 1),
+        rhs(max_rows_in),
+        lambda(max_rows_in),
+        y(max_rows_in) {}
+
+  bool SameRows(const ContactRows& rows) const;
+  bool CopyRows(const ContactRows& rows);
+  void StartFrom(const Eigen::VectorXd& lambda_start);
+  // The 3 × 3 block of W = W_body + U S Uᵀ at contact i (rows 3i..3i+2).
+  Eigen::Matrix3d CalcDiagonalBlock(int i) const {
+    const auto U_i = U.middleRows<3>(3 * i);
+    return W.block<3, 3>(3 * i, 3 * i) + U_i * S * U_i.transpose();
+  }
+  // c_i = Δt (y_i + U_i S g) − rhs_i, from the kept sums (h = S g).
+  Eigen::Vector3d CalcVelocity(int i, const Vector6d& h, double dt_s) const {
+    return dt_s * (y.segment<3>(3 * i) + U.middleRows<3>(3 * i) * h) - rhs.segment<3>(3 * i);
+  }
+  double Sweep(double dt_s);
+  double CalcResidual(double dt_s) const;
+
+  const int max_rows;
+  const int max_sweeps;
+  int n = -1;            // rows of the cached set; −1 before the first, or after a failure
+  Eigen::MatrixXd W;     // (max × max) W_body, full storage (its columns update y)
+  MatrixX6d U;           // (max × 6) [J_v J_ω]
+  Eigen::VectorXd body_rhs, mu;
+  Matrix6d S = Matrix6d::Zero();  // this step's tool compliance
+  Eigen::VectorXd rhs;            // this step's body_rhs − U s_free
+  Eigen::VectorXd lambda, y;      // λ and W_body λ
+  Vector6d g = Vector6d::Zero();  // Uᵀλ
+};
+
+bool HapticFrictionSolver::Workspace::SameRows(const ContactRows& rows) const {
+  const int m = rows.num_rows();
+  if (m != n) return false;
+  const auto same = [](const double* a, const double* b, int size) {
+    return std::memcmp(a, b, sizeof(double) * size) == 0;
+  };
+  if (!same(body_rhs.data(), rows.body_rhs.data(), m) ||
+      !same(mu.data(), rows.friction_coefficient.data(), m / 3))
+    return false;
+  for (int c = 0; c < 3; ++c)
+    if (!same(U.col(c).data(), rows.J_v.col(c).data(), m) ||
+        !same(U.col(3 + c).data(), rows.J_w.col(c).data(), m))
+      return false;
+  for (int c = 0; c < m; ++c)
+    if (!same(W.col(c).data(), rows.W_body.col(c).data(), m)) return false;
+  return true;
+}
+
+bool HapticFrictionSolver::Workspace::CopyRows(const ContactRows& rows) {
+  n = rows.num_rows();
+  body_rhs.head(n) = rows.body_rhs;
+  mu.head(n / 3) = rows.friction_coefficient;
+  U.topLeftCorner(n, 3) = rows.J_v;
+  U.topRightCorner(n, 3) = rows.J_w;
+  W.topLeftCorner(n, n) = rows.W_body;
+  double scale = 0.0, asymmetry = 0.0, sum = 0.0;  // the sum is finite iff every entry is
+  for (int j = 0; j < n; ++j) {
+    for (int i = j; i < n; ++i) {
+      sum += W(i, j) + W(j, i);
+      scale = std::max(scale, std::abs(W(i, j)));
+      asymmetry = std::max(asymmetry, std::abs(W(i, j) - W(j, i)));
+    }
+  }
+  const bool ok = std::isfinite(sum) && body_rhs.head(n).allFinite() && U.topRows(n).allFinite() &&
+                  asymmetry <= kSymmetryTolerance * scale &&
+                  (rows.lambda_frame_N.size() == 0 || rows.lambda_frame_N.allFinite());
+  if (!ok) n = -1;
+  return ok;
+}
+
+// λ, y = W_body λ and g = Uᵀλ from a start (zero-sized: λ = 0). Its normal impulses are clamped
+// at zero and tangential ones into the disc, so that every iterate is admissible.
+void HapticFrictionSolver::Workspace::StartFrom(const Eigen::VectorXd& lambda_start) {
+  if (lambda_start.size() == n) {
+    lambda.head(n) = lambda_start;
+    for (int i = 0; i < n / 3; ++i) {
+      lambda[3 * i] = std::max(0.0, lambda[3 * i]);
+      lambda.segment<2>(3 * i + 1) =
+          ProjectOntoDisc(lambda.segment<2>(3 * i + 1), mu[i] * lambda[3 * i]);
+    }
+  } else {
+    lambda.head(n).setZero();
+  }
+  // W_body's columns times λ: a product Eigen evaluates without temporaries on the heap.
+  y.head(n).noalias() = W.topLeftCorner(n, n) * lambda.head(n);
+  g.noalias() = U.topRows(n).transpose() * lambda.head(n);
+}
+
+// One Gauss–Seidel sweep over the contacts (SolveContactImpulses' kFriction sweep, with W
+// applied through y and g). Returns the largest change of an impulse.
+double HapticFrictionSolver::Workspace::Sweep(double dt_s) {
+  double largest_change = 0.0;
+  Vector6d h = S * g;
+  for (int i = 0; i < n / 3; ++i) {
+    const int a = 3 * i;
+    Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
+    const Eigen::Vector3d old = lambda.segment<3>(a);
+    if (old[0] == 0.0 && c[0] >= 0.0) continue;  // separated and staying so (λ_t is 0 too)
+    const Eigen::Matrix3d W_ii = CalcDiagonalBlock(i);
+    Eigen::Vector3d next;
+    next[0] = std::max(0.0, old[0] - c[0] / (dt_s * W_ii(0, 0)));
+    // The tangential rows see the normal row's new impulse, as in the dense sweep.
+    c.tail<2>() += dt_s * W_ii.block<2, 1>(1, 0) * (next[0] - old[0]);
+    const double omega_s =
+        dt_s * CalcTangentStep(W_ii(1, 1), 0.5 * (W_ii(1, 2) + W_ii(2, 1)), W_ii(2, 2));
+    next.tail<2>() = ProjectOntoDisc(old.tail<2>() - c.tail<2>() / omega_s, mu[i] * next[0]);
+    const Eigen::Vector3d delta = next - old;
+    if (delta.isZero(0.0)) continue;
+    largest_change = std::max(largest_change, delta.cwiseAbs().maxCoeff());
+    lambda.segment<3>(a) = next;
+    y.head(n).noalias() += W.block(0, a, n, 3) * delta;
+    const Vector6d dg = U.middleRows<3>(a).transpose() * delta;
+    g += dg;
+    h.noalias() += S * dg;
+  }
+  return largest_change;
+}
+
+// CalcFrictionResidual's measure (contact_solver.h) from the kept sums.
+double HapticFrictionSolver::Workspace::CalcResidual(double dt_s) const {
+  const Vector6d h = S * g;
+  double residual = 0.0;
+  for (int i = 0; i < n / 3; ++i) {
+    const int a = 3 * i;
+    const Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
+    const Eigen::Matrix3d W_ii = CalcDiagonalBlock(i);
+    const double omega_s =
+        dt_s * CalcTangentStep(W_ii(1, 1), 0.5 * (W_ii(1, 2) + W_ii(2, 1)), W_ii(2, 2));
+    const Eigen::Vector2d lambda_t = lambda.segment<2>(a + 1);
+    const Eigen::Vector2d moved =
+        ProjectOntoDisc(lambda_t - c.tail<2>() / omega_s, mu[i] * lambda[a]);
+    residual = std::max({residual, std::abs(std::min(lambda[a], c[0] / (dt_s * W_ii(0, 0)))),
+                         (moved - lambda_t).norm()});
+  }
+  const double scale = lambda.head(n).lpNorm<Eigen::Infinity>();
+  return scale > 0.0 ? residual / scale : residual;
+}
+
+HapticFrictionSolver::HapticFrictionSolver(int max_rows, int max_sweeps) {
+  if (max_rows < 0) throw std::invalid_argument("HapticFrictionSolver: max_rows must be ≥ 0");
+  if (max_sweeps < 1) throw std::invalid_argument("HapticFrictionSolver: max_sweeps must be ≥ 1");
+  ws_ = std::make_unique<Workspace>(max_rows, max_sweeps);
+}
+
+HapticFrictionSolver::~HapticFrictionSolver() = default;
+HapticFrictionSolver::HapticFrictionSolver(HapticFrictionSolver&&) noexcept = default;
+HapticFrictionSolver& HapticFrictionSolver::operator=(HapticFrictionSolver&&) noexcept = default;
+
+int HapticFrictionSolver::max_rows() const { return ws_->max_rows; }
+int HapticFrictionSolver::max_sweeps() const { return ws_->max_sweeps; }
+
+Eigen::Ref<const Eigen::VectorXd> HapticFrictionSolver::last_impulses() const {
+  return ws_->lambda.head(std::max(ws_->n, 0));
+}
+
+bool HapticFrictionSolver::Prepare(const ContactRows& rows) {
+  Workspace& ws = *ws_;
+  if (rows.num_rows() > ws.max_rows || rows.rows_per_contact != 3 || !HasConsistentShape(rows) ||
+      !ws.CopyRows(rows))
+    return false;
+  ws.StartFrom(rows.lambda_frame_N);
+  return true;
+}
+
+bool HapticFrictionSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
+                                 const Eigen::Vector3d& F_hat_N, const Eigen::Vector3d& T_hat_N_m,
+                                 Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m) {
+  Workspace& ws = *ws_;
+  F_c_N->setZero();
+  T_c_N_m->setZero();
+  last_iterations_ = 0;
+  last_residual_ = 0.0;
+  last_num_active_ = 0;
+  last_num_sliding_ = 0;
+  const int n = rows.num_rows();
+  if (n > ws.max_rows || rows.rows_per_contact != 3 || !HasConsistentShape(rows) ||
+      !(tool.dt_s > 0.0))
+    return false;
+  const double dt_s = tool.dt_s;
+  ws.S.setZero();
+  ws.S.topLeftCorner<3, 3>() = tool.A_v.inverse();
+  ws.S.bottomRightCorner<3, 3>() = tool.M_inv_W * tool.A_L.inverse();
+  Vector6d s_free;
+  s_free.head<3>() = ws.S.topLeftCorner<3, 3>() * (dt_s * F_hat_N);
+  s_free.tail<3>() = ws.S.bottomRightCorner<3, 3>() * (dt_s * T_hat_N_m);
+  if (!ws.S.allFinite() || !s_free.allFinite()) return false;
+  if (!ws.SameRows(rows)) {
+    if (!ws.CopyRows(rows)) return false;
+    ws.StartFrom(rows.lambda_frame_N);
+  }
+  if (n == 0) return true;
+  for (int i = 0; i < n / 3; ++i)  // a normal without compliance has no Gauss–Seidel step
+    if (!(ws.CalcDiagonalBlock(i)(0, 0) > 0.0)) {
+      ws.n = -1;
+      return false;
+    }
+  ws.rhs.head(n) = ws.body_rhs.head(n);
+  ws.rhs.head(n).noalias() -= ws.U.topRows(n) * s_free;
+  while (last_iterations_ < ws.max_sweeps) {
+    ++last_iterations_;
+    const double change = ws.Sweep(dt_s);
+    if (change <= kTolerance * ws.lambda.head(n).lpNorm<Eigen::Infinity>()) break;
+  }
+  if (!ws.lambda.head(n).allFinite()) {
+    ws.n = -1;  // start afresh next time
+    return false;
+  }
+  last_residual_ = ws.CalcResidual(dt_s);
+  for (int i = 0; i < n / 3; ++i) {
+    const double normal = ws.lambda[3 * i];
+    if (normal <= 0.0) continue;
+    ++last_num_active_;
+    if (ws.lambda.segment<2>(3 * i + 1).norm() >= (1.0 - 1e-12) * ws.mu[i] * normal &&
+        ws.mu[i] > 0.0)
+      ++last_num_sliding_;
+  }
+  *F_c_N = ws.U.topLeftCorner(n, 3).transpose() * ws.lambda.head(n);
+  *T_c_N_m = ws.U.topRightCorner(n, 3).transpose() * ws.lambda.head(n);
+  return true;
+}
+
+}  // namespace hapsim::contact
