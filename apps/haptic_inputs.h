@@ -50,6 +50,7 @@ inline device::HapticLoopOptions MakeHapticLoopOptions(const config::Scene& scen
   options.mode = mode;
   options.dt_s = 1.0 / scene.haptic.rate_hz;
   options.lcp_max_rows = scene.haptic.lcp_max_rows;
+  options.lcp_friction_sweeps = config::LcpFrictionSweeps(scene);
   options.safety = scene.haptic.safety;
   const device::MultirateOptions in_process =
       config::MakeMultirateOptions(scene, mode, std::max(1, scene.haptic.steps_per_frame));

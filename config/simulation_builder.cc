@@ -54,13 +54,15 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
     throw InputError(file, 0, key,
                      "the reference mode runs in `hapsim sim` only; the two processes render "
                      "every other mode");
-  if (mode == device::HapticMode::kLcp && scene.contact.law == contact::ContactLaw::kFriction)
-    throw InputError(file, 0, key,
-                     "lcp solves normal rows only; the scene's contact law is friction");
   if (const std::optional<std::string> why =
           WhyModelComplianceStepRefused(scene.contact.model_compliance_step, mode))
     throw InputError(scene.file, 0, "contact.model_compliance_step", *why);
   return mode;
+}
+
+int LcpFrictionSweeps(const Scene& scene) {
+  return scene.contact.law == contact::ContactLaw::kFriction ? scene.haptic.lcp_friction_sweeps
+                                                              : 0;
 }
 
 device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::HapticMode mode,
@@ -70,6 +72,7 @@ device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::Haptic
   options.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
   options.haptic_steps_per_frame = steps_per_frame;
   options.lcp_max_rows = scene.haptic.lcp_max_rows;
+  options.lcp_friction_sweeps = LcpFrictionSweeps(scene);
   options.geometric = scene.haptic.geometric;
   options.godobject = scene.haptic.godobject;
   if (scene.tool) options.godobject.proxy_radius_m = scene.tool->model.shape.radius_m;

@@ -24,9 +24,8 @@ contact::VisualFrame MakeVisualFrame(const Scene& scene, const std::optional<Bod
 
 // The haptic mode of a run: the scene's haptic.mode, or `option_value` when given (a
 // command-line override). Throws InputError naming `option` (or haptic.mode, when the scene's
-// mode is the problem) for an unknown mode, for lcp with the friction law (its 1 kHz rows are
-// normal only), for godobject without a point tool, and for the reference mode unless
-// allow_reference (the reference exists in the in-process simulator only).
+// mode is the problem) for an unknown mode, for godobject without a point tool, and for the
+// reference mode unless allow_reference (the reference exists in the in-process simulator only).
 device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& option_value,
                                      const std::string& option, bool allow_reference);
 
@@ -34,5 +33,9 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
 // frame.
 device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::HapticMode mode,
                                               int steps_per_frame);
+
+// The lcp friction solve's sweeps per haptic step: haptic.lcp_friction_sweeps with the friction
+// law, 0 (friction rows refused, none made) with the others.
+int LcpFrictionSweeps(const Scene& scene);
 
 }  // namespace hapsim::config

@@ -307,8 +307,8 @@ contact::GodObjectParams ReadGodObject(const YamlMap& map) {
 HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, ContactLaw law) {
   HapticScene haptic;
   if (map.has_value()) {
-    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "safety", "penalty", "material", "impact",
-                    "godobject"});
+    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "lcp_friction_sweeps", "safety", "penalty",
+                    "material", "impact", "godobject"});
     if (const std::optional<YamlMap> god = map->FindMap("godobject"))
       haptic.godobject = ReadGodObject(*god);
     if (const std::optional<YamlMap> penalty = map->FindMap("penalty"))
@@ -322,10 +322,11 @@ HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, C
     }
     haptic.rate_hz = map->GetDoubleOr("rate_hz", haptic.rate_hz, Above(0.0));
     haptic.mode = map->GetEnumOr("mode", Choices(kHapticModes), haptic.mode);
-    if (haptic.mode == HapticMode::kLcp && law == ContactLaw::kFriction)
-      map->FailKey("mode",
-                   "lcp solves normal rows only; it cannot be used with contact law friction");
     haptic.lcp_max_rows = map->GetIntOr("lcp_max_rows", haptic.lcp_max_rows, AtLeast(1));
+    if (map->Has("lcp_friction_sweeps") && law != ContactLaw::kFriction)
+      map->FailKey("lcp_friction_sweeps", "the friction sweeps need contact.law: friction");
+    haptic.lcp_friction_sweeps =
+        map->GetIntOr("lcp_friction_sweeps", haptic.lcp_friction_sweeps, AtLeast(1));
     if (const std::optional<YamlMap> safety = map->FindMap("safety"))
       haptic.safety = ReadSafety(*safety);
   }

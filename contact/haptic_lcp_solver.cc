@@ -487,9 +487,13 @@ double HapticLcpSolver::Workspace::CalcResidual(double dt_s) const {
   return scale > 0.0 ? residual / scale : residual;
 }
 
-HapticLcpSolver::HapticLcpSolver(int max_rows) {
+HapticLcpSolver::HapticLcpSolver(int max_rows, int friction_sweeps) {
   if (max_rows < 0) throw std::invalid_argument("HapticLcpSolver: max_rows must be ≥ 0");
+  if (friction_sweeps < 0)
+    throw std::invalid_argument("HapticLcpSolver: friction_sweeps must be ≥ 0");
   ws_ = std::make_unique<Workspace>(max_rows);
+  if (friction_sweeps > 0)
+    friction_ = std::make_unique<HapticFrictionSolver>(max_rows, friction_sweeps);
 }
 
 HapticLcpSolver::~HapticLcpSolver() = default;
@@ -497,12 +501,15 @@ HapticLcpSolver::HapticLcpSolver(HapticLcpSolver&&) noexcept = default;
 HapticLcpSolver& HapticLcpSolver::operator=(HapticLcpSolver&&) noexcept = default;
 
 int HapticLcpSolver::max_rows() const { return ws_->max_rows; }
+int HapticLcpSolver::friction_sweeps() const { return friction_ ? friction_->max_sweeps() : 0; }
 
 Eigen::Ref<const Eigen::VectorXd> HapticLcpSolver::last_impulses() const {
+  if (last_was_friction_) return friction_->last_impulses();
   return ws_->x.head(std::max(ws_->n, 0));
 }
 
 bool HapticLcpSolver::Prepare(const ContactRows& rows, const ToolStepSystem& tool) {
+  if (rows.rows_per_contact == 3) return friction_ && friction_->Prepare(rows);
   Workspace& ws = *ws_;
   const int n = rows.num_rows();
   if (n == 0 || n > ws.max_rows || rows.rows_per_contact != 1 || !HasConsistentShape(rows) ||
@@ -534,6 +541,14 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   last_num_active_ = 0;
   last_num_factorizations_ = 0;
   ws.num_factorizations = 0;
+  last_was_friction_ = rows.rows_per_contact == 3 && friction_;
+  if (last_was_friction_) {
+    const bool solved = friction_->Solve(rows, tool, F_hat_N, T_hat_N_m, F_c_N, T_c_N_m);
+    last_iterations_ = friction_->last_iterations();
+    last_residual_ = friction_->last_residual();
+    last_num_active_ = friction_->last_num_active();
+    return solved;
+  }
   const int n = rows.num_rows();
   if (n > ws.max_rows || rows.rows_per_contact != 1 || !HasConsistentShape(rows) ||
       !(tool.dt_s > 0.0))

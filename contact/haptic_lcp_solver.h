@@ -31,6 +31,7 @@
 #include <memory>
 
 #include "contact/haptic_contact_rows.h"
+#include "contact/haptic_friction_solver.h"
 #include "core/tool_integrator.h"
 
 namespace hapsim::contact {
@@ -65,11 +66,16 @@ namespace hapsim::contact {
 // No heap allocation after construction, checked by tests/contact/haptic_lcp_test.cc up to 512
 // rows with over 300 active (the base block is factorised by matrix–vector products: Eigen's
 // blocked Cholesky took its GEMM scratch from the heap from ~400 active rows on).
+//
+// Friction rows (ContactRows::rows_per_contact 3, the friction law) go to a HapticFrictionSolver
+// the solver owns when built with friction_sweeps > 0 (its sweep budget per step); the counters
+// below then describe that solve (iterations are sweeps, no factorisations).
 class HapticLcpSolver {
  public:
-  // Preallocates everything for up to max_rows rows (memory ≈ 16 max_rows² bytes). Throws
-  // std::invalid_argument if max_rows < 0.
-  explicit HapticLcpSolver(int max_rows);
+  // Preallocates everything for up to max_rows rows (memory ≈ 16 max_rows² bytes, and 8 max_rows²
+  // more with friction_sweeps > 0). Throws std::invalid_argument if max_rows < 0 or
+  // friction_sweeps < 0.
+  explicit HapticLcpSolver(int max_rows, int friction_sweeps = 0);
   ~HapticLcpSolver();
   HapticLcpSolver(HapticLcpSolver&&) noexcept;
   HapticLcpSolver& operator=(HapticLcpSolver&&) noexcept;
@@ -77,8 +83,8 @@ class HapticLcpSolver {
   // Solves the LCP for `rows`, the tool system `tool` of this haptic step (A_v, A_L, M⁻¹, Δt)
   // and F̂, T̂ (world, N and N m, CalcDiscreteTimeWrench), and writes F_c = J_vᵀλ (N) and
   // T_c = J_ωᵀλ (N m, about the tool's COM), world. Returns false, with zero force and torque,
-  // if rows.num_rows() > max_rows(), the rows have friction rows (HapticFrictionSolver's), are
-  // inconsistent in size (HasConsistentShape), not finite or
+  // if rows.num_rows() > max_rows(), the rows are friction rows and the solver has no friction
+  // solve, are inconsistent in size (HasConsistentShape), not finite or
   // W_body not symmetric, or the active-set iteration failed (singular W, or no convergence
   // within 3n + 10 entering rows); never allocates, never throws.
   bool Solve(const ContactRows& rows, const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
@@ -94,6 +100,8 @@ class HapticLcpSolver {
   bool Prepare(const ContactRows& rows, const ToolStepSystem& tool);
 
   int max_rows() const;
+  // The friction solve's sweep budget per step; 0: friction rows are refused.
+  int friction_sweeps() const;
   // Equality solves on an active set in the last Solve (1 when the warm start was right).
   int last_iterations() const { return last_iterations_; }
   // max_i |min(λ_i, c_i/(Δt W_ii))| / max_i λ_i (absolute when λ = 0), the measure of
@@ -110,6 +118,8 @@ class HapticLcpSolver {
  private:
   struct Workspace;
   std::unique_ptr<Workspace> ws_;
+  std::unique_ptr<HapticFrictionSolver> friction_;  // null without friction sweeps
+  bool last_was_friction_ = false;
   int last_iterations_ = 0;
   double last_residual_ = 0.0;
   int last_num_active_ = 0;

@@ -69,9 +69,6 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
                            surface_nodes_.end());
     }
   }
-  if (options.export_contact_rows && rows_per_contact_ != 1)
-    throw std::invalid_argument(
-        "VisualFrame: the lcp rows are normal rows only; the friction law has no lcp mode");
 }
 
 VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, ToolState* tool,
@@ -178,22 +175,21 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
   const Eigen::MatrixXd W = CalcToolDelassus(jacobian_, tool_system_) + W_body_;
   lambda_.setZero(jacobian_.num_rows());
-  Eigen::VectorXd mu_per_contact;
-  if (objects_have_own_friction_) {
+  if (rows_per_contact_ == 3) {
     // μ of a contact with an object is that object's (its own or the scene's); the grabbed object
-    // pressing another takes the other's, as the tool touching it would.
-    mu_per_contact.setConstant(static_cast<Eigen::Index>(contacts_.size()),
-                               options_.response.solve.friction_coefficient);
+    // pressing another takes the other's, as the tool touching it would. Kept for the lcp rows.
+    mu_per_contact_.setConstant(static_cast<Eigen::Index>(contacts_.size()),
+                                options_.response.solve.friction_coefficient);
     for (size_t i = 0; i < contacts_.size(); ++i) {
       const int object = contacts_[i].rigid_object;
       if (object >= 0 && options_.rigid_objects[object].friction_coefficient)
-        mu_per_contact[static_cast<Eigen::Index>(i)] =
+        mu_per_contact_[static_cast<Eigen::Index>(i)] =
             *options_.rigid_objects[object].friction_coefficient;
     }
   }
   last_solve_ =
       SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve, &lambda_,
-                           objects_have_own_friction_ ? &mu_per_contact : nullptr);
+                           objects_have_own_friction_ ? &mu_per_contact_ : nullptr);
   // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.
   dv_tool_ += tool_system_.A_v.inverse() * (dt * jacobian_.J_v.transpose() * lambda_);
   dL_tool_ += tool_system_.A_L.inverse() * (dt * jacobian_.J_w.transpose() * lambda_);

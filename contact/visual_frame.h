@@ -69,7 +69,8 @@ struct VisualFrameOptions {
   ComplianceMethod compliance = ComplianceMethod::kWarped;
   ModelComplianceStep model_compliance_step = ModelComplianceStep::kVisual;
   // Stage 6 also exports the per-contact rows of every candidate contact for the haptic `lcp`
-  // mode (contact_rows()). Needs normal rows only: not with the friction law.
+  // mode (contact_rows()): normal rows, or with the friction law three rows per contact and
+  // each contact's μ.
   bool export_contact_rows = false;
   // The scene's fixed rigid objects (contact/rigid_objects.h). They are model data, kept here so
   // that every user of the frame (sim, run, the tests) gets them from the one scene mapping
@@ -176,6 +177,7 @@ class VisualFrame {
   VisualFrameOptions options_;
   int rows_per_contact_;
   bool objects_have_own_friction_;             // friction law and an object with its own μ
+  Eigen::VectorXd mu_per_contact_;             // friction law: μ of each contact this frame
   std::unique_ptr<fem::TimeStepper> stepper_;  // with a body
   std::unique_ptr<fem::WarpedCompliance> warped_compliance_;  // with a body, kWarped only
   // ModelComplianceStep::kHaptic: a stepper at the haptic Δt (never stepped: it only holds the

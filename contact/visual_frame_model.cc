@@ -82,7 +82,10 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   linear_model_ = MakeLinearContactModel(J, W, haptic, body_rhs);
   if (options_.export_contact_rows) {
     const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
-    contact_rows_ = MakeContactRows(J_all, W_body, b_all - J_all.J_u * body.v_m_s + held_m_s);
+    const Eigen::VectorXd rows_rhs = b_all - J_all.J_u * body.v_m_s + held_m_s;
+    contact_rows_ = rows_per_contact_ == 3
+                        ? MakeFrictionContactRows(J_all, W_body, rows_rhs, mu_per_contact_)
+                        : MakeContactRows(J_all, W_body, rows_rhs);
     contact_rows_.lambda_frame_N = lambda_;
   }
 }

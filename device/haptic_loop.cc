@@ -15,7 +15,8 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
                        const std::vector<contact::RigidObject>& objects)
     : options_(options),
       step_(tool, coupling, gravity_m_s2, options.dt_s, initial_tool,
-            options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0),
+            options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0,
+            options.mode == HapticMode::kLcp ? options.lcp_friction_sweeps : 0),
       visual_tool_(initial_tool),
       proxy_tool_(initial_tool),
       world_nodes_(body != nullptr ? body->num_nodes() : 0),
@@ -36,8 +37,10 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
 }
 
 void EnsureLcpSolver(const HapticLoopOptions& options, ContactModelUpdate* update) {
-  if (!update->lcp_solver || update->lcp_solver->max_rows() != options.lcp_max_rows)
-    update->lcp_solver = std::make_unique<contact::HapticLcpSolver>(options.lcp_max_rows);
+  if (!update->lcp_solver || update->lcp_solver->max_rows() != options.lcp_max_rows ||
+      update->lcp_solver->friction_sweeps() != options.lcp_friction_sweeps)
+    update->lcp_solver = std::make_unique<contact::HapticLcpSolver>(options.lcp_max_rows,
+                                                                    options.lcp_friction_sweeps);
 }
 
 bool PrepareLcpUpdate(const ToolModel& tool, const CouplingParams& coupling,

@@ -34,6 +34,7 @@ struct HapticLoopOptions {
   HapticMode mode = HapticMode::kLinear;  // any but reference
   double dt_s = 1e-3;
   int lcp_max_rows = 512;
+  int lcp_friction_sweeps = 0;  // > 0: the lcp solver takes friction rows (the friction law)
   SafetyLimits safety;
   double passivity_threshold_J = 1e-3;
   // The geometric modes (penalty, material, impact) and godobject: their parameters, and the
@@ -95,8 +96,8 @@ class HapticLoop {
   long num_steps_ = 0;
 };
 
-// Gives the update an lcp solver of options.lcp_max_rows rows unless it has one (~16
-// lcp_max_rows² bytes). PrepareLcpUpdate calls it; `hapsim haptic` calls it for every mailbox
+// Gives the update an lcp solver of options.lcp_max_rows rows (and lcp_friction_sweeps) unless
+// it has one (~16 lcp_max_rows² bytes, 8 more with friction). PrepareLcpUpdate calls it; `hapsim haptic` calls it for every mailbox
 // slot before the loop starts, so that no model waits for an allocation (the first three models
 // of an lcp run once waited 3–4 ms each, page faults under mlockall included).
 void EnsureLcpSolver(const HapticLoopOptions& options, ContactModelUpdate* update);

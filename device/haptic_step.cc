@@ -8,13 +8,14 @@ namespace hapsim::device {
 
 HapticStep::HapticStep(ToolModel tool, const CouplingParams& coupling,
                        const Eigen::Vector3d& gravity_m_s2, double dt_s,
-                       const ToolState& initial_tool, int lcp_max_rows)
+                       const ToolState& initial_tool, int lcp_max_rows,
+                       int lcp_friction_sweeps)
     : tool_(std::move(tool)),
       coupling_(coupling),
       gravity_m_s2_(gravity_m_s2),
       dt_s_(dt_s),
       tool_state_(initial_tool),
-      lcp_(lcp_max_rows) {}
+      lcp_(lcp_max_rows, lcp_friction_sweeps) {}
 
 HapticOutput HapticStep::Step(const DeviceState& device) {
   const CouplingWrench wrench =

@@ -6,7 +6,8 @@
 //   4 contact force and torque on the haptic tool, either
 //       linear: from the linear contact model, F_c = F_c0 + ∂F_c/∂F̂ F̂ + ∂F_c/∂T̂ T̂ (and T_c), or
 //       lcp:    from the unilateral solve on the frame's contact rows (HapticLcpSolver), which
-//               lets contacts separate and re-engage between visual frames
+//               lets contacts separate and re-engage between visual frames; with the friction
+//               law, Coulomb friction on them too (HapticFrictionSolver)
 //   5 post-contact state: A_v Δv = Δt (F̃ + F_c), A_L ΔL = Δt (T̃ + T_c), advance
 //   6 output: the coupling's reaction −F, −T to the device.
 // The linear step is fixed-size and allocates nothing; the lcp step allocates nothing after
@@ -34,9 +35,11 @@ struct HapticOutput {
 
 class HapticStep {
  public:
-  // lcp_max_rows: capacity of the lcp solver (0: no lcp; memory ≈ 16 lcp_max_rows² bytes).
+  // lcp_max_rows: capacity of the lcp solver (0: no lcp; memory ≈ 16 lcp_max_rows² bytes);
+  // lcp_friction_sweeps > 0: it also solves friction rows, with that many sweeps a step.
   HapticStep(ToolModel tool, const CouplingParams& coupling, const Eigen::Vector3d& gravity_m_s2,
-             double dt_s, const ToolState& initial_tool, int lcp_max_rows = 0);
+             double dt_s, const ToolState& initial_tool, int lcp_max_rows = 0,
+             int lcp_friction_sweeps = 0);
 
   // Replaces the contact model (a copy of fixed-size data: no allocation).
   void SetContactModel(const contact::LinearContactModel& model) { model_ = model; }

@@ -61,7 +61,8 @@ MultirateSimulator::MultirateSimulator(const fem::Model* body, const fem::FemOpt
       body_state_(body ? fem::MakeRestState(*body) : fem::State{}),
       visual_tool_(initial_tool),
       haptic_(tool, visual_options_.coupling, visual_options_.gravity_m_s2, options.haptic_dt_s,
-              initial_tool, options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0) {
+              initial_tool, options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0,
+              options.mode == HapticMode::kLcp ? options.lcp_friction_sweeps : 0) {
   if (options.haptic_steps_per_frame < 1) throw std::invalid_argument("haptic_steps_per_frame < 1");
   if (IsGeometricMode(options.mode)) {
     geometric_ = std::make_unique<GeometricHapticContact>(options.mode, options.geometric, tool,

@@ -44,6 +44,7 @@ struct MultirateOptions {
   double haptic_dt_s = 1e-3;
   int haptic_steps_per_frame = 33;     // visual frame = this many haptic steps (reference: 1)
   int lcp_max_rows = 512;              // lcp: rows the 1 kHz solver holds (more: linear fallback)
+  int lcp_friction_sweeps = 0;         // lcp with the friction law: sweeps per step (> 0)
   GeometricContactParams geometric;    // penalty, material, impact
   contact::GodObjectParams godobject;  // godobject
 };

@@ -1,5 +1,6 @@
 #include "messages/adapters.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -117,6 +118,32 @@ bool CheckPackedLower(const hapsim_lcm::contact_model_t& msg, std::string* error
 }
 
 // Everything FromMessage(contact_model_t) rejects except the quaternion, which it reads itself.
+// contact_model_t.rows_per_contact and its friction coefficients: 1 (or 0 without rows) and
+// none, or 3 with one finite μ ≥ 0 per three rows.
+bool CheckRowLayout(const hapsim_lcm::contact_model_t& msg, std::string* error) {
+  const int per = msg.rows_per_contact;
+  if (!(per == 1 || per == 3 || (per == 0 && msg.num_rows == 0)) || msg.num_rows % std::max(per, 1)) {
+    SetError(error, "contact_model_t.rows_per_contact: " + std::to_string(per) + " with " +
+                        std::to_string(msg.num_rows) + " rows (1, or 3 with whole contacts)");
+    return false;
+  }
+  const int expected = per == 3 ? msg.num_rows / 3 : 0;
+  if (!CheckSize(msg.friction_coefficient.size(), expected, "contact_model_t.friction_coefficient",
+                 "entries", error) ||
+      !CheckSize(static_cast<std::size_t>(std::max(msg.num_friction_coefficients, 0)), expected,
+                 "contact_model_t.num_friction_coefficients", "entries", error) ||
+      !CheckFinite(msg.friction_coefficient.data(), expected,
+                   "contact_model_t.friction_coefficient", error))
+    return false;
+  for (int i = 0; i < expected; ++i) {
+    if (msg.friction_coefficient[i] < 0.0) {
+      SetError(error, "contact_model_t.friction_coefficient[" + std::to_string(i) + "]: negative");
+      return false;
+    }
+  }
+  return true;
+}
+
 bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   if (!(std::isfinite(msg.dt_visual_s) && msg.dt_visual_s > 0.0)) {
     SetError(error, "contact_model_t.dt_visual_s: must be finite and > 0");
@@ -150,12 +177,14 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
          CheckFinite(msg.body_rhs.data(), n, "contact_model_t.body_rhs", error) &&
          CheckSize(msg.lambda_frame_N.size(), n, "contact_model_t.lambda_frame_N", "entries",
                    error) &&
-         CheckFinite(msg.lambda_frame_N.data(), n, "contact_model_t.lambda_frame_N", error);
+         CheckFinite(msg.lambda_frame_N.data(), n, "contact_model_t.lambda_frame_N", error) &&
+         CheckRowLayout(msg, error);
 }
 
 // The ranges of the lcp rows that decoding alone cannot catch: J_v,i = −n_iᵀ is a unit normal;
 // W_body is positive semidefinite, so its diagonal is ≥ 0 (symmetry holds by construction: only
-// the lower triangle travels); the frame's impulses are ≥ 0 (unilateral contacts push).
+// the lower triangle travels); the frame's normal impulses are ≥ 0 (unilateral contacts push;
+// a tangential one has either sign).
 bool CheckContactRowRanges(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   constexpr double kUnitTolerance = 1e-6;
   for (int i = 0; i < msg.num_rows; ++i) {
@@ -171,7 +200,7 @@ bool CheckContactRowRanges(const hapsim_lcm::contact_model_t& msg, std::string* 
                           std::to_string(i) + " (W_body must be positive semidefinite)");
       return false;
     }
-    if (msg.lambda_frame_N[i] < 0.0) {
+    if (i % std::max<int>(msg.rows_per_contact, 1) == 0 && msg.lambda_frame_N[i] < 0.0) {
       SetError(error, "contact_model_t.lambda_frame_N[" + std::to_string(i) + "]: negative");
       return false;
     }
@@ -289,13 +318,13 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   const int n = rows_or_null == nullptr ? 0 : rows_or_null->num_rows();
   msg.num_rows = n;
   msg.num_W_body_lower = 0;
+  msg.rows_per_contact = 1;
+  msg.num_friction_coefficients = 0;
   if (n == 0) return msg;
   const contact::ContactRows& rows = *rows_or_null;
-  if (rows.J_w.rows() != n || rows.W_body.rows() != n || rows.W_body.cols() != n ||
-      rows.body_rhs.size() != n ||
-      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n)) {
+  if (!contact::HasConsistentShape(rows)) {
     throw std::invalid_argument("messages::ToMessage: ContactRows sizes disagree with J_v's " +
-                                std::to_string(n) + " rows");
+                                std::to_string(n) + " rows or its friction layout");
   }
   // Only the lower triangle travels: an asymmetric W_body would arrive changed.
   if (rows.W_body != rows.W_body.transpose())
@@ -315,6 +344,11 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
     msg.body_rhs[i] = rows.body_rhs[i];
     if (rows.lambda_frame_N.size() == n) msg.lambda_frame_N[i] = rows.lambda_frame_N[i];
   }
+  msg.rows_per_contact = static_cast<std::int8_t>(rows.rows_per_contact);
+  msg.num_friction_coefficients = static_cast<std::int32_t>(rows.friction_coefficient.size());
+  msg.friction_coefficient.assign(rows.friction_coefficient.data(),
+                                  rows.friction_coefficient.data() +
+                                      rows.friction_coefficient.size());
   return msg;
 }
 
@@ -364,6 +398,10 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
     rows->body_rhs[i] = msg.body_rhs[i];
     rows->lambda_frame_N[i] = msg.lambda_frame_N[i];
   }
+  rows->rows_per_contact = std::max<int>(msg.rows_per_contact, 1);
+  rows->friction_coefficient.resize(msg.num_friction_coefficients);
+  for (int i = 0; i < msg.num_friction_coefficients; ++i)
+    rows->friction_coefficient[i] = msg.friction_coefficient[i];
   return true;
 }
 

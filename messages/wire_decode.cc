@@ -133,6 +133,9 @@ bool CheckWireLayout<hapsim_lcm::contact_model_t>(const void* data, int size, st
   const std::int64_t lower = wire.ReadCount("num_W_body_lower");
   wire.Skip(lower, kDouble, "W_body_lower");
   wire.Skip(2 * rows, kDouble, "body_rhs, lambda_frame_N");
+  wire.Skip(1, kInt8, "rows_per_contact");
+  const std::int64_t mus = wire.ReadCount("num_friction_coefficients");
+  wire.Skip(mus, kDouble, "friction_coefficient");
   const std::int64_t nodes = wire.ReadCount("num_body_nodes");
   wire.Skip(nodes * 3, kDouble, "body_x_W_m");
   const std::int64_t objects = wire.ReadCount("num_objects");

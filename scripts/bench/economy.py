@@ -44,7 +44,10 @@ from compare_modes import errors, read_forces  # noqa: E402
 # Bench-only scenes: measured by their own experiments (indentation, cantilever), not interactive.
 BENCH_ONLY = {"hertz_indentation": "bench-only (the indentation experiment's Hertz press)",
               "flat_punch": "bench-only (the indentation experiment's Boussinesq press)",
-              "cantilever": "bench-only (the cantilever experiment; no tool)"}
+              "cantilever": "bench-only (the cantilever experiment; no tool)",
+              "block_press_friction": "block_press with the friction law (issue 13), measured "
+                                      "against its reference in docs/CONTACT.md: its frame's "
+                                      "friction sweeps take ~150 ms, past the sweeps' budget"}
 # Per scene: the finest mesh's factor (cells × f; an ellipsoid's cell size / f) and a shortened
 # script (time.num_steps) where the full one would not fit the bench's budget; why, for the page.
 PLAN = {

@@ -258,13 +258,13 @@ const BadCase kBadCases[] = {
      "mode: material\n  material: {tool: {stiffness: 2}}", 19, "haptic.material.tool.stiffness",
      "must be in [0, 1]"},
     {"UnknownHapticKey", "mode: coupling", "mode: coupling\n  period_s: 0.001", 19,
-     "haptic.period_s", "allowed keys here: rate_hz, mode, lcp_max_rows, safety, penalty"},
+     "haptic.period_s", "allowed keys here: rate_hz, mode, lcp_max_rows, lcp_friction_sweeps"},
     {"NegativeForceLimit", "mode: coupling", "mode: coupling\n  safety: {max_force_N: -1}", 19,
      "haptic.safety.max_force_N", "must be > 0"},
     {"UnknownSafetyKey", "mode: coupling", "mode: coupling\n  safety: {max_speed: 1}", 19,
      "haptic.safety.max_speed", "allowed keys here: max_force_N"},
-    {"LcpWithFriction", "mode: coupling", "mode: lcp", 18, "haptic.mode",
-     "cannot be used with contact law friction"},
+    {"ZeroFrictionSweeps", "mode: coupling", "mode: lcp\n  lcp_friction_sweeps: 0", 19,
+     "haptic.lcp_friction_sweeps", "must be >= 1"},
     {"ZeroLcpRows", "mode: coupling", "mode: coupling\n  lcp_max_rows: 0", 19,
      "haptic.lcp_max_rows", "must be >= 1"},
     // device
@@ -330,6 +330,27 @@ TEST(SimSceneTest, HapticStepComplianceOnlyWithTheLinearModelsModes) {
                 std::string::npos)
           << error.what();
     }
+  }
+}
+
+// lcp with the friction law (issue 13): accepted, the sweeps read and handed to the haptic side;
+// the sweeps key without the friction law is an error naming it.
+TEST(SimSceneTest, LcpTakesTheFrictionLawAndItsSweeps) {
+  const Scene scene = ParseScene(
+      Replace(kSimScene, "mode: coupling", "mode: lcp\n  lcp_friction_sweeps: 7"), kLabel, "");
+  EXPECT_EQ(scene.haptic.mode, HapticMode::kLcp);
+  EXPECT_EQ(scene.haptic.lcp_friction_sweeps, 7);
+  EXPECT_EQ(ResolveHapticMode(scene, "", "--mode", false), HapticMode::kLcp);
+  EXPECT_EQ(MakeMultirateOptions(scene, HapticMode::kLcp, 10).lcp_friction_sweeps, 7);
+  const Scene unilateral = ParseScene(kMinimalToolScene, kLabel, "");
+  EXPECT_EQ(LcpFrictionSweeps(unilateral), 0);
+  try {
+    ParseScene(std::string(kMinimalToolScene) + "haptic: {mode: lcp, lcp_friction_sweeps: 5}\n",
+               kLabel, "");
+    ADD_FAILURE() << "lcp_friction_sweeps accepted without the friction law";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.key(), "haptic.lcp_friction_sweeps");
+    EXPECT_NE(std::string(error.what()).find("contact.law: friction"), std::string::npos);
   }
 }
 

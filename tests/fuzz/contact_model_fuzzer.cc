@@ -61,9 +61,12 @@ void CheckAccepted(const contact::LinearContactModel& model, const contact::Cont
     CheckOrDie(
         std::abs(rows.J_v.row(i).norm() - 1.0) <= kUnitTolerance,
         "contact_model_t accepted a J_v row of norm " + std::to_string(rows.J_v.row(i).norm()));
-    CheckOrDie(rows.W_body(i, i) >= 0.0 && rows.lambda_frame_N[i] >= 0.0,
-               "contact_model_t accepted a negative W_body diagonal or lambda");
+    CheckOrDie(rows.W_body(i, i) >= 0.0 &&
+                   (i % rows.rows_per_contact != 0 || rows.lambda_frame_N[i] >= 0.0),
+               "contact_model_t accepted a negative W_body diagonal or normal lambda");
   }
+  CheckOrDie(contact::HasConsistentShape(rows),
+             "contact_model_t accepted rows whose friction layout is inconsistent");
 }
 
 // The frame's world (the geometric modes): whatever the message, WorldFromMessage either

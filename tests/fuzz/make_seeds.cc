@@ -121,6 +121,9 @@ hapsim_lcm::contact_model_t FirstRows(hapsim_lcm::contact_model_t msg, int n) {
   msg.W_body_lower.resize(msg.num_W_body_lower);
   msg.body_rhs.resize(n);
   msg.lambda_frame_N.resize(n);
+  msg.rows_per_contact = 1;
+  msg.num_friction_coefficients = 0;
+  msg.friction_coefficient.clear();
   return msg;
 }
 

@@ -257,6 +257,9 @@ void ExpectSameRowsAndHeader(const ContactModelFixture& in, const contact::Conta
   ExpectBitIdentical(rows.W_body, in.rows.W_body, "W_body");
   ExpectBitIdentical(rows.body_rhs, in.rows.body_rhs, "body_rhs");
   ExpectBitIdentical(rows.lambda_frame_N, in.rows.lambda_frame_N, "lambda_frame_N");
+  EXPECT_EQ(rows.rows_per_contact, in.rows.rows_per_contact);
+  ExpectBitIdentical(rows.friction_coefficient, in.rows.friction_coefficient,
+                     "friction_coefficient");
   EXPECT_EQ(header.utime, in.header.utime);
   EXPECT_EQ(header.sequence, in.header.sequence);
   EXPECT_EQ(header.dt_visual_s, in.header.dt_visual_s);
@@ -284,6 +287,44 @@ TEST(ContactModelMessage, RoundTripWithRowsIsBitIdentical) {
   ASSERT_TRUE(FromMessage(msg, &model, &rows, &header, &error)) << error;
   ExpectSameModel(model, in.model);
   ExpectSameRowsAndHeader(in, rows, header);
+}
+
+// Friction rows (issue 13): three rows per contact, a μ per contact, and tangential impulses of
+// either sign travel unchanged; a layout that does not add up is refused naming the field.
+TEST(ContactModelMessage, FrictionRowsRoundTripAndBadLayoutsAreRejected) {
+  ContactModelFixture in(6);
+  in.rows.rows_per_contact = 3;
+  in.rows.friction_coefficient = Eigen::Vector2d(0.3, 0.0);
+  in.rows.lambda_frame_N[1] = -0.25;  // a tangential impulse
+  const auto msg = EncodeDecode(ToMessage(in.model, &in.rows, in.header));
+  EXPECT_EQ(msg.rows_per_contact, 3);
+  contact::LinearContactModel model;
+  contact::ContactRows rows;
+  ContactModelHeader header;
+  std::string error;
+  ASSERT_TRUE(FromMessage(msg, &model, &rows, &header, &error)) << error;
+  ExpectSameRowsAndHeader(in, rows, header);
+  struct Case {
+    const char* field;
+    std::function<void(hapsim_lcm::contact_model_t*)> corrupt;
+  };
+  const std::vector<Case> cases = {
+      {"rows_per_contact", [](auto* m) { m->rows_per_contact = 2; }},
+      {"friction_coefficient", [](auto* m) { m->friction_coefficient.pop_back(); }},
+      {"friction_coefficient[1]", [](auto* m) { m->friction_coefficient[1] = -0.1; }},
+      {"friction_coefficient", [](auto* m) { m->friction_coefficient[0] = kNaN; }},
+      {"lambda_frame_N[3]", [](auto* m) { m->lambda_frame_N[3] = -0.5; }},  // a normal row
+  };
+  for (const Case& c : cases) {
+    hapsim_lcm::contact_model_t bad = msg;
+    c.corrupt(&bad);
+    error.clear();
+    EXPECT_FALSE(FromMessage(bad, &model, &rows, &header, &error)) << c.field;
+    EXPECT_NE(error.find(c.field), std::string::npos) << c.field << ": " << error;
+  }
+  // Rows whose μ count does not match are refused at the sender.
+  in.rows.friction_coefficient = Eigen::Vector3d(0.3, 0.3, 0.3);
+  EXPECT_THROW(ToMessage(in.model, &in.rows, in.header), std::invalid_argument);
 }
 
 // Only W_body's lower triangle is sent: the upper one is rebuilt from it, so an asymmetric

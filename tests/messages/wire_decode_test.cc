@@ -134,7 +134,10 @@ TEST(WireDecode, EveryTypeRoundTripsThroughTheLayoutCheck) {
 // num_W_body_lower (two int32), so it sits 8 bytes before the end.
 // With no rows and no world, a contact model ends in four int32 counts: num_rows,
 // num_W_body_lower, num_body_nodes, num_objects.
-std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 16; }
+// A model without rows ends in num_rows, num_W_body_lower (int32), rows_per_contact (int8),
+// num_friction_coefficients, num_body_nodes, num_objects (int32).
+std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 21; }
+std::size_t NumFrictionCoefficientsOffset() { return Encode(MakeContactModel(0)).size() - 12; }
 std::size_t NumBodyNodesOffset() { return Encode(MakeContactModel(0)).size() - 8; }
 
 // num_rows = −1 makes lcm-gen's decode() throw (resize to SIZE_MAX) and 10^8 or 2^31 − 1 makes
@@ -153,6 +156,19 @@ TEST(WireDecode, HostileRowCountsAreRejectedBeforeDecoding) {
       hapsim_lcm::contact_model_t raw;
       EXPECT_ANY_THROW(raw.decode(bytes.data(), 0, static_cast<int>(bytes.size())));
     }
+  }
+}
+
+// The friction coefficients' count likewise (issue 13: the lcp rows with friction).
+TEST(WireDecode, HostileFrictionCountsAreRejectedBeforeDecoding) {
+  for (const std::int64_t count : {-1LL, 100000000LL, 2147483647LL}) {
+    auto bytes = Encode(MakeContactModel(0));
+    PutBigEndian(&bytes, NumFrictionCoefficientsOffset(), static_cast<std::uint64_t>(count), 4);
+    std::string error;
+    EXPECT_FALSE(CheckWireLayout<hapsim_lcm::contact_model_t>(bytes.data(), bytes.size(), &error));
+    EXPECT_NE(error.find("friction"), std::string::npos) << error;
+    hapsim_lcm::contact_model_t out;
+    EXPECT_FALSE(Decode(bytes.data(), bytes.size(), &out, &error));
   }
 }
 
