@@ -120,9 +120,12 @@
 //       body: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}   # the body's
 //     lcp_max_rows: 512                # ≥ 1: rows the 1 kHz lcp solver holds (≈ 16 n² bytes);
 //                                      # a frame with more falls back to the linear model
-//     lcp_friction_sweeps: 20          # ≥ 1, contact.law friction only: the lcp friction
+//     lcp_friction_sweeps: 5           # ≥ 1, contact.law friction only: the lcp friction
 //                                      # solve's sweeps per haptic step (its time bound;
 //                                      # contact/haptic_friction_solver.h)
+//     lcp_reach_m_s: 0.005             # ≥ 0: the lcp model carries the frame's active contacts
+//                                      # and those an approach this fast engages within a frame
+//                                      # (smaller models; docs/CONTACT.md); 0: every candidate
 //     safety:                          # optional: the haptic process's limits
 //     (device/haptic_safety.h)
 //       {max_force_N: 10, max_torque_N_m: 0.5, max_force_rate_N_s: 5000,
@@ -268,7 +271,8 @@ struct HapticScene {
   double rate_hz = 1000.0;
   HapticMode mode = HapticMode::kLinear;
   int lcp_max_rows = 512;
-  int lcp_friction_sweeps = 20;  // contact.law friction: Gauss–Seidel sweeps per lcp step
+  int lcp_friction_sweeps = 5;   // contact.law friction: Gauss–Seidel sweeps per lcp step
+  double lcp_reach_m_s = 0.005;  // lcp rows: active ones and those this approach engages; 0: all
   device::SafetyLimits safety;
   int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
   // penalty, material, impact modes (the rigid objects' materials come from `objects`).

@@ -19,6 +19,7 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   options.response.restitution = scene.contact.restitution;
   options.compliance = scene.contact.compliance;
   options.model_compliance_step = scene.contact.model_compliance_step;
+  options.lcp_reach_m_s = scene.haptic.lcp_reach_m_s;
   for (const RigidObjectScene& rigid : scene.rigid_objects)
     options.rigid_objects.push_back(rigid.object);
   return options;

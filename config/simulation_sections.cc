@@ -307,8 +307,8 @@ contact::GodObjectParams ReadGodObject(const YamlMap& map) {
 HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, ContactLaw law) {
   HapticScene haptic;
   if (map.has_value()) {
-    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "lcp_friction_sweeps", "safety", "penalty",
-                    "material", "impact", "godobject"});
+    map->CheckKeys({"rate_hz", "mode", "lcp_max_rows", "lcp_friction_sweeps", "lcp_reach_m_s",
+                    "safety", "penalty", "material", "impact", "godobject"});
     if (const std::optional<YamlMap> god = map->FindMap("godobject"))
       haptic.godobject = ReadGodObject(*god);
     if (const std::optional<YamlMap> penalty = map->FindMap("penalty"))
@@ -327,6 +327,7 @@ HapticScene ReadHaptic(const std::optional<YamlMap>& map, const YamlMap& time, C
       map->FailKey("lcp_friction_sweeps", "the friction sweeps need contact.law: friction");
     haptic.lcp_friction_sweeps =
         map->GetIntOr("lcp_friction_sweeps", haptic.lcp_friction_sweeps, AtLeast(1));
+    haptic.lcp_reach_m_s = map->GetDoubleOr("lcp_reach_m_s", haptic.lcp_reach_m_s, AtLeast(0.0));
     if (const std::optional<YamlMap> safety = map->FindMap("safety"))
       haptic.safety = ReadSafety(*safety);
   }

@@ -13,9 +13,10 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
 }
 
 ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body_all,
-                            const std::vector<int>& rows, const Eigen::VectorXd& body_rhs) {
-  if (J.rows_per_contact != 1)
-    throw std::invalid_argument("MakeContactRows: the lcp mode takes normal rows only");
+                            const std::vector<int>& rows, const Eigen::VectorXd& body_rhs,
+                            const Eigen::VectorXd& friction_coefficient) {
+  if (J.rows_per_contact != 1 && J.rows_per_contact != 3)
+    throw std::invalid_argument("MakeContactRows: 1 (normal) or 3 (friction) rows per contact");
   const int n = J.num_rows();
   if (static_cast<int>(rows.size()) != n || body_rhs.size() != n || J.J_w.rows() != n)
     throw std::invalid_argument("MakeContactRows: J, rows and body_rhs differ in size");
@@ -24,6 +25,14 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
   for (int row : rows)
     if (row < 0 || row >= W_body_all.rows())
       throw std::invalid_argument("MakeContactRows: row index outside W_body");
+  if (J.rows_per_contact == 3) {
+    if (friction_coefficient.size() * 3 != n)
+      throw std::invalid_argument("MakeContactRows: one friction coefficient per contact");
+    if (!(friction_coefficient.array() >= 0.0).all())
+      throw std::invalid_argument("MakeContactRows: a friction coefficient is negative");
+  } else if (friction_coefficient.size() != 0) {
+    throw std::invalid_argument("MakeContactRows: friction coefficients need friction rows");
+  }
   ContactRows out;
   out.J_v = J.J_v;
   out.J_w = J.J_w;
@@ -32,6 +41,8 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
   for (int c = 0; c < n; ++c)
     for (int r = 0; r < n; ++r)
       out.W_body(r, c) = 0.5 * (W_body_all(rows[r], rows[c]) + W_body_all(rows[c], rows[r]));
+  out.rows_per_contact = J.rows_per_contact;
+  out.friction_coefficient = friction_coefficient;
   return out;
 }
 
@@ -40,16 +51,9 @@ ContactRows MakeFrictionContactRows(const ContactJacobian& J, const Eigen::Matri
                                     const Eigen::VectorXd& friction_coefficient) {
   if (J.rows_per_contact != 3)
     throw std::invalid_argument("MakeFrictionContactRows: needs 3 rows per contact (friction)");
-  if (friction_coefficient.size() * 3 != J.num_rows())
-    throw std::invalid_argument("MakeFrictionContactRows: one friction coefficient per contact");
-  if (!(friction_coefficient.array() >= 0.0).all())
-    throw std::invalid_argument("MakeFrictionContactRows: a friction coefficient is negative");
-  ContactJacobian normal_layout = J;  // the row selection and its checks do not look at the law
-  normal_layout.rows_per_contact = 1;
-  ContactRows out = MakeContactRows(normal_layout, W_body, body_rhs);
-  out.rows_per_contact = 3;
-  out.friction_coefficient = friction_coefficient;
-  return out;
+  std::vector<int> rows(J.num_rows());
+  for (int i = 0; i < J.num_rows(); ++i) rows[i] = i;
+  return MakeContactRows(J, W_body, rows, body_rhs, friction_coefficient);
 }
 
 bool HasConsistentShape(const ContactRows& rows) {

@@ -72,6 +72,9 @@ struct VisualFrameOptions {
   // mode (contact_rows()): normal rows, or with the friction law three rows per contact and
   // each contact's μ.
   bool export_contact_rows = false;
+  // Of those, only the active contacts and the ones an approach at this speed (m/s) could engage
+  // within the frame (ExportContactRows); 0: every candidate contact.
+  double lcp_reach_m_s = 0.0;
   // The scene's fixed rigid objects (contact/rigid_objects.h). They are model data, kept here so
   // that every user of the frame (sim, run, the tests) gets them from the one scene mapping
   // (config::MakeVisualFrameOptions).
@@ -115,9 +118,11 @@ class VisualFrame {
 
   // Results of the last Step.
   const LinearContactModel& linear_model() const { return linear_model_; }
-  // Rows of all the frame's contacts, linearised as the model is (empty unless
-  // options.export_contact_rows).
+  // Rows of the frame's contacts, linearised as the model is (empty unless
+  // options.export_contact_rows): all of them, or those options.lcp_reach_m_s keeps.
   const ContactRows& contact_rows() const { return contact_rows_; }
+  // Candidate rows the last frame did not export (options.lcp_reach_m_s).
+  int num_rows_withheld() const { return num_rows_withheld_; }
   const std::vector<Contact>& contacts() const { return contacts_; }
   const ContactJacobian& jacobian() const { return jacobian_; }
   const Eigen::VectorXd& impulses() const { return lambda_; }  // λ per row, N
@@ -155,6 +160,9 @@ class VisualFrame {
   void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                         const ToolState& tool, const ToolState& haptic_tool,
                         const fem::State& body);
+  void ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
+                         const Eigen::VectorXd& held_m_s, const ToolState& tool,
+                         const fem::State& body);
   // The frame's contacts as seen from the haptic tool at the end of the frame (points, normals
   // and gaps), with the velocity target b each row holds over the next frame.
   void MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start, const ToolState& visual_tool,
@@ -208,6 +216,7 @@ class VisualFrame {
   ContactSolveReport last_solve_;
   LinearContactModel linear_model_;
   ContactRows contact_rows_;
+  int num_rows_withheld_ = 0;
 };
 
 }  // namespace hapsim::contact

@@ -80,14 +80,44 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   Eigen::VectorXd body_rhs = b - J.J_u * body.v_m_s;
   for (size_t r = 0; r < active_rows.size(); ++r) body_rhs[r] += held_m_s[active_rows[r]];
   linear_model_ = MakeLinearContactModel(J, W, haptic, body_rhs);
-  if (options_.export_contact_rows) {
-    const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
-    const Eigen::VectorXd rows_rhs = b_all - J_all.J_u * body.v_m_s + held_m_s;
-    contact_rows_ = rows_per_contact_ == 3
-                        ? MakeFrictionContactRows(J_all, W_body, rows_rhs, mu_per_contact_)
-                        : MakeContactRows(J_all, W_body, rows_rhs);
-    contact_rows_.lambda_frame_N = lambda_;
+  if (options_.export_contact_rows) ExportContactRows(moved, b_all, held_m_s, tool, body);
+}
+
+// The rows that travel to the lcp step (issue 13 item 5): every contact the frame found active,
+// and every other one that an approach of the tool at lcp_reach_m_s or slower could engage
+// within the frame. Row i's target b_i − J_u,i u̇ (+ what the frame's force holds back) is the
+// approach speed it needs to engage: b closes its gap over a frame, less the body's own normal
+// velocity. A row that needs more than v_reach can only engage under a faster tool, and then the
+// next frame has it, as the linear model has every contact. 0 (the default) sends them all.
+void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
+                                    const Eigen::VectorXd& held_m_s, const ToolState& tool,
+                                    const fem::State& body) {
+  const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
+  const Eigen::VectorXd rhs_all = b_all - J_all.J_u * body.v_m_s + held_m_s;
+  const double reach_m_s = options_.lcp_reach_m_s;
+  std::vector<Contact> kept;
+  std::vector<int> rows;
+  std::vector<double> mu;
+  for (size_t i = 0; i < moved.size(); ++i) {
+    const int normal = rows_per_contact_ * static_cast<int>(i);
+    if (reach_m_s > 0.0 && !(lambda_[normal] > 0.0) && !(rhs_all[normal] > -reach_m_s)) continue;
+    kept.push_back(moved[i]);
+    for (int d = 0; d < rows_per_contact_; ++d) rows.push_back(normal + d);
+    if (rows_per_contact_ == 3) mu.push_back(mu_per_contact_[static_cast<Eigen::Index>(i)]);
   }
+  const ContactJacobian J = CalcJacobian(kept, tool.x_W_m);
+  Eigen::VectorXd rhs(static_cast<Eigen::Index>(rows.size()));
+  Eigen::VectorXd lambda(rhs.size());
+  for (size_t r = 0; r < rows.size(); ++r) {
+    rhs[static_cast<Eigen::Index>(r)] = rhs_all[rows[r]];
+    lambda[static_cast<Eigen::Index>(r)] = lambda_[rows[r]];
+  }
+  const Eigen::VectorXd mu_kept =
+      Eigen::Map<const Eigen::VectorXd>(mu.data(), static_cast<Eigen::Index>(mu.size()));
+  const Eigen::MatrixXd& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
+  contact_rows_ = MakeContactRows(J, W_body, rows, rhs, mu_kept);
+  contact_rows_.lambda_frame_N = lambda;
+  num_rows_withheld_ = static_cast<int>(rhs_all.size() - rhs.size());
 }
 
 int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,

@@ -265,6 +265,8 @@ const BadCase kBadCases[] = {
      "haptic.safety.max_speed", "allowed keys here: max_force_N"},
     {"ZeroFrictionSweeps", "mode: coupling", "mode: lcp\n  lcp_friction_sweeps: 0", 19,
      "haptic.lcp_friction_sweeps", "must be >= 1"},
+    {"NegativeLcpReach", "mode: coupling", "mode: lcp\n  lcp_reach_m_s: -0.01", 19,
+     "haptic.lcp_reach_m_s", "must be >= 0"},
     {"ZeroLcpRows", "mode: coupling", "mode: coupling\n  lcp_max_rows: 0", 19,
      "haptic.lcp_max_rows", "must be >= 1"},
     // device
@@ -342,6 +344,7 @@ TEST(SimSceneTest, LcpTakesTheFrictionLawAndItsSweeps) {
   EXPECT_EQ(scene.haptic.lcp_friction_sweeps, 7);
   EXPECT_EQ(ResolveHapticMode(scene, "", "--mode", false), HapticMode::kLcp);
   EXPECT_EQ(MakeMultirateOptions(scene, HapticMode::kLcp, 10).lcp_friction_sweeps, 7);
+  EXPECT_EQ(MakeVisualFrameOptions(scene).lcp_reach_m_s, 0.005);  // the default
   const Scene unilateral = ParseScene(kMinimalToolScene, kLabel, "");
   EXPECT_EQ(LcpFrictionSweeps(unilateral), 0);
   try {
