@@ -331,6 +331,11 @@ void RunHaptic(const HapticCommandOptions& options) {
           ? WaitForFirstModel(&lcm, run_id, &mailbox, scene, loop, in_process_device,
                               options.wait_for_model_s)
           : nullptr;
+  if (first_model != nullptr) {
+    std::printf("hapsim haptic: first contact model (frame %lld); the loop starts\n",
+                static_cast<long long>(first_model->sequence));
+    std::fflush(stdout);
+  }
 
   LoopStats stats;
   stats.period_error_s.reserve(num_steps);

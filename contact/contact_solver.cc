@@ -37,14 +37,17 @@ double CalcNormalResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, 
 
 }  // namespace
 
-double CalcTangentStep(double W_11, double W_12, double W_22) {
-  return std::max(W_11, W_22) + std::abs(W_12);
-}
-
 Eigen::Vector2d ProjectOntoDisc(const Eigen::Vector2d& lambda_t, double radius) {
   const double norm = lambda_t.norm();
   return norm > radius ? Eigen::Vector2d((norm > 0.0 ? radius / norm : 0.0) * lambda_t)
                        : lambda_t;
+}
+
+Eigen::Vector2d StepTangentialImpulse(const Eigen::Vector2d& lambda_t, const Eigen::Vector2d& c_t,
+                                      const Eigen::Matrix2d& W_tt, double dt_s, double radius) {
+  const double omega = std::max(W_tt(0, 0), W_tt(1, 1)) + 0.5 * std::abs(W_tt(0, 1) + W_tt(1, 0));
+  if (!(radius > 0.0) || !(omega > 0.0)) return Eigen::Vector2d::Zero();
+  return ProjectOntoDisc(lambda_t - c_t / (dt_s * omega), radius);
 }
 
 double CalcFrictionResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
@@ -54,13 +57,10 @@ double CalcFrictionResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs
   double residual = 0.0;
   for (Eigen::Index normal = 0; normal < lambda.size(); normal += 3) {
     const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
-    const double omega_s =
-        dt_s * CalcTangentStep(W(normal + 1, normal + 1), 0.5 * (W(normal + 1, normal + 2) +
-                                                                 W(normal + 2, normal + 1)),
-                               W(normal + 2, normal + 2));
     const Eigen::Vector2d lambda_t = lambda.segment<2>(normal + 1);
-    const Eigen::Vector2d moved = ProjectOntoDisc(lambda_t - c.segment<2>(normal + 1) / omega_s,
-                                                  mu_contact * lambda[normal]);
+    const Eigen::Vector2d moved =
+        StepTangentialImpulse(lambda_t, c.segment<2>(normal + 1), W.block<2, 2>(normal + 1, normal + 1),
+                              dt_s, mu_contact * lambda[normal]);
     residual = std::max({residual,
                          std::abs(std::min(lambda[normal], c[normal] / (dt_s * W(normal, normal)))),
                          (moved - lambda_t).norm()});
@@ -75,7 +75,7 @@ namespace {
 // with friction, then the tangent pair moves together by one step against its residual and is
 // projected onto the disc of radius μ λ_n (Jean & Moreau's non-smooth contact dynamics, in its
 // simplest blocked form):
-//   λ_t ← Proj_{|·| ≤ μλ_n}(λ_t − r_t / (Δt ω)),   ω = CalcTangentStep(W_tt).
+//   λ_t ← Proj_{|·| ≤ μλ_n}(λ_t − r_t / (Δt ω))   (StepTangentialImpulse).
 // One step size for both tangents is what makes the fixed point Coulomb's law: inside the disc
 // r_t = 0 (stick); on its rim r_t = −k λ_t with k > 0, friction opposite the sliding velocity.
 // (Relaxing the two rows each by its own diagonal, as this solver once did, leaves a fixed point
@@ -97,12 +97,10 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
         const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
         const Eigen::Vector2d r_t(dt_s * W.row(normal + 1).dot(*lambda) - rhs[normal + 1],
                                   dt_s * W.row(normal + 2).dot(*lambda) - rhs[normal + 2]);
-        const double omega_s =
-            dt_s * CalcTangentStep(W(normal + 1, normal + 1),
-                                   0.5 * (W(normal + 1, normal + 2) + W(normal + 2, normal + 1)),
-                                   W(normal + 2, normal + 2));
-        lambda->segment<2>(normal + 1) = ProjectOntoDisc(
-            lambda->segment<2>(normal + 1) - r_t / omega_s, mu_contact * (*lambda)[normal]);
+        lambda->segment<2>(normal + 1) =
+            StepTangentialImpulse(lambda->segment<2>(normal + 1), r_t,
+                                  W.block<2, 2>(normal + 1, normal + 1), dt_s,
+                                  mu_contact * (*lambda)[normal]);
       }
     }
     report.residual = stride == 3 ? CalcFrictionResidual(W, rhs, dt_s, mu, mu_per_contact, *lambda)

@@ -46,16 +46,19 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
 
 // The pieces of the friction law both friction solvers (the frame's, above, and the haptic
 // step's HapticFrictionSolver) share, so that they have one fixed point:
-//  - the step 1/ω for a contact's tangent pair, ω = max(W_11, W_22) + |W_12| over its 2 × 2
-//    tangential block of W (Gershgorin: ω ≥ the block's largest eigenvalue, so the projected
-//    step never overshoots);
 //  - the projection of a tangential impulse onto the disc |λ_t| ≤ radius;
+//  - one Gauss–Seidel step of a contact's tangential impulse: λ_t ← Proj(λ_t − c_t/(Δt ω)) onto
+//    the disc of radius μλ_n, ω = max(W_11, W_22) + |W_12| over the contact's 2 × 2 tangential
+//    block of W (its symmetric part; Gershgorin: ω ≥ the block's largest eigenvalue, so the step
+//    never overshoots). Zero when the disc is (μλ_n = 0) or ω is not positive (nothing can change
+//    the contact's tangential velocity: it carries no friction); never divides by zero;
 //  - the fixed-point residual of a friction solution: per contact |min(λ_n, c_n/(ΔtW_nn))| and
 //    |λ_t − Proj(λ_t − c_t/(Δt ω))|, c = ΔtWλ − rhs, relative to max |λ| (absolute at λ = 0).
 //    Zero exactly when Coulomb's law holds: λ_n ≥ 0 ⟂ c_n ≥ 0, |λ_t| ≤ μλ_n, c_t = 0 inside the
 //    disc and λ_t opposite c_t on its rim.
-double CalcTangentStep(double W_11, double W_12, double W_22);
 Eigen::Vector2d ProjectOntoDisc(const Eigen::Vector2d& lambda_t, double radius);
+Eigen::Vector2d StepTangentialImpulse(const Eigen::Vector2d& lambda_t, const Eigen::Vector2d& c_t,
+                                      const Eigen::Matrix2d& W_tt, double dt_s, double radius);
 double CalcFrictionResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
                             double mu, const Eigen::VectorXd* mu_per_contact,
                             const Eigen::VectorXd& lambda);

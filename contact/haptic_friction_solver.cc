@@ -133,12 +133,12 @@ double HapticFrictionSolver::Workspace::Sweep(double dt_s) {
     next[0] = std::max(0.0, old[0] - c[0] / (dt_s * W_ii(0, 0)));
     // The tangential rows see the normal row's new impulse, as in the dense sweep.
     c.tail<2>() += dt_s * W_ii.block<2, 1>(1, 0) * (next[0] - old[0]);
-    const double omega_s =
-        dt_s * CalcTangentStep(W_ii(1, 1), 0.5 * (W_ii(1, 2) + W_ii(2, 1)), W_ii(2, 2));
-    next.tail<2>() = ProjectOntoDisc(old.tail<2>() - c.tail<2>() / omega_s, mu[i] * next[0]);
+    next.tail<2>() = StepTangentialImpulse(old.tail<2>(), c.tail<2>(), W_ii.block<2, 2>(1, 1), dt_s,
+                                           mu[i] * next[0]);
     const Eigen::Vector3d delta = next - old;
     if (delta.isZero(0.0)) continue;
-    largest_change = std::max(largest_change, delta.cwiseAbs().maxCoeff());
+    const double change = delta.cwiseAbs().maxCoeff();
+    if (!(change <= largest_change)) largest_change = change;  // NaN propagates
     lambda.segment<3>(a) = next;
     y.head(n).noalias() += W.block(0, a, n, 3) * delta;
     const Vector6d dg = U.middleRows<3>(a).transpose() * delta;
@@ -156,11 +156,9 @@ double HapticFrictionSolver::Workspace::CalcResidual(double dt_s) const {
     const int a = 3 * i;
     const Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
     const Eigen::Matrix3d W_ii = CalcDiagonalBlock(i);
-    const double omega_s =
-        dt_s * CalcTangentStep(W_ii(1, 1), 0.5 * (W_ii(1, 2) + W_ii(2, 1)), W_ii(2, 2));
     const Eigen::Vector2d lambda_t = lambda.segment<2>(a + 1);
     const Eigen::Vector2d moved =
-        ProjectOntoDisc(lambda_t - c.tail<2>() / omega_s, mu[i] * lambda[a]);
+        StepTangentialImpulse(lambda_t, c.tail<2>(), W_ii.block<2, 2>(1, 1), dt_s, mu[i] * lambda[a]);
     residual = std::max({residual, std::abs(std::min(lambda[a], c[0] / (dt_s * W_ii(0, 0)))),
                          (moved - lambda_t).norm()});
   }
@@ -231,6 +229,7 @@ bool HapticFrictionSolver::Solve(const ContactRows& rows, const ToolStepSystem& 
   while (last_iterations_ < ws.max_sweeps) {
     ++last_iterations_;
     const double change = ws.Sweep(dt_s);
+    if (!std::isfinite(change)) break;  // reported as a failure below
     if (change <= kTolerance * ws.lambda.head(n).lpNorm<Eigen::Infinity>()) break;
   }
   if (!ws.lambda.head(n).allFinite()) {

@@ -22,6 +22,8 @@
 // velocity is c_i = Δt (y_i + U_i S g) − rhs_i (O(1) per contact), and a change δ of a contact's
 // three impulses costs y += W_body[:, i] δ (3n) and g += U_iᵀ δ. A contact that stays separated
 // (λ_i = 0, c_n ≥ 0) costs nothing more, so a sweep costs ~3n per contact that carries load.
+// A contact whose tangential block of W is not positive carries no friction
+// (StepTangentialImpulse); one whose normal compliance is not positive fails the solve.
 //
 // Warm start: the previous step's λ with the same rows (compared bitwise, as HapticLcpSolver
 // does), y and g kept; new rows start from the frame's impulses (ContactRows::lambda_frame_N, the
@@ -72,7 +74,8 @@ class HapticFrictionSolver {
 
   // Copies and checks new rows and sets up the warm start (y = W_body λ_frame, an O(n²) product)
   // ahead of time, off the 1 kHz loop; the following Solve on the same rows starts warm.
-  // Returns false, preparing nothing, for rows Solve would reject. Allocates nothing.
+  // Returns false for rows Solve would reject (leaving no rows cached: the next Solve copies
+  // afresh). Allocates nothing.
   bool Prepare(const ContactRows& rows);
 
   int max_rows() const;

@@ -504,6 +504,7 @@ int HapticLcpSolver::max_rows() const { return ws_->max_rows; }
 int HapticLcpSolver::friction_sweeps() const { return friction_ ? friction_->max_sweeps() : 0; }
 
 Eigen::Ref<const Eigen::VectorXd> HapticLcpSolver::last_impulses() const {
+  if (!last_solved_) return ws_->x.head(0);
   if (last_was_friction_) return friction_->last_impulses();
   return ws_->x.head(std::max(ws_->n, 0));
 }
@@ -541,13 +542,14 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   last_num_active_ = 0;
   last_num_factorizations_ = 0;
   ws.num_factorizations = 0;
+  last_solved_ = false;
   last_was_friction_ = rows.rows_per_contact == 3 && friction_;
   if (last_was_friction_) {
-    const bool solved = friction_->Solve(rows, tool, F_hat_N, T_hat_N_m, F_c_N, T_c_N_m);
+    last_solved_ = friction_->Solve(rows, tool, F_hat_N, T_hat_N_m, F_c_N, T_c_N_m);
     last_iterations_ = friction_->last_iterations();
     last_residual_ = friction_->last_residual();
     last_num_active_ = friction_->last_num_active();
-    return solved;
+    return last_solved_;
   }
   const int n = rows.num_rows();
   if (n > ws.max_rows || rows.rows_per_contact != 1 || !HasConsistentShape(rows) ||
@@ -566,6 +568,7 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   if (n == 0) {
     ws.n = 0;
     ws.rebase_pending = true;
+    last_solved_ = true;
     return true;
   }
   const bool new_rows = !ws.SameRows(rows);
@@ -603,6 +606,7 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   last_num_active_ = static_cast<int>((ws.x.head(n).array() > 0.0).count());
   *F_c_N = ws.U.topLeftCorner(n, 3).transpose() * ws.x.head(n);
   *T_c_N_m = ws.U.topRightCorner(n, 3).transpose() * ws.x.head(n);
+  last_solved_ = true;
   return true;
 }
 

@@ -112,7 +112,7 @@ class HapticLcpSolver {
   // Dense Cholesky factorisations of a base block in the last Solve: 0 at a warm step with the
   // same rows, ≥ 1 when the rows changed or the border of changes grew past its capacity.
   int last_num_factorizations() const { return last_num_factorizations_; }
-  // λ per row after the last successful Solve (size num_rows), N.
+  // λ per row after the last Solve (size num_rows), N; empty when it failed.
   Eigen::Ref<const Eigen::VectorXd> last_impulses() const;
 
  private:
@@ -120,6 +120,7 @@ class HapticLcpSolver {
   std::unique_ptr<Workspace> ws_;
   std::unique_ptr<HapticFrictionSolver> friction_;  // null without friction sweeps
   bool last_was_friction_ = false;
+  bool last_solved_ = false;
   int last_iterations_ = 0;
   double last_residual_ = 0.0;
   int last_num_active_ = 0;

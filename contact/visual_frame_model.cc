@@ -84,23 +84,29 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
 }
 
 // The rows that travel to the lcp step (issue 13 item 5): every contact the frame found active,
-// and every other one that an approach of the tool at lcp_reach_m_s or slower could engage
-// within the frame. Row i's target b_i − J_u,i u̇ (+ what the frame's force holds back) is the
-// approach speed it needs to engage: b closes its gap over a frame, less the body's own normal
-// velocity. A row that needs more than v_reach can only engage under a faster tool, and then the
-// next frame has it, as the linear model has every contact. 0 (the default) sends them all.
+// and every other one the tool could engage within the frame: its approach now, plus up to
+// lcp_reach_m_s more. Row i's target r_i = b_i − J_u,i u̇ (+ what the frame's force holds back)
+// is the approach speed it needs to engage (b closes its gap over a frame, less the body's own
+// normal velocity); the tool approaches it at −(J_v,i v + J_ω,i ω). A row kept back needs more
+// than v_reach beyond the tool's present approach: only a tool that speeds up toward it engages
+// it, and then the next frame has it, as the linear model has every contact. 0 sends them all.
 void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
                                     const Eigen::VectorXd& held_m_s, const ToolState& tool,
                                     const fem::State& body) {
   const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
   const Eigen::VectorXd rhs_all = b_all - J_all.J_u * body.v_m_s + held_m_s;
   const double reach_m_s = options_.lcp_reach_m_s;
+  const Eigen::Vector3d w_W_rad_s = CalcAngularVelocity(tool_, tool);
   std::vector<Contact> kept;
   std::vector<int> rows;
   std::vector<double> mu;
   for (size_t i = 0; i < moved.size(); ++i) {
     const int normal = rows_per_contact_ * static_cast<int>(i);
-    if (reach_m_s > 0.0 && !(lambda_[normal] > 0.0) && !(rhs_all[normal] > -reach_m_s)) continue;
+    const double tool_separating_m_s =
+        J_all.J_v.row(normal).dot(tool.v_W_m_s) + J_all.J_w.row(normal).dot(w_W_rad_s);
+    if (reach_m_s > 0.0 && !(lambda_[normal] > 0.0) &&
+        !(rhs_all[normal] - tool_separating_m_s > -reach_m_s))
+      continue;
     kept.push_back(moved[i]);
     for (int d = 0; d < rows_per_contact_; ++d) rows.push_back(normal + d);
     if (rows_per_contact_ == 3) mu.push_back(mu_per_contact_[static_cast<Eigen::Index>(i)]);

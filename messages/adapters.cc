@@ -117,22 +117,26 @@ bool CheckPackedLower(const hapsim_lcm::contact_model_t& msg, std::string* error
   return true;
 }
 
-// Everything FromMessage(contact_model_t) rejects except the quaternion, which it reads itself.
 // contact_model_t.rows_per_contact and its friction coefficients: 1 (or 0 without rows) and
 // none, or 3 with one finite μ ≥ 0 per three rows.
 bool CheckRowLayout(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   const int per = msg.rows_per_contact;
-  if (!(per == 1 || per == 3 || (per == 0 && msg.num_rows == 0)) || msg.num_rows % std::max(per, 1)) {
+  if (!(per == 1 || per == 3 || (per == 0 && msg.num_rows == 0)) ||
+      msg.num_rows % std::max(per, 1) != 0) {
     SetError(error, "contact_model_t.rows_per_contact: " + std::to_string(per) + " with " +
                         std::to_string(msg.num_rows) + " rows (1, or 3 with whole contacts)");
     return false;
   }
   const int expected = per == 3 ? msg.num_rows / 3 : 0;
-  if (!CheckSize(msg.friction_coefficient.size(), expected, "contact_model_t.friction_coefficient",
-                 "entries", error) ||
-      !CheckSize(static_cast<std::size_t>(std::max(msg.num_friction_coefficients, 0)), expected,
-                 "contact_model_t.num_friction_coefficients", "entries", error) ||
-      !CheckFinite(msg.friction_coefficient.data(), expected,
+  if (msg.num_friction_coefficients != expected ||
+      msg.friction_coefficient.size() != static_cast<std::size_t>(expected)) {
+    SetError(error, "contact_model_t.friction_coefficient: " +
+                        std::to_string(msg.num_friction_coefficients) + " declared, " +
+                        std::to_string(msg.friction_coefficient.size()) + " entries, expected " +
+                        std::to_string(expected) + " (one per contact of 3 rows)");
+    return false;
+  }
+  if (!CheckFinite(msg.friction_coefficient.data(), expected,
                    "contact_model_t.friction_coefficient", error))
     return false;
   for (int i = 0; i < expected; ++i) {
@@ -144,6 +148,7 @@ bool CheckRowLayout(const hapsim_lcm::contact_model_t& msg, std::string* error) 
   return true;
 }
 
+// Everything FromMessage(contact_model_t) rejects except the quaternion, which it reads itself.
 bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   if (!(std::isfinite(msg.dt_visual_s) && msg.dt_visual_s > 0.0)) {
     SetError(error, "contact_model_t.dt_visual_s: must be finite and > 0");

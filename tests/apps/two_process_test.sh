@@ -135,6 +135,12 @@ grep -q "haptic process was killed by signal" "$work/kill_haptic.out" ||
 haptic_pid=$!
 "$hapsim" run "$scene" --lcm-url "$url" --run-id 4a --no-spawn > /dev/null 2>&1 &
 visual_pid=$!
+# Killed 1.6 s into the haptic loop, which starts at the first model: a fixed 1.6 s from the
+# start once killed a visual process still starting (ASan on a busy host) before any model.
+for _ in $(seq 600); do
+  grep -q "the loop starts" "$work/fade_haptic.out" 2> /dev/null && break
+  sleep 0.1
+done
 sleep 1.6
 kill -KILL "$visual_pid"
 wait "$visual_pid" 2> /dev/null || true  # killed on purpose

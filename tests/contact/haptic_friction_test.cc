@@ -96,6 +96,22 @@ Eigen::VectorXd SolveDense(const Dense& dense, const Eigen::VectorXd& mu, double
   return lambda;
 }
 
+// One tangential step (contact_solver.h): a projected step of 1/(Δt ω) against c_t; nothing
+// when the disc or ω is zero (no division by zero, no NaN).
+TEST(StepTangentialImpulse, StepsProjectsAndDegeneratesToZero) {
+  Eigen::Matrix2d W_tt;
+  W_tt << 2.0, 0.5, 0.5, 3.0;  // ω = 3.5
+  const Eigen::Vector2d lambda_t(0.1, 0.0), c_t(-0.0035, 0.0035);
+  const Eigen::Vector2d free = lambda_t - c_t / (kDt_s * 3.5);  // (1.1, −1.0)
+  EXPECT_LT((StepTangentialImpulse(lambda_t, c_t, W_tt, kDt_s, 10.0) - free).norm(), 1e-12);
+  EXPECT_LT((StepTangentialImpulse(lambda_t, c_t, W_tt, kDt_s, 0.5) - 0.5 * free.normalized())
+                .norm(),
+            1e-12);
+  EXPECT_EQ(StepTangentialImpulse(lambda_t, c_t, W_tt, kDt_s, 0.0), Eigen::Vector2d::Zero());
+  EXPECT_EQ(StepTangentialImpulse(lambda_t, c_t, Eigen::Matrix2d::Zero(), kDt_s, 1.0),
+            Eigen::Vector2d::Zero());
+}
+
 TEST(MakeFrictionContactRows, KeepsTheLayoutAndChecksMu) {
   const LcpProblem p = MakeLcpProblem(4, 5, 0.5, 1.0, 3, 0.4);
   EXPECT_EQ(p.rows.rows_per_contact, 3);
@@ -267,6 +283,54 @@ TEST(HapticFrictionSolver, RejectsRowsItCannotSolveWithZeroForce) {
   EXPECT_TRUE(solver.Solve(friction.rows, friction.tool, friction.F_hat_N, friction.T_hat_N_m,
                            &F_c, &T_c));
   EXPECT_GT(F_c.norm(), 0.0);
+}
+
+// The rows' cache: rows that differ only in μ, or only in a target, are new rows, solved as
+// such (a cold solve's answer), not the previous rows' warm state.
+TEST(HapticFrictionSolver, AChangeOfMuOrOfATargetAloneIsNewRows) {
+  const LcpProblem p = MakeLcpProblem(12, 81, 0.3, 1.0, 3, 0.5);
+  LcpProblem other_mu = p;
+  other_mu.rows.friction_coefficient.setConstant(0.05);  // every sliding contact changes
+  LcpProblem other_target = p;
+  other_target.rows.body_rhs.array() += 0.02;
+  for (const LcpProblem* q : {&other_mu, &other_target}) {
+    HapticFrictionSolver warm(36, kManySweeps), cold(36, kManySweeps);
+    Eigen::Vector3d F_first, F_warm, F_cold, T;
+    ASSERT_TRUE(warm.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_first, &T));
+    ASSERT_TRUE(warm.Solve(q->rows, q->tool, q->F_hat_N, q->T_hat_N_m, &F_warm, &T));
+    ASSERT_TRUE(cold.Solve(q->rows, q->tool, q->F_hat_N, q->T_hat_N_m, &F_cold, &T));
+    EXPECT_GT((F_cold - F_first).norm(), 1e-6) << "precondition: the change matters";
+    EXPECT_LT((F_warm - F_cold).norm(), 1e-8 * F_cold.norm());
+  }
+}
+
+// The lcp mode's solver hands friction rows to its friction solve (built with sweeps), and
+// reports that solve; without sweeps it refuses them, leaving no impulses from an older solve.
+TEST(HapticLcpSolver, HandsFrictionRowsToItsFrictionSolve) {
+  const LcpProblem p = MakeLcpProblem(10, 91, 0.3, 1.0, 3, 0.5);
+  HapticLcpSolver lcp(30, 50);
+  HapticFrictionSolver friction(30, 50);
+  EXPECT_EQ(lcp.friction_sweeps(), 50);
+  Eigen::Vector3d F_lcp, T_lcp, F_friction, T_friction;
+  ASSERT_TRUE(lcp.Prepare(p.rows, p.tool));
+  ASSERT_TRUE(lcp.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_lcp, &T_lcp));
+  ASSERT_TRUE(friction.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_friction, &T_friction));
+  EXPECT_EQ(F_lcp, F_friction);
+  EXPECT_EQ(T_lcp, T_friction);
+  EXPECT_EQ(lcp.last_impulses(), friction.last_impulses());
+  EXPECT_EQ(lcp.last_iterations(), friction.last_iterations());
+  EXPECT_EQ(lcp.last_num_active(), friction.last_num_active());
+  EXPECT_EQ(lcp.last_num_factorizations(), 0);
+  // Without sweeps: normal rows solve, then friction rows are refused with no impulses left.
+  const LcpProblem normal = MakeLcpProblem(10, 91, 0.3);
+  HapticLcpSolver frictionless(30);
+  EXPECT_EQ(frictionless.friction_sweeps(), 0);
+  ASSERT_TRUE(frictionless.Solve(normal.rows, normal.tool, normal.F_hat_N, normal.T_hat_N_m,
+                                 &F_lcp, &T_lcp));
+  EXPECT_EQ(frictionless.last_impulses().size(), 10);
+  EXPECT_FALSE(frictionless.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_lcp, &T_lcp));
+  EXPECT_EQ(F_lcp, Eigen::Vector3d::Zero());
+  EXPECT_EQ(frictionless.last_impulses().size(), 0);
 }
 
 TEST(HapticFrictionSolver, AllocatesNothingAt510Rows) {

@@ -109,51 +109,73 @@ TEST(VisualFrame, HapticStepComplianceYieldsMoreAndAgreesAtEqualSteps) {
 }
 
 // The lcp rows that travel (issue 13 item 5): with lcp_reach_m_s the frame exports exactly the
-// rows of the all-rows export whose contact is active (λ > 0) or needs an approach slower than
-// the reach (body_rhs > −v_reach), bit for bit, in order; the frame itself is unchanged.
+// contacts of the all-rows export that are active (λ_n > 0) or that the tool's present approach
+// plus the reach engages (r_i − (J_v,i v + J_ω,i ω) > −v_reach), whole (three rows each with
+// friction, and their μ), bit for bit, in order; the frame itself is unchanged.
 TEST(VisualFrame, LcpRowsKeepTheActiveAndTheReachableContacts) {
   const fem::Model body = MakeSlab(0.02, 5e4, false);
-  const auto run = [&](double reach_m_s) {
-    VisualFrameOptions options = MakeOptions(1.0 / 30.0, ContactLaw::kUnilateral, 0.0);
-    options.haptic_dt_s = 1e-3;
-    options.export_contact_rows = true;
-    options.lcp_reach_m_s = reach_m_s;
-    options.detection.margin_m = 0.003;  // candidates up to 3 mm away: some cannot engage
-    auto frame = std::make_unique<VisualFrame>(
-        body, fem::FemOptions{}, fem::CalcGravityForce(body, {0, 0, -9.81}), MakeBoxTool(0.2),
-        options);
-    fem::State body_state = fem::MakeRestState(body);
-    ToolState tool;
-    tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.01);
-    tool.q_WT = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX());  // tilted: gaps of all sizes
-    for (int k = 0; k < 6; ++k) frame->Step(DeviceState{}, &body_state, &tool);
-    return frame;
-  };
-  const double reach_m_s = 0.005;
-  const auto all = run(0.0);
-  const auto cut = run(reach_m_s);
-  const ContactRows& a = all->contact_rows();
-  const ContactRows& c = cut->contact_rows();
-  EXPECT_EQ(cut->contact_force_N(), all->contact_force_N());  // the frame is the same
-  std::vector<int> kept;
-  for (int i = 0; i < a.num_rows(); ++i)
-    if (a.lambda_frame_N[i] > 0.0 || a.body_rhs[i] > -reach_m_s) kept.push_back(i);
-  const int active = static_cast<int>((a.lambda_frame_N.array() > 0.0).count());
-  std::printf("rows: %d candidates, %d active, %d kept\n", a.num_rows(), active,
-              static_cast<int>(kept.size()));
-  ASSERT_GT(active, 0);
-  ASSERT_GT(static_cast<int>(kept.size()), active) << "precondition: an inactive row is kept";
-  ASSERT_LT(static_cast<int>(kept.size()), a.num_rows()) << "precondition: a row is withheld";
-  ASSERT_EQ(c.num_rows(), static_cast<int>(kept.size()));
-  EXPECT_EQ(cut->num_rows_withheld(), a.num_rows() - c.num_rows());
-  EXPECT_EQ(all->num_rows_withheld(), 0);
-  for (int r = 0; r < c.num_rows(); ++r) {
-    const int i = kept[r];
-    EXPECT_EQ(c.J_v.row(r), a.J_v.row(i)) << r;
-    EXPECT_EQ(c.J_w.row(r), a.J_w.row(i)) << r;
-    EXPECT_EQ(c.body_rhs[r], a.body_rhs[i]) << r;
-    EXPECT_EQ(c.lambda_frame_N[r], a.lambda_frame_N[i]) << r;
-    for (int q = 0; q < c.num_rows(); ++q) EXPECT_EQ(c.W_body(r, q), a.W_body(i, kept[q]));
+  for (const ContactLaw law : {ContactLaw::kUnilateral, ContactLaw::kFriction}) {
+    SCOPED_TRACE(ToString(law));
+    const int per = law == ContactLaw::kFriction ? 3 : 1;
+    ToolState tool_all;
+    const auto run = [&](double reach_m_s, ToolState* tool) {
+      VisualFrameOptions options = MakeOptions(1.0 / 30.0, law, 0.0);
+      options.response.solve.friction_coefficient = 0.4;
+      options.haptic_dt_s = 1e-3;
+      options.export_contact_rows = true;
+      options.lcp_reach_m_s = reach_m_s;
+      options.detection.margin_m = 0.003;  // candidates up to 3 mm away: some cannot engage
+      auto frame = std::make_unique<VisualFrame>(
+          body, fem::FemOptions{}, fem::CalcGravityForce(body, {0, 0, -9.81}), MakeBoxTool(0.2),
+          options);
+      fem::State body_state = fem::MakeRestState(body);
+      tool->x_W_m = Eigen::Vector3d(0.0, 0.0, 0.01);
+      tool->q_WT = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX());  // tilted: gaps of all sizes
+      tool->v_W_m_s = Eigen::Vector3d(0.01, 0.0, -0.005);               // moving: it counts
+      for (int k = 0; k < 6; ++k) frame->Step(DeviceState{}, &body_state, tool);
+      return frame;
+    };
+    const double reach_m_s = 0.005;
+    ToolState tool_cut;
+    const auto all = run(0.0, &tool_all);
+    const auto cut = run(reach_m_s, &tool_cut);
+    const ContactRows& a = all->contact_rows();
+    const ContactRows& c = cut->contact_rows();
+    EXPECT_EQ(cut->contact_force_N(), all->contact_force_N());  // the frame is the same
+    const Eigen::Vector3d w = CalcAngularVelocity(all->tool_model(), tool_all);
+    std::vector<int> kept;  // contacts
+    for (int i = 0; i < a.num_rows() / per; ++i) {
+      const int n = per * i;
+      const double tool_separating = a.J_v.row(n).dot(tool_all.v_W_m_s) + a.J_w.row(n).dot(w);
+      if (a.lambda_frame_N[n] > 0.0 || a.body_rhs[n] - tool_separating > -reach_m_s)
+        kept.push_back(i);
+    }
+    int active = 0;
+    for (int i = 0; i < a.num_rows() / per; ++i) active += a.lambda_frame_N[per * i] > 0.0;
+    std::printf("%s: %d candidate contacts, %d active, %d kept\n", ToString(law),
+                a.num_rows() / per, active, static_cast<int>(kept.size()));
+    ASSERT_GT(active, 0);
+    ASSERT_GT(static_cast<int>(kept.size()), active) << "precondition: an inactive row is kept";
+    ASSERT_LT(per * static_cast<int>(kept.size()), a.num_rows()) << "precondition: one withheld";
+    ASSERT_EQ(c.num_rows(), per * static_cast<int>(kept.size()));
+    EXPECT_EQ(c.rows_per_contact, per);
+    EXPECT_EQ(cut->num_rows_withheld(), a.num_rows() - c.num_rows());
+    EXPECT_EQ(all->num_rows_withheld(), 0);
+    for (size_t k = 0; k < kept.size(); ++k) {
+      if (per == 3) {
+        EXPECT_EQ(c.friction_coefficient[k], a.friction_coefficient[kept[k]]);
+      }
+      for (int d = 0; d < per; ++d) {
+        const int r = per * static_cast<int>(k) + d, i = per * kept[k] + d;
+        EXPECT_EQ(c.J_v.row(r), a.J_v.row(i)) << r;
+        EXPECT_EQ(c.J_w.row(r), a.J_w.row(i)) << r;
+        EXPECT_EQ(c.body_rhs[r], a.body_rhs[i]) << r;
+        EXPECT_EQ(c.lambda_frame_N[r], a.lambda_frame_N[i]) << r;
+        for (size_t q = 0; q < kept.size(); ++q)
+          for (int e = 0; e < per; ++e)
+            EXPECT_EQ(c.W_body(r, per * static_cast<int>(q) + e), a.W_body(i, per * kept[q] + e));
+      }
+    }
   }
 }
 

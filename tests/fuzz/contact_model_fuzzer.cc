@@ -124,7 +124,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const Eigen::Vector3d F_hat_N(0.0, 0.0, -1.0), T_hat_N_m(0.0, 1e-3, 0.0);
   Eigen::Vector3d F_c_N, T_c_N_m;
   contact::EvaluateLinearContactModel(model, F_hat_N, T_hat_N_m, &F_c_N, &T_c_N_m);
-  contact::HapticLcpSolver solver(kMaxRows);
+  // With a friction solve (5 sweeps, the scene default), so that friction rows reach it too.
+  contact::HapticLcpSolver solver(kMaxRows, /*friction_sweeps=*/5);
   if (solver.Prepare(rows, tool)) solver.Solve(rows, tool, F_hat_N, T_hat_N_m, &F_c_N, &T_c_N_m);
   return 0;
 }

@@ -176,6 +176,12 @@ void WriteMessageSeeds(const std::vector<Event>& linear, const std::vector<Event
   if (with_rows == lcp_models.rend()) throw std::runtime_error("no lcp model with 3 rows");
   WriteMessage("contact_model", "lcp_3_rows", FirstRows(*with_rows, 3));
   WriteMessage("contact_model", "lcp_1_row", FirstRows(*with_rows, 1));
+  // Friction rows (issue 13): the three rows read as one contact's normal, t1, t2, μ 0.5.
+  hapsim_lcm::contact_model_t friction = FirstRows(*with_rows, 3);
+  friction.rows_per_contact = 3;
+  friction.num_friction_coefficients = 1;
+  friction.friction_coefficient = {0.5};
+  WriteMessage("contact_model", "lcp_friction_1_contact", friction);
 
   const auto frames = Messages<hapsim_lcm::sim_frame_t>(lcp, messages::kSimFrameChannel);
   WriteMessage("sim_frame", "tiny", TinyFrame(frames.back()));

@@ -130,12 +130,8 @@ TEST(WireDecode, EveryTypeRoundTripsThroughTheLayoutCheck) {
   }
 }
 
-// The offset of contact_model_t.num_rows: the empty message ends with num_rows, then
-// num_W_body_lower (two int32), so it sits 8 bytes before the end.
-// With no rows and no world, a contact model ends in four int32 counts: num_rows,
-// num_W_body_lower, num_body_nodes, num_objects.
-// A model without rows ends in num_rows, num_W_body_lower (int32), rows_per_contact (int8),
-// num_friction_coefficients, num_body_nodes, num_objects (int32).
+// With no rows and no world a contact model ends in num_rows, num_W_body_lower (int32),
+// rows_per_contact (int8), num_friction_coefficients, num_body_nodes, num_objects (int32).
 std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 21; }
 std::size_t NumFrictionCoefficientsOffset() { return Encode(MakeContactModel(0)).size() - 12; }
 std::size_t NumBodyNodesOffset() { return Encode(MakeContactModel(0)).size() - 8; }
