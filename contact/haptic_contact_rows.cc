@@ -1,5 +1,6 @@
 #include "contact/haptic_contact_rows.h"
 
+#include <Eigen/LU>
 #include <cmath>
 #include <stdexcept>
 
@@ -54,6 +55,17 @@ ContactRows MakeFrictionContactRows(const ContactJacobian& J, const Eigen::Matri
   std::vector<int> rows(J.num_rows());
   for (int i = 0; i < J.num_rows(); ++i) rows[i] = i;
   return MakeContactRows(J, W_body, rows, body_rhs, friction_coefficient);
+}
+
+bool CalcToolCompliance(const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
+                        const Eigen::Vector3d& T_hat_N_m, Eigen::Matrix<double, 6, 6>* S,
+                        Eigen::Matrix<double, 6, 1>* s_free) {
+  S->setZero();
+  S->topLeftCorner<3, 3>() = tool.A_v.inverse();
+  S->bottomRightCorner<3, 3>() = tool.M_inv_W * tool.A_L.inverse();
+  s_free->head<3>() = S->topLeftCorner<3, 3>() * (tool.dt_s * F_hat_N);
+  s_free->tail<3>() = S->bottomRightCorner<3, 3>() * (tool.dt_s * T_hat_N_m);
+  return S->allFinite() && s_free->allFinite();
 }
 
 bool HasConsistentShape(const ContactRows& rows) {

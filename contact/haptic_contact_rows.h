@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "contact/contact_jacobian.h"
+#include "core/tool_integrator.h"
 
 namespace hapsim::contact {
 
@@ -35,6 +36,13 @@ struct ContactRows {
 // μ ≥ 0 per contact with rows_per_contact 3 (a whole number of contacts) and empty with 1.
 // (The other entries' finiteness and W_body's symmetry are checked where a solver copies them.)
 bool HasConsistentShape(const ContactRows& rows);
+
+// The tool's side of both haptic solves at one step: its compliance S = blockdiag(A_v⁻¹,
+// M⁻¹A_L⁻¹) and free velocities s_free = S Δt [F̂; T̂] (world; m/s and rad/s). Returns whether
+// both are finite. Fixed-size: no allocation.
+bool CalcToolCompliance(const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
+                        const Eigen::Vector3d& T_hat_N_m, Eigen::Matrix<double, 6, 6>* S,
+                        Eigen::Matrix<double, 6, 1>* s_free);
 
 // Builds the rows from the visual frame's data, the same inputs as MakeLinearContactModel: the
 // Jacobian of the chosen contacts (rows_per_contact must be 1), the body's Delassus part over

@@ -207,13 +207,8 @@ bool HapticFrictionSolver::Solve(const ContactRows& rows, const ToolStepSystem& 
       !(tool.dt_s > 0.0))
     return false;
   const double dt_s = tool.dt_s;
-  ws.S.setZero();
-  ws.S.topLeftCorner<3, 3>() = tool.A_v.inverse();
-  ws.S.bottomRightCorner<3, 3>() = tool.M_inv_W * tool.A_L.inverse();
   Vector6d s_free;
-  s_free.head<3>() = ws.S.topLeftCorner<3, 3>() * (dt_s * F_hat_N);
-  s_free.tail<3>() = ws.S.bottomRightCorner<3, 3>() * (dt_s * T_hat_N_m);
-  if (!ws.S.allFinite() || !s_free.allFinite()) return false;
+  if (!CalcToolCompliance(tool, F_hat_N, T_hat_N_m, &ws.S, &s_free)) return false;
   if (!ws.SameRows(rows)) {
     if (!ws.CopyRows(rows)) return false;
     ws.StartFrom(rows.lambda_frame_N);

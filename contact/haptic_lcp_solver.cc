@@ -516,10 +516,9 @@ bool HapticLcpSolver::Prepare(const ContactRows& rows, const ToolStepSystem& too
   if (n == 0 || n > ws.max_rows || rows.rows_per_contact != 1 || !HasConsistentShape(rows) ||
       !(tool.dt_s > 0.0))
     return false;
-  ws.S.setZero();
-  ws.S.topLeftCorner<3, 3>() = tool.A_v.inverse();
-  ws.S.bottomRightCorner<3, 3>() = tool.M_inv_W * tool.A_L.inverse();
-  if (!ws.S.allFinite() || !ws.CopyRows(rows)) {
+  if (!CalcToolCompliance(tool, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), &ws.S,
+                          &ws.s_free) ||
+      !ws.CopyRows(rows)) {
     ws.n = -1;
     return false;
   }
@@ -556,14 +555,7 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
       !(tool.dt_s > 0.0))
     return false;
   const double dt_s = tool.dt_s;
-  const Eigen::Matrix3d A_v_inv = tool.A_v.inverse();
-  const Eigen::Matrix3d M_inv_A_L_inv = tool.M_inv_W * tool.A_L.inverse();
-  ws.S.setZero();
-  ws.S.topLeftCorner<3, 3>() = A_v_inv;
-  ws.S.bottomRightCorner<3, 3>() = M_inv_A_L_inv;
-  ws.s_free.head<3>() = A_v_inv * (dt_s * F_hat_N);
-  ws.s_free.tail<3>() = M_inv_A_L_inv * (dt_s * T_hat_N_m);
-  if (!ws.S.allFinite() || !ws.s_free.allFinite()) return false;
+  if (!CalcToolCompliance(tool, F_hat_N, T_hat_N_m, &ws.S, &ws.s_free)) return false;
 
   if (n == 0) {
     ws.n = 0;

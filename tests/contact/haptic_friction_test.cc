@@ -27,31 +27,13 @@ namespace {
 
 constexpr int kManySweeps = 200000;
 
-struct Dense {
-  Eigen::MatrixXd W;
-  Eigen::VectorXd rhs;
-};
-
-Dense Assemble(const ContactRows& rows, const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
-               const Eigen::Vector3d& T_hat_N_m) {
-  ContactJacobian J;
-  J.J_v = rows.J_v;
-  J.J_w = rows.J_w;
-  Dense dense;
-  dense.W = CalcToolDelassus(J, tool) + rows.W_body;
-  const Eigen::Vector3d v_free = tool.A_v.inverse() * tool.dt_s * F_hat_N;
-  const Eigen::Vector3d w_free = tool.M_inv_W * tool.A_L.inverse() * tool.dt_s * T_hat_N_m;
-  dense.rhs = rows.body_rhs - rows.J_v * v_free - rows.J_w * w_free;
-  return dense;
-}
-
 struct LawCount {
   int separated = 0, sticking = 0, sliding = 0;
 };
 
 // Coulomb's law on the dense problem, to `tolerance` of the size of the terms summed in c (for
 // velocities) and of the largest λ (for impulses).
-LawCount ExpectCoulomb(const Dense& dense, const Eigen::VectorXd& mu, double dt_s,
+LawCount ExpectCoulomb(const DenseProblem& dense, const Eigen::VectorXd& mu, double dt_s,
                        const Eigen::VectorXd& lambda, double tolerance, const std::string& where) {
   const Eigen::VectorXd c = dt_s * dense.W * lambda - dense.rhs;
   const double c_scale = (dt_s * dense.W.cwiseAbs() * lambda.cwiseAbs()).maxCoeff() +
@@ -85,7 +67,7 @@ LawCount ExpectCoulomb(const Dense& dense, const Eigen::VectorXd& mu, double dt_
   return count;
 }
 
-Eigen::VectorXd SolveDense(const Dense& dense, const Eigen::VectorXd& mu, double dt_s) {
+Eigen::VectorXd SolveDense(const DenseProblem& dense, const Eigen::VectorXd& mu, double dt_s) {
   ContactSolveOptions options{ContactLaw::kFriction};
   options.max_iterations = kManySweeps;
   options.tolerance = 1e-13;
@@ -152,7 +134,7 @@ TEST(HapticFrictionSolver, SatisfiesCoulombAndMatchesTheDenseReference) {
       EXPECT_LT(solver.last_iterations(), kManySweeps) << where << ": not converged";
       EXPECT_LT(solver.last_residual(), 1e-9) << where;
       const Eigen::VectorXd lambda = solver.last_impulses();
-      const Dense dense = Assemble(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m);
+      const DenseProblem dense = AssembleDense(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m);
       const LawCount count = ExpectCoulomb(dense, p.rows.friction_coefficient, kDt_s, lambda,
                                            1e-9, where);
       total.separated += count.separated;
@@ -219,7 +201,7 @@ TEST(HapticFrictionSolver, WarmStartFollowsTheReferenceAsTheWrenchChanges) {
     HapticFrictionSolver cold(90, kManySweeps);
     ASSERT_TRUE(cold.Solve(p.rows, p.tool, F_hat, p.T_hat_N_m, &F_c, &T_c));
     if (step > 0) cold_sweeps += cold.last_iterations();
-    const Dense dense = Assemble(p.rows, p.tool, F_hat, p.T_hat_N_m);
+    const DenseProblem dense = AssembleDense(p.rows, p.tool, F_hat, p.T_hat_N_m);
     const Eigen::VectorXd reference = SolveDense(dense, p.rows.friction_coefficient, kDt_s);
     EXPECT_LE((warm.last_impulses() - reference).norm(), 1e-8 * reference.norm()) << step;
     ExpectCoulomb(dense, p.rows.friction_coefficient, kDt_s, warm.last_impulses(), 1e-9,

@@ -43,14 +43,10 @@ struct Reference {
 // The LCP assembled densely and solved by SolveContactImpulses (kUnilateral).
 Reference SolveReference(const ContactRows& rows, const ToolStepSystem& tool,
                          const Eigen::Vector3d& F_hat_N, const Eigen::Vector3d& T_hat_N_m) {
-  ContactJacobian J;
-  J.J_v = rows.J_v;
-  J.J_w = rows.J_w;
   Reference ref;
-  ref.W = CalcToolDelassus(J, tool) + rows.W_body;
-  const Eigen::Vector3d v_free = tool.A_v.inverse() * tool.dt_s * F_hat_N;
-  const Eigen::Vector3d w_free = tool.M_inv_W * tool.A_L.inverse() * tool.dt_s * T_hat_N_m;
-  ref.rhs = rows.body_rhs - rows.J_v * v_free - rows.J_w * w_free;
+  const DenseProblem dense = AssembleDense(rows, tool, F_hat_N, T_hat_N_m);
+  ref.W = dense.W;
+  ref.rhs = dense.rhs;
   const ContactSolveReport report = SolveContactImpulses(
       ref.W, ref.rhs, tool.dt_s, 1, ContactSolveOptions{ContactLaw::kUnilateral}, &ref.lambda);
   EXPECT_TRUE(report.converged) << "reference residual " << report.residual;

@@ -96,4 +96,26 @@ inline LcpProblem MakeLcpProblem(int n, unsigned seed, double press = 0.0, doubl
   return p;
 }
 
+// The step's problem assembled densely, independently of the solvers' structured W:
+// W = J_v A_v⁻¹ J_vᵀ + J_ω M⁻¹A_L⁻¹ J_ωᵀ + W_body (CalcToolDelassus) and rhs = body_rhs −
+// J_v v_free − J_ω ω_free.
+struct DenseProblem {
+  Eigen::MatrixXd W;
+  Eigen::VectorXd rhs;
+};
+
+inline DenseProblem AssembleDense(const ContactRows& rows, const ToolStepSystem& tool,
+                                  const Eigen::Vector3d& F_hat_N,
+                                  const Eigen::Vector3d& T_hat_N_m) {
+  ContactJacobian J;
+  J.J_v = rows.J_v;
+  J.J_w = rows.J_w;
+  DenseProblem dense;
+  dense.W = CalcToolDelassus(J, tool) + rows.W_body;
+  const Eigen::Vector3d v_free = tool.A_v.inverse() * tool.dt_s * F_hat_N;
+  const Eigen::Vector3d w_free = tool.M_inv_W * tool.A_L.inverse() * tool.dt_s * T_hat_N_m;
+  dense.rhs = rows.body_rhs - rows.J_v * v_free - rows.J_w * w_free;
+  return dense;
+}
+
 }  // namespace hapsim::contact

@@ -18,6 +18,7 @@
 #include "config/scene.h"
 #include "config/simulation_builder.h"
 #include "device/multirate_simulator.h"
+#include "tests/device/simulate_scene.h"
 
 namespace hapsim::device {
 namespace {
@@ -53,25 +54,12 @@ device:
     - {t_s: 3.0, position_m: [0.016, 0, 0.0025]}
 )";
 
-std::vector<HapticSample> Simulate(const config::Scene& scene, HapticMode mode) {
-  MultirateSimulator simulator(
-      nullptr, nullptr, Eigen::VectorXd(), scene.tool->model, scene.tool->initial_state,
-      config::MakeVisualFrameOptions(scene),
-      config::MakeMultirateOptions(scene, mode, scene.haptic.steps_per_frame));
-  std::vector<HapticSample> samples;
-  const long steps = std::lround(scene.num_steps * scene.dt_s * scene.haptic.rate_hz);
-  simulator.Run(
-      ScriptedTrajectory(scene.trajectory), steps,
-      [&](const HapticSample& s) { samples.push_back(s); }, nullptr);
-  return samples;
-}
-
 TEST(FrictionLcp, ABoxPushedSidewaysSticksBelowMuNAndSlidesAtIt) {
   const config::Scene scene = config::ParseScene(kScene, "box_slide.yaml", "");
   ASSERT_EQ(scene.haptic.mode, HapticMode::kLcp);
   const double normal_N = kCoupling_N_m * kPressDepth_m + kMass_kg * kGravity_m_s2;
   const double limit_N = kMu * normal_N;
-  const std::vector<HapticSample> run = Simulate(scene, HapticMode::kLcp);
+  const std::vector<HapticSample> run = SimulateScene(scene, HapticMode::kLcp);
   ASSERT_EQ(run.size(), 3000u);
   int fell_back = 0;
   for (const HapticSample& s : run) fell_back += s.lcp_fell_back;
@@ -111,7 +99,7 @@ TEST(FrictionLcp, ABoxPushedSidewaysSticksBelowMuNAndSlidesAtIt) {
   EXPECT_LT(worst_ratio_error, 1e-6);
 
   // The linear model's friction rows are equalities: it never slips (the drag grows with the push).
-  const std::vector<HapticSample> linear = Simulate(scene, HapticMode::kLinear);
+  const std::vector<HapticSample> linear = SimulateScene(scene, HapticMode::kLinear);
   EXPECT_LT(std::abs(linear[2900].tool_x_W_m.x()), 1e-5);
   EXPECT_GT(std::abs(linear[2900].device_force_W_N.x()), 5.0 * limit_N);
 }

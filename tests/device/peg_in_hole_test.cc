@@ -13,6 +13,7 @@
 #include "config/scene.h"
 #include "config/simulation_builder.h"
 #include "device/multirate_simulator.h"
+#include "tests/device/simulate_scene.h"
 
 namespace hapsim::device {
 namespace {
@@ -20,19 +21,6 @@ namespace {
 constexpr double kFloorTop_m = -0.015;  // the hole's floor
 constexpr double kPegHalfLength_m = 0.015;
 constexpr double kDeviceBelow_m = 0.002;  // the device, under the peg resting on the floor
-
-std::vector<HapticSample> Simulate(const config::Scene& scene, HapticMode mode) {
-  MultirateSimulator simulator(
-      nullptr, nullptr, Eigen::VectorXd(), scene.tool->model, scene.tool->initial_state,
-      config::MakeVisualFrameOptions(scene),
-      config::MakeMultirateOptions(scene, mode, scene.haptic.steps_per_frame));
-  std::vector<HapticSample> samples;
-  const long steps = std::lround(scene.num_steps * scene.dt_s * scene.haptic.rate_hz);
-  simulator.Run(
-      ScriptedTrajectory(scene.trajectory), steps,
-      [&](const HapticSample& s) { samples.push_back(s); }, nullptr);
-  return samples;
-}
 
 TEST(PegInHole, RigidSceneBuildsNoFem) {
   const config::Scene scene = config::LoadScene("scenes/peg_in_hole.yaml");
@@ -56,7 +44,7 @@ TEST(PegInHole, PegRestsOnTheFloorWithTheStaticForceOfEachMode) {
        {Expected{HapticMode::kReference, 0.0, k_c * kDeviceBelow_m},
         Expected{HapticMode::kLinear, 0.0, k_c * kDeviceBelow_m},
         Expected{HapticMode::kPenalty, sink_m, k_c * (kDeviceBelow_m - sink_m)}}) {
-    const std::vector<HapticSample> run = Simulate(scene, e.mode);
+    const std::vector<HapticSample> run = SimulateScene(scene, e.mode);
     // Held still on the floor from 2.4 to 3.0 s: at 2.9 s, settled.
     const HapticSample& rest = run[2900];
     ASSERT_NEAR(rest.t_s, 2.9, 1e-9);

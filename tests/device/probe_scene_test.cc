@@ -19,21 +19,14 @@
 #include "config/simulation_builder.h"
 #include "contact/tool_distance.h"
 #include "device/multirate_simulator.h"
+#include "tests/device/simulate_scene.h"
 
 namespace hapsim::device {
 namespace {
 
 std::vector<HapticSample> Simulate(const config::Scene& scene, const config::Body& body,
                                    HapticMode mode, double duration_s) {
-  MultirateSimulator simulator(
-      body.model, scene.body->options, body.external_force_N, scene.tool->model,
-      scene.tool->initial_state, config::MakeVisualFrameOptions(scene),
-      config::MakeMultirateOptions(scene, mode, scene.haptic.steps_per_frame));
-  std::vector<HapticSample> samples;
-  simulator.Run(
-      ScriptedTrajectory(scene.trajectory), std::lround(duration_s * 1000),
-      [&](const HapticSample& s) { samples.push_back(s); }, nullptr);
-  return samples;
+  return SimulateScene(scene, mode, &body, std::lround(duration_s * 1000));
 }
 
 // Unsigned distance from p to the body's surface triangles at node positions x, by brute force
