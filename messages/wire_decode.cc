@@ -199,4 +199,35 @@ bool PeekRunId(const void* data, int size, std::int64_t* run_id) {
   return true;
 }
 
+template <>
+void SizeArraysToCounts(hapsim_lcm::contact_model_t* msg) {
+  msg->J_v.resize(msg->num_rows);
+  msg->J_w.resize(msg->num_rows);
+  msg->W_body_lower.resize(msg->num_W_body_lower);
+  msg->body_rhs.resize(msg->num_rows);
+  msg->lambda_frame_N.resize(msg->num_rows);
+  msg->friction_coefficient.resize(msg->num_friction_coefficients);
+  msg->body_x_W_m.resize(msg->num_body_nodes);
+  msg->object_x_W_m.resize(msg->num_objects);
+  msg->object_q_WO.resize(msg->num_objects);
+}
+
+template <>
+void SizeArraysToCounts(hapsim_lcm::sim_frame_t* msg) {
+  msg->positions_W_m.resize(msg->num_nodes);
+  msg->triangles.resize(msg->num_triangles);
+  msg->p_W_m.resize(msg->num_contacts);
+  msg->n_W.resize(msg->num_contacts);
+  msg->lambda_N.resize(msg->num_contacts);
+  msg->contact_kind.resize(msg->num_contacts);
+  msg->object_x_W_m.resize(msg->num_objects);
+  msg->object_q_WO.resize(msg->num_objects);
+}
+
+template <>
+void SizeArraysToCounts(hapsim_lcm::run_info_t* msg) {
+  msg->file_paths.resize(msg->num_files);
+  msg->file_sha256.resize(msg->num_files);
+}
+
 }  // namespace hapsim::messages

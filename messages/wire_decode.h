@@ -27,14 +27,33 @@ namespace hapsim::messages {
 template <typename T>
 bool CheckWireLayout(const void* data, int size, std::string* error);
 
+// lcm-gen's decode() resizes a variable array only when its count is non-zero: decoded into a
+// reused message (the receive threads keep one, so that its vectors keep their storage), a
+// count of 0 left the previous message's entries in place, and a contact model without rows
+// after one with rows was rejected for its stale W_body_lower. This sizes every variable array
+// to its count after decoding (shrinking keeps the storage: no allocation). Fixed-size types
+// have none.
+template <typename T>
+void SizeArraysToCounts(T*) {}
+template <>
+void SizeArraysToCounts(hapsim_lcm::contact_model_t* msg);
+template <>
+void SizeArraysToCounts(hapsim_lcm::sim_frame_t* msg);
+template <>
+void SizeArraysToCounts(hapsim_lcm::run_info_t* msg);
+
 // Decodes `size` bytes at `data` into *msg, consuming all of them: CheckWireLayout, then T's
-// decode(). Never throws and never allocates beyond what the bytes hold. On failure returns false
-// with the reason in *error and *msg in an unspecified (but valid) state.
+// decode(), then SizeArraysToCounts. Never throws and never allocates beyond what the bytes
+// hold. On failure returns false with the reason in *error and *msg in an unspecified (but
+// valid) state.
 template <typename T>
 bool Decode(const void* data, int size, T* msg, std::string* error) {
   if (!CheckWireLayout<T>(data, size, error)) return false;
   try {
-    if (msg->decode(data, 0, size) == size) return true;
+    if (msg->decode(data, 0, size) == size) {
+      SizeArraysToCounts(msg);
+      return true;
+    }
     if (error != nullptr) *error = std::string(T::getTypeName()) + ": does not decode";
   } catch (const std::exception& e) {
     if (error != nullptr) *error = std::string(T::getTypeName()) + ": " + e.what();

@@ -155,6 +155,28 @@ TEST(WireDecode, HostileRowCountsAreRejectedBeforeDecoding) {
   }
 }
 
+// A message decoded into the struct of a previous one (the receive threads reuse theirs): a
+// model without rows after one with rows must come out without rows, and be accepted. lcm-gen's
+// decode() leaves an array whose count is 0 as it was (it once made the haptic process reject
+// every model after the tool lifted off in the lcp mode).
+TEST(WireDecode, ACountOfZeroEmptiesTheArrayOfAReusedMessage) {
+  hapsim_lcm::contact_model_t reused;
+  std::string error;
+  const auto with_rows = Encode(MakeContactModel(3));
+  ASSERT_TRUE(Decode(with_rows.data(), with_rows.size(), &reused, &error)) << error;
+  EXPECT_EQ(reused.W_body_lower.size(), 6u);
+  const auto without_rows = Encode(MakeContactModel(0));
+  ASSERT_TRUE(Decode(without_rows.data(), without_rows.size(), &reused, &error)) << error;
+  EXPECT_EQ(reused.num_rows, 0);
+  EXPECT_TRUE(reused.J_v.empty() && reused.J_w.empty() && reused.W_body_lower.empty() &&
+              reused.body_rhs.empty() && reused.lambda_frame_N.empty());
+  contact::LinearContactModel model;
+  contact::ContactRows rows;
+  ContactModelHeader header;
+  EXPECT_TRUE(FromMessage(reused, &model, &rows, &header, &error)) << error;
+  EXPECT_EQ(rows.num_rows(), 0);
+}
+
 // The friction coefficients' count likewise (issue 13: the lcp rows with friction).
 TEST(WireDecode, HostileFrictionCountsAreRejectedBeforeDecoding) {
   for (const std::int64_t count : {-1LL, 100000000LL, 2147483647LL}) {
