@@ -39,8 +39,7 @@ double CalcNormalResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, 
 
 Eigen::Vector2d ProjectOntoDisc(const Eigen::Vector2d& lambda_t, double radius) {
   const double norm = lambda_t.norm();
-  return norm > radius ? Eigen::Vector2d((norm > 0.0 ? radius / norm : 0.0) * lambda_t)
-                       : lambda_t;
+  return norm > radius ? Eigen::Vector2d((norm > 0.0 ? radius / norm : 0.0) * lambda_t) : lambda_t;
 }
 
 Eigen::Vector2d StepTangentialImpulse(const Eigen::Vector2d& lambda_t, const Eigen::Vector2d& c_t,
@@ -58,9 +57,9 @@ double CalcFrictionResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs
   for (Eigen::Index normal = 0; normal < lambda.size(); normal += 3) {
     const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
     const Eigen::Vector2d lambda_t = lambda.segment<2>(normal + 1);
-    const Eigen::Vector2d moved =
-        StepTangentialImpulse(lambda_t, c.segment<2>(normal + 1), W.block<2, 2>(normal + 1, normal + 1),
-                              dt_s, mu_contact * lambda[normal]);
+    const Eigen::Vector2d moved = StepTangentialImpulse(lambda_t, c.segment<2>(normal + 1),
+                                                        W.block<2, 2>(normal + 1, normal + 1), dt_s,
+                                                        mu_contact * lambda[normal]);
     residual = std::max({residual,
                          std::abs(std::min(lambda[normal], c[normal] / (dt_s * W(normal, normal)))),
                          (moved - lambda_t).norm()});
@@ -97,10 +96,9 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
         const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
         const Eigen::Vector2d r_t(dt_s * W.row(normal + 1).dot(*lambda) - rhs[normal + 1],
                                   dt_s * W.row(normal + 2).dot(*lambda) - rhs[normal + 2]);
-        lambda->segment<2>(normal + 1) =
-            StepTangentialImpulse(lambda->segment<2>(normal + 1), r_t,
-                                  W.block<2, 2>(normal + 1, normal + 1), dt_s,
-                                  mu_contact * (*lambda)[normal]);
+        lambda->segment<2>(normal + 1) = StepTangentialImpulse(
+            lambda->segment<2>(normal + 1), r_t, W.block<2, 2>(normal + 1, normal + 1), dt_s,
+            mu_contact * (*lambda)[normal]);
       }
     }
     report.residual = stride == 3 ? CalcFrictionResidual(W, rhs, dt_s, mu, mu_per_contact, *lambda)

@@ -76,8 +76,7 @@ bool HasConsistentShape(const ContactRows& rows) {
     return false;
   if (rows.rows_per_contact == 1) return rows.friction_coefficient.size() == 0;
   return rows.rows_per_contact == 3 && rows.friction_coefficient.size() * 3 == n &&
-         (rows.friction_coefficient.array() >= 0.0).all() &&
-         rows.friction_coefficient.allFinite();
+         (rows.friction_coefficient.array() >= 0.0).all() && rows.friction_coefficient.allFinite();
 }
 
 }  // namespace hapsim::contact

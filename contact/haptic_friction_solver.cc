@@ -50,9 +50,9 @@ struct HapticFrictionSolver::Workspace {
 
   const int max_rows;
   const int max_sweeps;
-  int n = -1;            // rows of the cached set; −1 before the first, or after a failure
-  Eigen::MatrixXd W;     // (max × max) W_body, full storage (its columns update y)
-  MatrixX6d U;           // (max × 6) [J_v J_ω]
+  int n = -1;         // rows of the cached set; −1 before the first, or after a failure
+  Eigen::MatrixXd W;  // (max × max) W_body, full storage (its columns update y)
+  MatrixX6d U;        // (max × 6) [J_v J_ω]
   Eigen::VectorXd body_rhs, mu;
   Matrix6d S = Matrix6d::Zero();  // this step's tool compliance
   Eigen::VectorXd rhs;            // this step's body_rhs − U s_free
@@ -63,8 +63,9 @@ struct HapticFrictionSolver::Workspace {
 bool HapticFrictionSolver::Workspace::SameRows(const ContactRows& rows) const {
   const int m = rows.num_rows();
   if (m != n) return false;
+  // Empty rows have null data(), which memcmp must not be given even for 0 bytes.
   const auto same = [](const double* a, const double* b, int size) {
-    return std::memcmp(a, b, sizeof(double) * size) == 0;
+    return size == 0 || std::memcmp(a, b, sizeof(double) * size) == 0;
   };
   if (!same(body_rhs.data(), rows.body_rhs.data(), m) ||
       !same(mu.data(), rows.friction_coefficient.data(), m / 3))
@@ -157,8 +158,8 @@ double HapticFrictionSolver::Workspace::CalcResidual(double dt_s) const {
     const Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
     const Eigen::Matrix3d W_ii = CalcDiagonalBlock(i);
     const Eigen::Vector2d lambda_t = lambda.segment<2>(a + 1);
-    const Eigen::Vector2d moved =
-        StepTangentialImpulse(lambda_t, c.tail<2>(), W_ii.block<2, 2>(1, 1), dt_s, mu[i] * lambda[a]);
+    const Eigen::Vector2d moved = StepTangentialImpulse(
+        lambda_t, c.tail<2>(), W_ii.block<2, 2>(1, 1), dt_s, mu[i] * lambda[a]);
     residual = std::max({residual, std::abs(std::min(lambda[a], c[0] / (dt_s * W_ii(0, 0)))),
                          (moved - lambda_t).norm()});
   }

@@ -351,9 +351,9 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   }
   msg.rows_per_contact = static_cast<std::int8_t>(rows.rows_per_contact);
   msg.num_friction_coefficients = static_cast<std::int32_t>(rows.friction_coefficient.size());
-  msg.friction_coefficient.assign(rows.friction_coefficient.data(),
-                                  rows.friction_coefficient.data() +
-                                      rows.friction_coefficient.size());
+  msg.friction_coefficient.assign(
+      rows.friction_coefficient.data(),
+      rows.friction_coefficient.data() + rows.friction_coefficient.size());
   return msg;
 }
 

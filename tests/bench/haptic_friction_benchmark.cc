@@ -31,8 +31,8 @@ const LcpProblem& GetProblem(int contacts, int which) {
   static std::vector<std::pair<std::pair<int, int>, LcpProblem*>> cache;
   for (const auto& [key, problem] : cache)
     if (key == std::make_pair(contacts, which)) return *problem;
-  LcpProblem* p = new LcpProblem(MakeLcpProblem(contacts, 7000 + 10 * contacts + which, 1.0,
-                                                100.0, 3, kMu));
+  LcpProblem* p =
+      new LcpProblem(MakeLcpProblem(contacts, 7000 + 10 * contacts + which, 1.0, 100.0, 3, kMu));
   // The frame's impulses: the converged solve at the frame's wrench.
   HapticFrictionSolver solver(3 * contacts, 100000);
   Eigen::Vector3d F_c, T_c;

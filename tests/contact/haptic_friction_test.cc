@@ -36,8 +36,8 @@ struct LawCount {
 LawCount ExpectCoulomb(const DenseProblem& dense, const Eigen::VectorXd& mu, double dt_s,
                        const Eigen::VectorXd& lambda, double tolerance, const std::string& where) {
   const Eigen::VectorXd c = dt_s * dense.W * lambda - dense.rhs;
-  const double c_scale = (dt_s * dense.W.cwiseAbs() * lambda.cwiseAbs()).maxCoeff() +
-                         dense.rhs.cwiseAbs().maxCoeff();
+  const double c_scale =
+      (dt_s * dense.W.cwiseAbs() * lambda.cwiseAbs()).maxCoeff() + dense.rhs.cwiseAbs().maxCoeff();
   const double lambda_scale = std::max(lambda.cwiseAbs().maxCoeff(), 1e-300);
   LawCount count;
   for (Eigen::Index i = 0; i < mu.size(); ++i) {
@@ -86,9 +86,9 @@ TEST(StepTangentialImpulse, StepsProjectsAndDegeneratesToZero) {
   const Eigen::Vector2d lambda_t(0.1, 0.0), c_t(-0.0035, 0.0035);
   const Eigen::Vector2d free = lambda_t - c_t / (kDt_s * 3.5);  // (1.1, −1.0)
   EXPECT_LT((StepTangentialImpulse(lambda_t, c_t, W_tt, kDt_s, 10.0) - free).norm(), 1e-12);
-  EXPECT_LT((StepTangentialImpulse(lambda_t, c_t, W_tt, kDt_s, 0.5) - 0.5 * free.normalized())
-                .norm(),
-            1e-12);
+  EXPECT_LT(
+      (StepTangentialImpulse(lambda_t, c_t, W_tt, kDt_s, 0.5) - 0.5 * free.normalized()).norm(),
+      1e-12);
   EXPECT_EQ(StepTangentialImpulse(lambda_t, c_t, W_tt, kDt_s, 0.0), Eigen::Vector2d::Zero());
   EXPECT_EQ(StepTangentialImpulse(lambda_t, c_t, Eigen::Matrix2d::Zero(), kDt_s, 1.0),
             Eigen::Vector2d::Zero());
@@ -118,16 +118,15 @@ TEST(HapticFrictionSolver, SatisfiesCoulombAndMatchesTheDenseReference) {
     int contacts;
     double press, mu;
   };
-  const Case cases[] = {{2, 0.3, 0.5}, {8, 0.0, 0.3}, {8, 0.3, 1.0},
+  const Case cases[] = {{2, 0.3, 0.5},  {8, 0.0, 0.3},  {8, 0.3, 1.0},
                         {20, 0.1, 0.5}, {50, 0.2, 0.2}, {50, 0.5, 2.0}};
   LawCount total;
   for (const Case& k : cases) {
     for (unsigned seed = 1; seed <= 2; ++seed) {
-      const std::string where =
-          "m " + std::to_string(k.contacts) + " mu " + std::to_string(k.mu) + " seed " +
-          std::to_string(seed);
-      const LcpProblem p = MakeLcpProblem(k.contacts, 1000 * k.contacts + seed, k.press, 1.0, 3,
-                                          k.mu);
+      const std::string where = "m " + std::to_string(k.contacts) + " mu " + std::to_string(k.mu) +
+                                " seed " + std::to_string(seed);
+      const LcpProblem p =
+          MakeLcpProblem(k.contacts, 1000 * k.contacts + seed, k.press, 1.0, 3, k.mu);
       HapticFrictionSolver solver(3 * 50, kManySweeps);
       Eigen::Vector3d F_c, T_c;
       ASSERT_TRUE(solver.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c)) << where;
@@ -135,8 +134,8 @@ TEST(HapticFrictionSolver, SatisfiesCoulombAndMatchesTheDenseReference) {
       EXPECT_LT(solver.last_residual(), 1e-9) << where;
       const Eigen::VectorXd lambda = solver.last_impulses();
       const DenseProblem dense = AssembleDense(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m);
-      const LawCount count = ExpectCoulomb(dense, p.rows.friction_coefficient, kDt_s, lambda,
-                                           1e-9, where);
+      const LawCount count =
+          ExpectCoulomb(dense, p.rows.friction_coefficient, kDt_s, lambda, 1e-9, where);
       total.separated += count.separated;
       total.sticking += count.sticking;
       total.sliding += count.sliding;
@@ -246,7 +245,8 @@ TEST(HapticFrictionSolver, RejectsRowsItCannotSolveWithZeroForce) {
   const LcpProblem normal = MakeLcpProblem(5, 51, 0.3);
   HapticFrictionSolver solver(15, 100);
   Eigen::Vector3d F_c(1, 1, 1), T_c(1, 1, 1);
-  EXPECT_FALSE(solver.Solve(normal.rows, normal.tool, normal.F_hat_N, normal.T_hat_N_m, &F_c, &T_c));
+  EXPECT_FALSE(
+      solver.Solve(normal.rows, normal.tool, normal.F_hat_N, normal.T_hat_N_m, &F_c, &T_c));
   EXPECT_EQ(F_c, Eigen::Vector3d::Zero());
   ContactRows bad = friction.rows;
   bad.W_body(0, 1) += 1.0;  // not symmetric
@@ -255,15 +255,15 @@ TEST(HapticFrictionSolver, RejectsRowsItCannotSolveWithZeroForce) {
   bad.friction_coefficient[2] = std::nan("");
   EXPECT_FALSE(solver.Solve(bad, friction.tool, friction.F_hat_N, friction.T_hat_N_m, &F_c, &T_c));
   HapticFrictionSolver small(12, 100);  // 15 rows do not fit
-  EXPECT_FALSE(small.Solve(friction.rows, friction.tool, friction.F_hat_N, friction.T_hat_N_m,
-                           &F_c, &T_c));
+  EXPECT_FALSE(
+      small.Solve(friction.rows, friction.tool, friction.F_hat_N, friction.T_hat_N_m, &F_c, &T_c));
   // The frictionless solver refuses friction rows rather than read tangents as normals.
   HapticLcpSolver lcp(15);
-  EXPECT_FALSE(lcp.Solve(friction.rows, friction.tool, friction.F_hat_N, friction.T_hat_N_m, &F_c,
-                         &T_c));
+  EXPECT_FALSE(
+      lcp.Solve(friction.rows, friction.tool, friction.F_hat_N, friction.T_hat_N_m, &F_c, &T_c));
   // And recovers on good rows.
-  EXPECT_TRUE(solver.Solve(friction.rows, friction.tool, friction.F_hat_N, friction.T_hat_N_m,
-                           &F_c, &T_c));
+  EXPECT_TRUE(
+      solver.Solve(friction.rows, friction.tool, friction.F_hat_N, friction.T_hat_N_m, &F_c, &T_c));
   EXPECT_GT(F_c.norm(), 0.0);
 }
 
@@ -307,8 +307,8 @@ TEST(HapticLcpSolver, HandsFrictionRowsToItsFrictionSolve) {
   const LcpProblem normal = MakeLcpProblem(10, 91, 0.3);
   HapticLcpSolver frictionless(30);
   EXPECT_EQ(frictionless.friction_sweeps(), 0);
-  ASSERT_TRUE(frictionless.Solve(normal.rows, normal.tool, normal.F_hat_N, normal.T_hat_N_m,
-                                 &F_lcp, &T_lcp));
+  ASSERT_TRUE(frictionless.Solve(normal.rows, normal.tool, normal.F_hat_N, normal.T_hat_N_m, &F_lcp,
+                                 &T_lcp));
   EXPECT_EQ(frictionless.last_impulses().size(), 10);
   EXPECT_FALSE(frictionless.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_lcp, &T_lcp));
   EXPECT_EQ(F_lcp, Eigen::Vector3d::Zero());

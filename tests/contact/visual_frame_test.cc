@@ -125,13 +125,13 @@ TEST(VisualFrame, LcpRowsKeepTheActiveAndTheReachableContacts) {
       options.export_contact_rows = true;
       options.lcp_reach_m_s = reach_m_s;
       options.detection.margin_m = 0.003;  // candidates up to 3 mm away: some cannot engage
-      auto frame = std::make_unique<VisualFrame>(
-          body, fem::FemOptions{}, fem::CalcGravityForce(body, {0, 0, -9.81}), MakeBoxTool(0.2),
-          options);
+      auto frame = std::make_unique<VisualFrame>(body, fem::FemOptions{},
+                                                 fem::CalcGravityForce(body, {0, 0, -9.81}),
+                                                 MakeBoxTool(0.2), options);
       fem::State body_state = fem::MakeRestState(body);
       tool->x_W_m = Eigen::Vector3d(0.0, 0.0, 0.01);
       tool->q_WT = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX());  // tilted: gaps of all sizes
-      tool->v_W_m_s = Eigen::Vector3d(0.01, 0.0, -0.005);               // moving: it counts
+      tool->v_W_m_s = Eigen::Vector3d(0.01, 0.0, -0.005);              // moving: it counts
       for (int k = 0; k < 6; ++k) frame->Step(DeviceState{}, &body_state, tool);
       return frame;
     };

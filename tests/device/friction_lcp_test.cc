@@ -94,8 +94,8 @@ TEST(FrictionLcp, ABoxPushedSidewaysSticksBelowMuNAndSlidesAtIt) {
     worst_ratio_error = std::max(worst_ratio_error, std::abs(ratio - kMu));
     EXPECT_NEAR(s.device_force_W_N.x(), -limit_N, 0.02 * limit_N) << step;
   }
-  std::printf("N = %.4f N, mu N = %.4f N; sliding |F_t|/F_n within %.2e of mu\n", normal_N,
-              limit_N, worst_ratio_error);
+  std::printf("N = %.4f N, mu N = %.4f N; sliding |F_t|/F_n within %.2e of mu\n", normal_N, limit_N,
+              worst_ratio_error);
   EXPECT_LT(worst_ratio_error, 1e-6);
 
   // The linear model's friction rows are equalities: it never slips (the drag grows with the push).
