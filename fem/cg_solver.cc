@@ -77,12 +77,15 @@ SolveReport ConjugateGradientSolver::Solve(const Eigen::SparseMatrix<double>& A,
     const double alpha = rz / p_.dot(Ap_);
     *x += alpha * p_;
     r_ -= alpha * Ap_;
+    r_norm = r_.norm();
+    ++report.iterations;
+    // Converged: the next direction would never be used. With a fresh lagged factor CG stops
+    // after one iteration, so skipping this apply halves the triangular solves of a step.
+    if (r_norm <= target) break;
     ApplyPreconditioner(r_, &z_);
     const double rz_next = r_.dot(z_);
     p_ = z_ + (rz_next / rz) * p_;
     rz = rz_next;
-    r_norm = r_.norm();
-    ++report.iterations;
   }
   if (factored_this_solve_) baseline_iterations_ = report.iterations;
   excess_iterations_ += std::max(0, report.iterations - baseline_iterations_);

@@ -45,6 +45,11 @@ CholmodFactor::CholmodFactor() {
   common_.supernodal = CHOLMOD_SUPERNODAL;
   common_.final_asis = 1;  // keep the factor supernodal: the solves work on it directly
   common_.print = 0;
+  // Nested dissection (METIS, then CAMD within each part): on the 28.8k-tet block L has 4.08 M
+  // nonzeros against 4.30 M with CHOLMOD's default choice (METIS) and 4.95 M with AMD, and a
+  // solve is 7% faster; on the 3.6k-tet block the three are within 3%. Measured 2026-11-25.
+  common_.nmethods = 1;
+  common_.method[0].ordering = CHOLMOD_NESDIS;
 }
 
 CholmodFactor::~CholmodFactor() {

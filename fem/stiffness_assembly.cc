@@ -53,8 +53,10 @@ void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::M
     const Eigen::Matrix<double, 3, 4> c = rotations[t] * b;
     const Eigen::Matrix4d gram = b.transpose() * b;  // b_a · b_b
     const std::array<int, 48>& index = block_value_index_[t];
+    // K_ab = V (μ c_b c_aᵀ + λ c_a c_bᵀ + μ (b_a·b_b) I) and K_ba = K_abᵀ: each pair is computed
+    // once (10 blocks, not 16) and scattered to both places.
     for (int a = 0; a < 4; ++a) {
-      for (int bb = 0; bb < 4; ++bb) {
+      for (int bb = a; bb < 4; ++bb) {
         Eigen::Matrix3d block = (mu_Pa * rest.volume_m3) * (c.col(bb) * c.col(a).transpose()) +
                                 (lambda_Pa * rest.volume_m3) * (c.col(a) * c.col(bb).transpose());
         block.diagonal().array() += mu_Pa * rest.volume_m3 * gram(a, bb);
@@ -63,6 +65,13 @@ void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::M
           column[0] += block(0, col);
           column[1] += block(1, col);
           column[2] += block(2, col);
+        }
+        if (bb == a) continue;
+        for (int col = 0; col < 3; ++col) {
+          double* column = values + index[12 * bb + 3 * a + col];
+          column[0] += block(col, 0);
+          column[1] += block(col, 1);
+          column[2] += block(col, 2);
         }
       }
     }
