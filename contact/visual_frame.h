@@ -206,6 +206,7 @@ class VisualFrame {
   ToolStepSystem tool_system_;
   Eigen::Vector3d dv_tool_, dL_tool_;
   Eigen::VectorXd du_body_;
+  Eigen::VectorXd du_contact_;  // last frame's A⁻¹ Δt J_uᵀλ: the post-collision solve's warm start
   std::vector<Contact> contacts_;
   ContactJacobian jacobian_;
   Eigen::MatrixXd W_body_;         // J_u A_u⁻¹ J_uᵀ at the visual step, the frame's solve
