@@ -1,10 +1,16 @@
 #include "contact/haptic_contact_rows.h"
 
 #include <Eigen/LU>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 
 namespace hapsim::contact {
+
+void StampNewContactRows(ContactRows* rows) {
+  static std::atomic<std::uint64_t> last_stamp{0};
+  rows->stamp = ++last_stamp;
+}
 
 ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body,
                             const Eigen::VectorXd& body_rhs) {

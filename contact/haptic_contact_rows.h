@@ -5,6 +5,7 @@
 // (haptic_lcp_solver.h) solves the LCP on them at every haptic step.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "contact/contact_jacobian.h"
@@ -28,8 +29,18 @@ struct ContactRows {
   // contact; HapticFrictionSolver solves them. With 1 (normal rows only) it is empty.
   int rows_per_contact = 1;
   Eigen::VectorXd friction_coefficient;
+  // Identity for the solvers' caches. 0 (the default) promises nothing: a solver compares the
+  // rows it is given with its copy bitwise, O(n²) (60 µs at 600 rows, a sixth of a friction
+  // step). Rows stamped by StampNewContactRows promise that rows with equal stamps are equal, so
+  // a solver compares the stamp alone; the two producers that feed the haptic loop (the visual
+  // frame's export and the LCM decode) stamp what they fill, and rows changed in place must be
+  // stamped again.
+  std::uint64_t stamp = 0;
   int num_rows() const { return static_cast<int>(J_v.rows()); }
 };
+
+// Gives `rows` a stamp no other rows in this process have had (an atomic counter from 1).
+void StampNewContactRows(ContactRows* rows);
 
 // The checks both haptic solvers make of rows they are handed: W_body square of num_rows,
 // body_rhs, J_w and lambda_frame_N (if given) of num_rows rows, friction_coefficient one finite

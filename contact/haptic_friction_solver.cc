@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <vector>
 
 #include "contact/contact_solver.h"
 
@@ -31,15 +32,22 @@ struct HapticFrictionSolver::Workspace {
         mu(max_rows_in / 3 + 1),
         rhs(max_rows_in),
         lambda(max_rows_in),
-        y(max_rows_in) {}
+        y(max_rows_in),
+        W_diagonal(max_rows_in / 3 + 1) {}
 
   bool SameRows(const ContactRows& rows) const;
   bool CopyRows(const ContactRows& rows);
   void StartFrom(const Eigen::VectorXd& lambda_start);
-  // The 3 × 3 block of W = W_body + U S Uᵀ at contact i (rows 3i..3i+2).
-  Eigen::Matrix3d CalcDiagonalBlock(int i) const {
-    const auto U_i = U.middleRows<3>(3 * i);
-    return W.block<3, 3>(3 * i, 3 * i) + U_i * S * U_i.transpose();
+  // The 3 × 3 blocks of W = W_body + U S Uᵀ at each contact (rows 3i..3i+2), for this step's S:
+  // the sweeps read each once per contact, so they are formed once a step. False if a normal
+  // has no compliance (no Gauss–Seidel step exists for it).
+  bool CalcDiagonalBlocks() {
+    for (int i = 0; i < n / 3; ++i) {
+      const auto U_i = U.middleRows<3>(3 * i);
+      W_diagonal[i] = W.block<3, 3>(3 * i, 3 * i) + U_i * S * U_i.transpose();
+      if (!(W_diagonal[i](0, 0) > 0.0)) return false;
+    }
+    return true;
   }
   // c_i = Δt (y_i + U_i S g) − rhs_i, from the kept sums (h = S g).
   Eigen::Vector3d CalcVelocity(int i, const Vector6d& h, double dt_s) const {
@@ -51,18 +59,22 @@ struct HapticFrictionSolver::Workspace {
   const int max_rows;
   const int max_sweeps;
   int n = -1;         // rows of the cached set; −1 before the first, or after a failure
+  std::uint64_t stamp = 0;  // ContactRows::stamp of the cached set
   Eigen::MatrixXd W;  // (max × max) W_body, full storage (its columns update y)
   MatrixX6d U;        // (max × 6) [J_v J_ω]
   Eigen::VectorXd body_rhs, mu;
   Matrix6d S = Matrix6d::Zero();  // this step's tool compliance
   Eigen::VectorXd rhs;            // this step's body_rhs − U s_free
   Eigen::VectorXd lambda, y;      // λ and W_body λ
+  std::vector<Eigen::Matrix3d> W_diagonal;  // per contact, this step's (CalcDiagonalBlocks)
   Vector6d g = Vector6d::Zero();  // Uᵀλ
 };
 
+// Stamped rows: the stamp (ContactRows::stamp). Else bitwise, as HapticLcpSolver.
 bool HapticFrictionSolver::Workspace::SameRows(const ContactRows& rows) const {
   const int m = rows.num_rows();
   if (m != n) return false;
+  if (rows.stamp != 0) return rows.stamp == stamp;
   // Empty rows have null data(), which memcmp must not be given even for 0 bytes.
   const auto same = [](const double* a, const double* b, int size) {
     return size == 0 || std::memcmp(a, b, sizeof(double) * size) == 0;
@@ -81,6 +93,7 @@ bool HapticFrictionSolver::Workspace::SameRows(const ContactRows& rows) const {
 
 bool HapticFrictionSolver::Workspace::CopyRows(const ContactRows& rows) {
   n = rows.num_rows();
+  stamp = rows.stamp;
   body_rhs.head(n) = rows.body_rhs;
   mu.head(n / 3) = rows.friction_coefficient;
   U.topLeftCorner(n, 3) = rows.J_v;
@@ -129,7 +142,7 @@ double HapticFrictionSolver::Workspace::Sweep(double dt_s) {
     Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
     const Eigen::Vector3d old = lambda.segment<3>(a);
     if (old[0] == 0.0 && c[0] >= 0.0) continue;  // separated and staying so (λ_t is 0 too)
-    const Eigen::Matrix3d W_ii = CalcDiagonalBlock(i);
+    const Eigen::Matrix3d& W_ii = W_diagonal[i];
     Eigen::Vector3d next;
     next[0] = std::max(0.0, old[0] - c[0] / (dt_s * W_ii(0, 0)));
     // The tangential rows see the normal row's new impulse, as in the dense sweep.
@@ -156,7 +169,7 @@ double HapticFrictionSolver::Workspace::CalcResidual(double dt_s) const {
   for (int i = 0; i < n / 3; ++i) {
     const int a = 3 * i;
     const Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
-    const Eigen::Matrix3d W_ii = CalcDiagonalBlock(i);
+    const Eigen::Matrix3d& W_ii = W_diagonal[i];
     const Eigen::Vector2d lambda_t = lambda.segment<2>(a + 1);
     const Eigen::Vector2d moved = StepTangentialImpulse(
         lambda_t, c.tail<2>(), W_ii.block<2, 2>(1, 1), dt_s, mu[i] * lambda[a]);
@@ -215,11 +228,10 @@ bool HapticFrictionSolver::Solve(const ContactRows& rows, const ToolStepSystem& 
     ws.StartFrom(rows.lambda_frame_N);
   }
   if (n == 0) return true;
-  for (int i = 0; i < n / 3; ++i)  // a normal without compliance has no Gauss–Seidel step
-    if (!(ws.CalcDiagonalBlock(i)(0, 0) > 0.0)) {
-      ws.n = -1;
-      return false;
-    }
+  if (!ws.CalcDiagonalBlocks()) {
+    ws.n = -1;
+    return false;
+  }
   ws.rhs.head(n) = ws.body_rhs.head(n);
   ws.rhs.head(n).noalias() -= ws.U.topRows(n) * s_free;
   while (last_iterations_ < ws.max_sweeps) {

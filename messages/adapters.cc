@@ -407,6 +407,7 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
   rows->friction_coefficient.resize(msg.num_friction_coefficients);
   for (int i = 0; i < msg.num_friction_coefficients; ++i)
     rows->friction_coefficient[i] = msg.friction_coefficient[i];
+  StampNewContactRows(rows);
   return true;
 }
 

@@ -286,6 +286,34 @@ TEST(HapticFrictionSolver, AChangeOfMuOrOfATargetAloneIsNewRows) {
   }
 }
 
+// Stamped rows (ContactRows::stamp) are compared by their stamp alone: rows changed in place
+// without a new stamp are, by the contract, the cached ones; a new stamp makes them new rows,
+// solved as a cold solver solves them. Both solvers, friction and frictionless.
+TEST(ContactRowsStamp, EqualStampsAreTheSameRowsAndANewStampIsNewRows) {
+  for (const int rows_per_contact : {3, 1}) {
+    LcpProblem p = MakeLcpProblem(12, 83, 0.3, 1.0, rows_per_contact, 0.5);
+    StampNewContactRows(&p.rows);
+    const ContactRows original = p.rows;
+    HapticLcpSolver warm(36, kManySweeps), cold_original(36, kManySweeps), cold_changed(36, kManySweeps);
+    Eigen::Vector3d F_warm, F_original, F_changed, T;
+    ASSERT_TRUE(warm.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_warm, &T));
+    p.rows.body_rhs.array() += 0.02;  // in place, stamp kept: the contract says "unchanged"
+    ASSERT_TRUE(warm.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_warm, &T));
+    ContactRows unstamped = original;
+    unstamped.stamp = 0;
+    ASSERT_TRUE(cold_original.Solve(unstamped, p.tool, p.F_hat_N, p.T_hat_N_m, &F_original, &T));
+    EXPECT_LT((F_warm - F_original).norm(), 1e-8 * F_original.norm()) << rows_per_contact;
+    StampNewContactRows(&p.rows);
+    EXPECT_GT(p.rows.stamp, original.stamp);
+    ASSERT_TRUE(warm.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_warm, &T));
+    unstamped = p.rows;
+    unstamped.stamp = 0;
+    ASSERT_TRUE(cold_changed.Solve(unstamped, p.tool, p.F_hat_N, p.T_hat_N_m, &F_changed, &T));
+    EXPECT_GT((F_changed - F_original).norm(), 1e-6) << "precondition: the change matters";
+    EXPECT_LT((F_warm - F_changed).norm(), 1e-8 * F_changed.norm()) << rows_per_contact;
+  }
+}
+
 // The lcp mode's solver hands friction rows to its friction solve (built with sweeps), and
 // reports that solve; without sweeps it refuses them, leaving no impulses from an older solve.
 TEST(HapticLcpSolver, HandsFrictionRowsToItsFrictionSolve) {

@@ -468,6 +468,7 @@ TEST(ContactModelMessage, RowStorageIsReusedWhenTheSizeIsUnchanged) {
   ContactModelHeader header;
   std::string error;
   ASSERT_TRUE(FromMessage(msg1, &model, &rows, &header, &error)) << error;
+  const std::uint64_t first_stamp = rows.stamp;
   const double* W_storage = rows.W_body.data();
   const double* J_storage = rows.J_v.data();
   AllocationCounter counter;
@@ -476,6 +477,9 @@ TEST(ContactModelMessage, RowStorageIsReusedWhenTheSizeIsUnchanged) {
   EXPECT_EQ(rows.W_body.data(), W_storage);
   EXPECT_EQ(rows.J_v.data(), J_storage);
   EXPECT_EQ(rows.W_body(0, 0), msg2.W_body_lower[0]);
+  // Each decode is new rows to the haptic solvers (ContactRows::stamp).
+  EXPECT_NE(first_stamp, 0u);
+  EXPECT_NE(rows.stamp, first_stamp);
   if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer)";
   EXPECT_EQ(allocations, 0);
 }
