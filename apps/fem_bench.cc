@@ -20,6 +20,7 @@ struct SolverCase {
   const char* label;
   fem::SolverKind kind;
   fem::PreconditionerKind preconditioner;
+  fem::FactorPrecision factor_precision = fem::FactorPrecision::kSingle;
 };
 
 // CHOLMOD first: its final state is the reference the others are measured against.
@@ -27,6 +28,8 @@ constexpr SolverCase kSolverCases[] = {
     {"cholmod", fem::SolverKind::kCholmod, fem::PreconditionerKind::kBlockJacobi},
     {"cg+lagged_cholesky", fem::SolverKind::kConjugateGradient,
      fem::PreconditionerKind::kLaggedCholesky},
+    {"cg+lagged_cholesky_double", fem::SolverKind::kConjugateGradient,
+     fem::PreconditionerKind::kLaggedCholesky, fem::FactorPrecision::kDouble},
     {"cg+block_jacobi", fem::SolverKind::kConjugateGradient, fem::PreconditionerKind::kBlockJacobi},
 };
 
@@ -63,6 +66,7 @@ nlohmann::json MeasureCase(const config::Scene& scene, const config::Body& body,
   options.integrator = fem::IntegratorKind::kImplicitEuler;
   options.solver.kind = c.kind;
   options.solver.preconditioner = c.preconditioner;
+  options.solver.factor_precision = c.factor_precision;
   FemRunRecord& record = *record_out;
   {
     ProgressBar progress(scene.name + " " + c.label, num_steps);
@@ -98,7 +102,7 @@ nlohmann::json MeasureCase(const config::Scene& scene, const config::Body& body,
 }
 
 void PrintRow(const nlohmann::json& row) {
-  std::printf("%-14s %7d %-20s %9.3f %9.3f %8.3f %8.3f %8.3f %7.1f %5d %11.2e\n",
+  std::printf("%-14s %7d %-26s %9.3f %9.3f %8.3f %8.3f %8.3f %7.1f %5d %11.2e\n",
               row["scene"].get<std::string>().c_str(), row["num_tets"].get<int>(),
               row["solver"].get<std::string>().c_str(), row["mean_ms"].get<double>(),
               row["median_ms"].get<double>(), row["rotations_mean_ms"].get<double>(),
@@ -141,7 +145,7 @@ void WriteBenchCsv(const std::string& path, const nlohmann::json& rows) {
 
 void RunFemBench(const FemBenchOptions& options) {
   nlohmann::json rows = nlohmann::json::array();
-  std::printf("%-14s %7s %-20s %9s %9s %8s %8s %8s %7s %5s %11s\n", "scene", "tets", "solver",
+  std::printf("%-14s %7s %-26s %9s %9s %8s %8s %8s %7s %5s %11s\n", "scene", "tets", "solver",
               "mean_ms", "median_ms", "rot_ms", "asm_ms", "solve_ms", "iters", "facts",
               "probe_rel_err");
   for (const std::string& path : options.scene_paths) {

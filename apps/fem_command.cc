@@ -86,6 +86,7 @@ nlohmann::json MakeSummary(const config::Scene& scene, const config::Body& body,
       {"integrator", fem::ToString(options.integrator)},
       {"solver", fem::ToString(options.solver.kind)},
       {"preconditioner", fem::ToString(options.solver.preconditioner)},
+      {"factor_precision", fem::ToString(options.solver.factor_precision)},
       {"timings",
        {{"rotations", StageSummary(Column(record.steps, &fem::StepStats::rotations_s))},
         {"assembly", StageSummary(Column(record.steps, &fem::StepStats::assembly_s))},
@@ -195,8 +196,9 @@ void AddFemCommand(CLI::App* app) {
                   "Number of steps (default: the scene's time.num_steps)")
       ->check(CLI::PositiveNumber);
   fem->add_flag("--bench", options->bench,
-                "Benchmark each scene with every solver (CG + lagged Cholesky, CG + block Jacobi,\n"
-                "CHOLMOD): per-stage times and the difference of each final state from CHOLMOD's");
+                "Benchmark each scene with every solver (CG + lagged Cholesky with its factor in\n"
+                "single and in double precision, CG + block Jacobi, CHOLMOD): per-stage times and\n"
+                "the difference of each final state from CHOLMOD's");
   fem->callback([options] {
     if (options->bench) {
       RunFemBench({options->scene_paths, options->out_dir.empty() ? "out/bench" : options->out_dir,

@@ -146,7 +146,7 @@ fem::SolverOptions ReadSolver(const YamlMap& map) {
   using fem::PreconditionerKind;
   using fem::SolverKind;
   map.CheckKeys({"type", "preconditioner", "relative_tolerance", "max_iterations",
-                 "refactor_budget_iterations"});
+                 "refactor_budget_iterations", "factor_precision"});
   fem::SolverOptions solver;
   solver.kind = map.GetEnumOr<SolverKind>(
       "type",
@@ -160,6 +160,11 @@ fem::SolverOptions ReadSolver(const YamlMap& map) {
       solver.preconditioner);
   solver.refactor_budget_iterations =
       map.GetIntOr("refactor_budget_iterations", solver.refactor_budget_iterations, AtLeast(1));
+  solver.factor_precision = map.GetEnumOr<fem::FactorPrecision>(
+      "factor_precision",
+      {{ToString(fem::FactorPrecision::kSingle), fem::FactorPrecision::kSingle},
+       {ToString(fem::FactorPrecision::kDouble), fem::FactorPrecision::kDouble}},
+      solver.factor_precision);
   solver.relative_tolerance =
       map.GetDoubleOr("relative_tolerance", solver.relative_tolerance, OpenInterval(0.0, 1.0));
   solver.max_iterations = map.GetIntOr("max_iterations", solver.max_iterations, AtLeast(1));

@@ -29,9 +29,10 @@
 //     elasticity: corotational         # corotational | linear, default corotational
 //     integrator: implicit             # implicit | explicit, default implicit
 //     solver: {type: cg, preconditioner: lagged_cholesky, relative_tolerance: 1.0e-6,
-//              max_iterations: 1000, refactor_budget_iterations: 50}
+//              max_iterations: 1000, refactor_budget_iterations: 50, factor_precision: single}
 //                                      # type cg | cholmod (default cg); preconditioner
-//                                      # lagged_cholesky | block_jacobi; tol in (0, 1); iters ≥ 1
+//                                      # lagged_cholesky | block_jacobi; tol in (0, 1); iters ≥ 1;
+//                                      # factor_precision single | double (lagged_cholesky's)
 //     fixed: {min_m: [..], max_m: [..]}   # optional: nodes inside this box are fixed
 //     loads:                           # optional: each total force spread evenly over the
 //                                      # nodes in its box

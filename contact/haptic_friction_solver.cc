@@ -58,16 +58,16 @@ struct HapticFrictionSolver::Workspace {
 
   const int max_rows;
   const int max_sweeps;
-  int n = -1;         // rows of the cached set; −1 before the first, or after a failure
+  int n = -1;               // rows of the cached set; −1 before the first, or after a failure
   std::uint64_t stamp = 0;  // ContactRows::stamp of the cached set
-  Eigen::MatrixXd W;  // (max × max) W_body, full storage (its columns update y)
-  MatrixX6d U;        // (max × 6) [J_v J_ω]
+  Eigen::MatrixXd W;        // (max × max) W_body, full storage (its columns update y)
+  MatrixX6d U;              // (max × 6) [J_v J_ω]
   Eigen::VectorXd body_rhs, mu;
-  Matrix6d S = Matrix6d::Zero();  // this step's tool compliance
-  Eigen::VectorXd rhs;            // this step's body_rhs − U s_free
-  Eigen::VectorXd lambda, y;      // λ and W_body λ
+  Matrix6d S = Matrix6d::Zero();            // this step's tool compliance
+  Eigen::VectorXd rhs;                      // this step's body_rhs − U s_free
+  Eigen::VectorXd lambda, y;                // λ and W_body λ
   std::vector<Eigen::Matrix3d> W_diagonal;  // per contact, this step's (CalcDiagonalBlocks)
-  Vector6d g = Vector6d::Zero();  // Uᵀλ
+  Vector6d g = Vector6d::Zero();            // Uᵀλ
 };
 
 // Stamped rows: the stamp (ContactRows::stamp). Else bitwise, as HapticLcpSolver.

@@ -45,11 +45,13 @@ Eigen::Matrix3d CalcSymmetricPositive(const Eigen::Matrix3d& S) {
 
 // K = L Lᵀ in place: L overwrites K's lower triangle (the upper one is not read). Left-looking,
 // column j at a time (Golub & Van Loan, Algorithm 4.2.1):
-//   K(j:n, j) −= L(j:n, 0:j) L(j, 0:j)ᵀ,   L(j, j) = √K(j, j),   L(j+1:n, j) = K(j+1:n, j) / L(j, j).
+//   K(j:n, j) −= L(j:n, 0:j) L(j, 0:j)ᵀ,  L(j, j) = √K(j, j),
+//   L(j+1:n, j) = K(j+1:n, j) / L(j, j).
 // Only matrix–vector products, whose temporaries Eigen keeps on the stack: Eigen's LLT is
 // blocked, and its matrix–matrix updates take heap workspace from ~400 rows on (cache-size
 // dependent), which the 1 kHz step must never do. Speed within 0.8–1.35× of Eigen's LLT from 32
-// to 512 rows (faster below ~100). Returns false, K part-overwritten, if K is not positive definite.
+// to 512 rows (faster below ~100). Returns false, K part-overwritten, if K is not positive
+// definite.
 bool FactorCholeskyInPlace(Eigen::Ref<Eigen::MatrixXd> K) {
   const Eigen::Index n = K.rows();
   for (Eigen::Index j = 0; j < n; ++j) {
@@ -151,8 +153,8 @@ struct HapticLcpSolver::Workspace {
   // The rows of the last call (the cache key); n = −1 before the first.
   int n = -1;
   std::uint64_t stamp = 0;  // ContactRows::stamp of the cached set
-  Eigen::MatrixXd W;  // (max x max) W_body
-  MatrixX6d U;        // (max x 6) [J_v J_ω]
+  Eigen::MatrixXd W;        // (max x max) W_body
+  MatrixX6d U;              // (max x 6) [J_v J_ω]
   Eigen::VectorXd body_rhs;
   // This step's tool: S = blockdiag(A_v⁻¹, M⁻¹A_L⁻¹), s_free = (v_free, ω_free).
   Matrix6d S = Matrix6d::Zero();

@@ -45,7 +45,10 @@ void ConjugateGradientSolver::PreparePreconditioner(const Eigen::SparseMatrix<do
 
 void ConjugateGradientSolver::ApplyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd* z) {
   if (use_factor_) {
-    factor_.Solve(r, z);
+    if (options_.factor_precision == FactorPrecision::kSingle)
+      factor_.SolveSinglePrecision(r, z);
+    else
+      factor_.Solve(r, z);
     return;
   }
   for (size_t n = 0; n < block_inverse_.size(); ++n)

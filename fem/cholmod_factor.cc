@@ -1,8 +1,7 @@
 #include "fem/cholmod_factor.h"
 
-#include <vector>
-
 #include <stdexcept>
+#include <vector>
 
 namespace hapsim::fem {
 namespace {
@@ -72,7 +71,14 @@ bool CholmodFactor::Factorize(const Eigen::SparseMatrix<double>& A) {
   cholmod_factorize(&A_view, factor_, &common_);
   if (common_.status == CHOLMOD_OUT_OF_MEMORY) throw std::runtime_error("CHOLMOD out of memory");
   factored_ = common_.status == CHOLMOD_OK;
+  if (factored_ && keep_single_) single_.Assign(*factor_);
   return factored_;
+}
+
+void CholmodFactor::SolveSinglePrecision(const Eigen::VectorXd& b, Eigen::VectorXd* x) const {
+  if (!factored_ || single_.empty())
+    throw std::logic_error("CholmodFactor::SolveSinglePrecision without a single-precision copy");
+  single_.Solve(b, x);
 }
 
 void CholmodFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
@@ -85,7 +91,8 @@ void CholmodFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
 }
 
 Eigen::MatrixXd CholmodFactor::SolveColumns(const Eigen::MatrixXd& B) {
-  if (!factored_) throw std::logic_error("CholmodFactor::SolveColumns before a successful Factorize");
+  if (!factored_)
+    throw std::logic_error("CholmodFactor::SolveColumns before a successful Factorize");
   cholmod_dense B_view = ViewAsCholmod(B);
   cholmod_dense* X = cholmod_solve(CHOLMOD_A, factor_, &B_view, &common_);
   if (!X) throw std::runtime_error("CHOLMOD solve failed");

@@ -16,4 +16,8 @@ const char* ToString(PreconditionerKind kind) {
   return kind == PreconditionerKind::kLaggedCholesky ? "lagged_cholesky" : "block_jacobi";
 }
 
+const char* ToString(FactorPrecision precision) {
+  return precision == FactorPrecision::kSingle ? "single" : "double";
+}
+
 }  // namespace hapsim::fem

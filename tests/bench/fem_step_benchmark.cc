@@ -2,10 +2,10 @@
 // Not a test: run `build/tests/fem_step_benchmark` from the repository root (it reads scenes/).
 // The state is first advanced 30 steps from rest so rotations and CG warm starts are realistic.
 
+#include <benchmark/benchmark.h>
+
 #include <algorithm>
 #include <vector>
-
-#include <benchmark/benchmark.h>
 
 #include "config/body_builder.h"
 #include "config/scene.h"
@@ -108,7 +108,8 @@ Eigen::SparseMatrix<double> MakeTopContactRows(const fem::Model& model, int num_
 // Zᵀ Z, 1 one dense solve per contact with the same factor.
 void BM_ContactCompliance(benchmark::State& bench) {
   const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
-  fem::TimeStepper stepper(f.body.model, f.scene.body->options, f.scene.dt_s, f.body.external_force_N);
+  fem::TimeStepper stepper(f.body.model, f.scene.body->options, f.scene.dt_s,
+                           f.body.external_force_N);
   Eigen::VectorXd dv;
   stepper.CalcFreeVelocityChange(f.state, &dv);  // assembles A and holds its factor
   const Eigen::SparseMatrix<double> J = MakeTopContactRows(f.body.model, 125);
@@ -130,11 +131,39 @@ void BM_ContactCompliance(benchmark::State& bench) {
   SetCounters(bench, f);
 }
 
+// One preconditioner application A⁻¹ r with the factor of the settled block's system matrix:
+// arg 1 = 0 CHOLMOD's double-precision supernodal solve, 1 the single-precision copy.
+void BM_FactorSolve(benchmark::State& bench) {
+  const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
+  fem::TimeStepper stepper(f.body.model, f.scene.body->options, f.scene.dt_s,
+                           f.body.external_force_N);
+  Eigen::VectorXd dv;
+  stepper.CalcFreeVelocityChange(f.state, &dv);  // assembles A
+  fem::CholmodFactor factor;
+  factor.KeepSinglePrecisionCopy();
+  factor.Factorize(stepper.system_matrix());
+  const Eigen::VectorXd r = Eigen::VectorXd::Random(stepper.system_matrix().rows());
+  Eigen::VectorXd z;
+  for (auto _ : bench) {
+    if (bench.range(1) == 0)
+      factor.Solve(r, &z);
+    else
+      factor.SolveSinglePrecision(r, &z);
+    benchmark::DoNotOptimize(z.data());
+  }
+  SetCounters(bench, f);
+  bench.counters["factor_nonzeros"] = factor.num_factor_nonzeros();
+}
+
 BENCHMARK(BM_Rotations)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ForcesAndStiffness)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ImplicitStep)
     ->ArgsProduct({{0, 1, 2}, {0, 1}})
     ->ArgNames({"block", "cholmod"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FactorSolve)
+    ->ArgsProduct({{1, 2}, {0, 1}})
+    ->ArgNames({"block", "single"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ContactCompliance)
     ->ArgsProduct({{1, 2}, {0, 1}})

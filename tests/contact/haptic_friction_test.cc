@@ -294,7 +294,8 @@ TEST(ContactRowsStamp, EqualStampsAreTheSameRowsAndANewStampIsNewRows) {
     LcpProblem p = MakeLcpProblem(12, 83, 0.3, 1.0, rows_per_contact, 0.5);
     StampNewContactRows(&p.rows);
     const ContactRows original = p.rows;
-    HapticLcpSolver warm(36, kManySweeps), cold_original(36, kManySweeps), cold_changed(36, kManySweeps);
+    HapticLcpSolver warm(36, kManySweeps), cold_original(36, kManySweeps),
+        cold_changed(36, kManySweeps);
     Eigen::Vector3d F_warm, F_original, F_changed, T;
     ASSERT_TRUE(warm.Solve(p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_warm, &T));
     p.rows.body_rhs.array() += 0.02;  // in place, stamp kept: the contract says "unchanged"

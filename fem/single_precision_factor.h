@@ -1,0 +1,43 @@
+#pragma once
+// A single-precision copy of a supernodal CHOLMOD factor A = Pᵀ L Lᵀ P, and its two triangular
+// solves: z ≈ A⁻¹ r as a preconditioner for double-precision CG (issue 13: "a single-precision
+// factor inside double-precision CG").
+//
+// Why. With a lagged factor CG needs 1–5 iterations, and each is one forward and one backward
+// solve with L: on the 28.8k-tet block L has 4.1 M nonzeros, 33 MB in double, more than this
+// machine's 32 MB L3, so every solve streams L from memory twice. In float it is 16 MB and stays
+// in cache. The preconditioner only has to be close to A⁻¹, not exact: L rounded to float
+// changes M⁻¹A by about 6e-8 · κ(A), which on these blocks costs no extra CG iterations (measured
+// in tests/fem/time_stepper_test.cc against CHOLMOD and in docs/BENCHMARKS.md). CG itself, its
+// residual and its stopping test stay in double, so the answer is as accurate as before.
+//
+// Layout (CHOLMOD's supernodal factor, read as documented in cholmod_core.h): supernode s holds
+// columns super[s] .. super[s+1]−1 of L as a dense column-major block of nsrow = pi[s+1] − pi[s]
+// rows at x[px[s]]; its first nscol rows are the diagonal block (lower triangular), the rest are
+// the rows s[pi[s] + nscol ..], below it.
+
+#include <cholmod.h>
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace hapsim::fem {
+
+class SinglePrecisionFactor {
+ public:
+  // Copies L (supernodal, LLᵀ, real, double, int indices) rounded to float. Throws
+  // std::invalid_argument for any other kind of factor.
+  void Assign(const cholmod_factor& L);
+
+  // x = Pᵀ L⁻ᵀ L⁻¹ P b, in single precision (b and x in double). Allocates nothing once sized.
+  void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
+
+  bool empty() const { return super_.empty(); }
+
+ private:
+  std::vector<int> super_, pi_, px_, s_, perm_;
+  std::vector<float> values_;
+  mutable Eigen::VectorXf y_, gathered_;  // scratch: the permuted vector; a supernode's rows
+};
+
+}  // namespace hapsim::fem
