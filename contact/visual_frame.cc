@@ -82,8 +82,14 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   tool_system_ = CalcToolStepSystem(tool_, *tool, wrench_, options_.gravity_m_s2, options_.dt_s);
   CalcFreeVelocityChange(tool_system_, &dv_tool_, &dL_tool_);
   stats.free_tool_s = stage.Lap();
-  // 3. Collision-free FEM update.
-  if (stepper_) stats.fem = stepper_->CalcFreeVelocityChange(*body, &du_body_);
+  // 3. Collision-free FEM update. CG starts from the last frame's free change (its total less
+  //    the contact correction): under a steady press the total is near zero while the free
+  //    change is not (the body would spring back), and on block_press this start saves one CG
+  //    iteration in seven.
+  if (stepper_) {
+    if (du_contact_.size() == du_body_.size()) du_body_ -= du_contact_;
+    stats.fem = stepper_->CalcFreeVelocityChange(*body, &du_body_);
+  }
   stats.free_fem_s = stage.Lap();
   // 4. Collision detection, swept from the start to the free configuration, with the rigid
   //    objects placed for the frame.
