@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Issue 13's speed-ups measured before and after in one run, each beside its accuracy.
+#
+#   scripts/bench_speed.sh [BASE_REV]      (default 4eceff2: main before issue 13's speed work)
+#
+# Builds BASE_REV in a worktree (only the targets used; Release, -j2), then runs the same
+# commands with both builds, alternating, on the same scene files (the ones checked out now):
+#   - `hapsim fem --bench` on the 3.6k- and 28.8k-tet blocks: 200 steps from rest, mean and
+#     median, and the probe trajectory's largest difference from CHOLMOD (relative);
+#   - fem_step_benchmark: the settled implicit step (CG + lagged Cholesky);
+#   - `hapsim sim --mode linear` on block_press and block_press_large, and `--mode lcp` on
+#     block_press_friction: the visual frame's median by contact count, and the device force's
+#     RMS difference from the 1 kHz reference (block_press, computed once with the current build)
+#     or between the two builds (the others, whose references take many minutes);
+#   - haptic_friction_benchmark: the warm friction step at 200 contacts, 1 / 2 / 5 sweeps.
+# Writes out/speed/speed.md (the tables for docs/BENCHMARKS.md) and speed.json. About 25 minutes
+# on 2 cores; not part of ctest. Machines are shared and noisy: read ratios within this run.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+base_rev=${1:-4eceff2}
+out=out/speed
+mkdir -p "$out"
+base_src=${TMPDIR:-/tmp}/hapsim-speed-base
+if [ ! -d "$base_src/.git" ] && [ ! -f "$base_src/.git" ]; then
+  git worktree add --detach "$base_src" "$base_rev"
+fi
+git -C "$base_src" checkout --detach -q "$base_rev"
+cmake -S "$base_src" -B "$base_src/build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$base_src/build" -j2 --target hapsim fem_step_benchmark haptic_friction_benchmark
+declare -A bin=([before]="$base_src/build" [after]=build)
+
+# The reference of block_press, once (about 2 minutes).
+[ -f "$out/reference/haptic.csv" ] ||
+  build/apps/hapsim sim scenes/block_press.yaml --mode reference --out "$out/reference"
+
+for run in before after; do
+  b=${bin[$run]}
+  echo "== $run ($b)"
+  mkdir -p "$out/$run"
+  "$b/apps/hapsim" fem --bench scenes/block_small.yaml scenes/block_large.yaml --out "$out/$run/fem" \
+    > "$out/$run/fem.txt"
+  "$b/tests/fem_step_benchmark" --benchmark_filter='BM_ImplicitStep/block:[12]/cholmod:0' \
+    --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+    --benchmark_out="$out/$run/fem_step.json" --benchmark_out_format=json > /dev/null
+  "$b/apps/hapsim" sim scenes/block_press.yaml --mode linear --out "$out/$run/block_press"
+  "$b/apps/hapsim" sim scenes/block_press_large.yaml --mode linear --out "$out/$run/block_press_large"
+  "$b/apps/hapsim" sim scenes/block_press_friction.yaml --mode lcp --out "$out/$run/block_press_friction"
+  "$b/tests/haptic_friction_benchmark" --benchmark_filter='BM_HapticFrictionWarm/200/[125]$' \
+    --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+    --benchmark_out="$out/$run/friction.json" --benchmark_out_format=json > /dev/null
+done
+# Debian's interpreter (the one python3-matplotlib is installed for; no chart here, but the same).
+/usr/bin/python3 scripts/bench/speed_table.py "$out" "$base_rev" | tee "$out/speed.md"
+echo "speed: outputs in $out/"
