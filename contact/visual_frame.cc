@@ -206,7 +206,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     stepper_->SolveWithSystemMatrix(dt * (jacobian_.J_u.transpose() * lambda_), &du_contact_);
     du_body_ += du_contact_;
   } else {
-    du_contact_.resize(0);
+    du_contact_.resize(0);  // nothing was added to du_body_: nothing to take off next frame
   }
   c_post_ = c_free + dt * W * lambda_;
 }

@@ -206,7 +206,10 @@ class VisualFrame {
   ToolStepSystem tool_system_;
   Eigen::Vector3d dv_tool_, dL_tool_;
   Eigen::VectorXd du_body_;
-  Eigen::VectorXd du_contact_;  // last frame's A⁻¹ Δt J_uᵀλ: the post-collision solve's warm start
+  // The last frame's contact correction A⁻¹ Δt J_uᵀλ: the post-collision solve's warm start.
+  // Between frames du_body_ = free change + du_contact_ (empty after a frame without rows), so
+  // du_body_ − du_contact_ is the last free change, the free solve's warm start.
+  Eigen::VectorXd du_contact_;
   std::vector<Contact> contacts_;
   ContactJacobian jacobian_;
   Eigen::MatrixXd W_body_;         // J_u A_u⁻¹ J_uᵀ at the visual step, the frame's solve

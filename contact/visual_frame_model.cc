@@ -122,8 +122,8 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
       Eigen::Map<const Eigen::VectorXd>(mu.data(), static_cast<Eigen::Index>(mu.size()));
   const Eigen::MatrixXd& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
   contact_rows_ = MakeContactRows(J, W_body, rows, rhs, mu_kept);
-  StampNewContactRows(&contact_rows_);
   contact_rows_.lambda_frame_N = lambda;
+  StampNewContactRows(&contact_rows_);  // last: the rows are complete
   num_rows_withheld_ = static_cast<int>(rhs_all.size() - rhs.size());
 }
 

@@ -82,8 +82,8 @@ SolveReport ConjugateGradientSolver::Solve(const Eigen::SparseMatrix<double>& A,
     r_ -= alpha * Ap_;
     r_norm = r_.norm();
     ++report.iterations;
-    // Converged: the next direction would never be used. With a fresh lagged factor CG stops
-    // after one iteration, so skipping this apply halves the triangular solves of a step.
+    // Converged: the next direction would never be used. With a fresh lagged factor CG mostly
+    // stops after one iteration, so skipping this apply halves the triangular solves of a step.
     if (r_norm <= target) break;
     ApplyPreconditioner(r_, &z_);
     const double rz_next = r_.dot(z_);

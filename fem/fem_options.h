@@ -22,9 +22,13 @@ enum class SolverKind { kConjugateGradient, kCholmod };
 enum class PreconditionerKind { kLaggedCholesky, kBlockJacobi };
 
 // Precision of the lagged Cholesky factor's triangular solves (CG itself is double). kSingle
-// applies a float copy of the factor (fem/single_precision_factor.h): 1.9x faster at 28.8k tets
-// (3.1 against 5.8 ms; L no longer overflows the L3 cache), 1.3x at 3.6k, with the same CG
-// iteration counts on the reference blocks and block_press and device forces within 5e-8 N RMS.
+// applies a float copy of the factor (fem/single_precision_factor.h): one apply 1.9x faster at
+// 28.8k tets (3.1 against 5.8 ms: L no longer overflows the L3 cache), 1.3x at 3.6k. The float
+// factor leaves a residual near CG's 1e-6 tolerance, so about one step in six needs a second
+// iteration (1.4 a step against 1.25 over 200 steps from rest); net, the 28.8k step's mean is
+// 15.5 against 17.8 ms, the 3.6k step's the same (1.37 ms; L fits in cache either way), and
+// block_press's frames are faster (docs/BENCHMARKS.md, issue 13). Answers agree to CG's
+// tolerance: device forces within 5e-8 N RMS, the same number of refactorisations.
 enum class FactorPrecision { kSingle, kDouble };
 
 struct SolverOptions {

@@ -7,9 +7,10 @@
 // solve with L: on the 28.8k-tet block L has 4.1 M nonzeros, 33 MB in double, more than this
 // machine's 32 MB L3, so every solve streams L from memory twice. In float it is 16 MB and stays
 // in cache. The preconditioner only has to be close to A⁻¹, not exact: L rounded to float
-// changes M⁻¹A by about 6e-8 · κ(A), which on these blocks costs no extra CG iterations (measured
-// in tests/fem/time_stepper_test.cc against CHOLMOD and in docs/BENCHMARKS.md). CG itself, its
-// residual and its stopping test stay in double, so the answer is as accurate as before.
+// changes M⁻¹A by about 6e-8 · κ(A), which leaves a residual near CG's 1e-6 tolerance after a
+// fresh factor's one iteration: about one step in six then takes a second (FemOptions,
+// FactorPrecision). CG itself, its residual and its stopping test stay in double, so the answer
+// is as accurate as before (tests/fem/time_stepper_test.cc, against CHOLMOD).
 //
 // Layout (CHOLMOD's supernodal factor, read as documented in cholmod_core.h): supernode s holds
 // columns super[s] .. super[s+1]−1 of L as a dense column-major block of nsrow = pi[s+1] − pi[s]

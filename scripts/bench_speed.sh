@@ -4,7 +4,7 @@
 #   scripts/bench_speed.sh [BASE_REV]      (default 4eceff2: main before issue 13's speed work)
 #
 # Builds BASE_REV in a worktree (only the targets used; Release, -j2), then runs the same
-# commands with both builds, alternating, on the same scene files (the ones checked out now):
+# commands with both builds, one after the other, on the same scene files (those checked out):
 #   - `hapsim fem --bench` on the 3.6k- and 28.8k-tet blocks: 200 steps from rest, mean and
 #     median, and the probe trajectory's largest difference from CHOLMOD (relative);
 #   - fem_step_benchmark: the settled implicit step (CG + lagged Cholesky);

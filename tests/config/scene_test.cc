@@ -45,7 +45,7 @@ body:                                         #  7
     rayleigh_beta_s: 0.01                     # 15
   elasticity: linear                          # 16
   integrator: explicit                        # 17
-  solver: {type: cholmod, relative_tolerance: 1e-8, max_iterations: 50}   # 18
+  solver: {type: cholmod, relative_tolerance: 1e-8, max_iterations: 50, factor_precision: double}   # 18
   fixed: {min_m: [-1, -1, -0.001], max_m: [1, 1, 0.001]}                  # 19
   loads:                                      # 20
     - {min_m: [-1, -1, 0.049], max_m: [1, 1, 0.051], total_force_N: [0, 0, -2]}   # 21
@@ -86,6 +86,7 @@ TEST(ParseSceneTest, FullSceneGivesEveryValue) {
   EXPECT_EQ(body.options.solver.kind, fem::SolverKind::kCholmod);
   EXPECT_EQ(body.options.solver.relative_tolerance, 1e-8);
   EXPECT_EQ(body.options.solver.max_iterations, 50);
+  EXPECT_EQ(body.options.solver.factor_precision, fem::FactorPrecision::kDouble);
 
   ASSERT_TRUE(body.fixed.has_value());
   EXPECT_EQ(body.fixed->min_m, Eigen::Vector3d(-1, -1, -0.001));
@@ -150,6 +151,7 @@ body:
   EXPECT_EQ(body.options.solver.kind, defaults.solver.kind);
   EXPECT_EQ(body.options.solver.relative_tolerance, defaults.solver.relative_tolerance);
   EXPECT_EQ(body.options.solver.max_iterations, defaults.solver.max_iterations);
+  EXPECT_EQ(body.options.solver.factor_precision, fem::FactorPrecision::kSingle);
   EXPECT_FALSE(body.fixed.has_value());
   EXPECT_TRUE(body.loads.empty());
   EXPECT_TRUE(body.probes.empty());
@@ -197,7 +199,9 @@ const BadCase kBadCases[] = {
      "body.probes[0]", "must be a map"},
     {"MapForString", "elasticity: linear", "elasticity: {type: linear}", 16, "body.elasticity",
      "must be a string"},
-    {"ScalarForMap", "solver: {type: cholmod, relative_tolerance: 1e-8, max_iterations: 50}",
+    {"ScalarForMap",
+     "solver: {type: cholmod, relative_tolerance: 1e-8, max_iterations: 50, factor_precision: "
+     "double}",
      "solver: cg", 18, "body.solver", "must be a map"},
     {"NullForMap", "fixed: {min_m: [-1, -1, -0.001], max_m: [1, 1, 0.001]}", "fixed:", 19,
      "body.fixed", "got nothing"},
@@ -256,6 +260,8 @@ const BadCase kBadCases[] = {
     {"UnknownIntegrator", "integrator: explicit", "integrator: rk4", 17, "body.integrator",
      "one of: implicit, explicit"},
     {"UnknownSolver", "type: cholmod", "type: lu", 18, "body.solver.type", "one of: cg, cholmod"},
+    {"UnknownFactorPrecision", "factor_precision: double", "factor_precision: half", 18,
+     "body.solver.factor_precision", "one of: single, double"},
     // Mesh sources.
     {"NoMeshSource", kBoxLine, "{}", 8, "body.mesh", "exactly one of box, ellipsoid, file; got 0"},
     {"TwoMeshSources", "cells: [12, 12, 5]}", "cells: [12, 12, 5]}\n    file: a.msh", 8,

@@ -165,6 +165,50 @@ TEST(ContactResponse, ProjectedGaussSeidelMatchesEnumeratedLcp) {
   }
 }
 
+// The active-set solve's bordered LU (contact_solver.cc, FreeSet) on W that is not symmetric,
+// as with a rotating tool: W = SPD + a skew part, so the rows and the columns of a border differ
+// (l ≠ u). Mixed targets make rows enter and then leave the free set; a duplicated row (the same
+// constraint twice) makes a pivot vanish, which must switch that solve to pivoted LU. Against the
+// enumerated LCP, whose solution is unique (W's symmetric part is positive definite).
+TEST(ContactResponse, ActiveSetMatchesEnumeratedLcpOnAnUnsymmetricW) {
+  std::mt19937 rng(17);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  int left_rows = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 9;
+    Eigen::MatrixXd B(n, n), S(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) B(i, j) = normal(rng), S(i, j) = normal(rng);
+    Eigen::MatrixXd W =
+        B * B.transpose() / n + 0.05 * Eigen::MatrixXd::Identity(n, n) + 0.5 * (S - S.transpose());
+    Eigen::VectorXd rhs(n);
+    for (int i = 0; i < n; ++i) rhs[i] = 1e-3 * normal(rng);
+    if (trial % 4 == 3) {  // row 1 repeats row 0: a singular pair, kept apart by the shift only
+      W.row(1) = W.row(0);
+      W.col(1) = W.col(0);
+      rhs[1] = rhs[0];
+    }
+    Eigen::VectorXd lambda;
+    const ContactSolveReport report = SolveContactImpulses(
+        W, rhs, kDt_s, 1, ContactSolveOptions{ContactLaw::kUnilateral}, &lambda);
+    EXPECT_TRUE(report.converged) << "trial " << trial << " residual " << report.residual;
+    // The solver's λ meets the LCP's conditions on W itself (λ ≥ 0, c ≥ 0, cᵀλ = 0)...
+    const Eigen::VectorXd c = kDt_s * W * lambda - rhs;
+    const double scale = rhs.lpNorm<Eigen::Infinity>();
+    EXPECT_GE(lambda.minCoeff(), 0.0) << trial;
+    EXPECT_GE(c.minCoeff(), -1e-8 * scale) << trial;
+    EXPECT_LE(std::abs(c.dot(lambda)), 1e-8 * scale * lambda.lpNorm<1>()) << trial;
+    // ...and, where the solution is unique (no duplicated row), equals the enumerated one.
+    if (trial % 4 != 3) {
+      const Eigen::VectorXd exact = SolveLcpByEnumeration(W, rhs);
+      EXPECT_LT((lambda - exact).norm(), 1e-7 * std::max(1e-9, exact.norm())) << trial;
+    }
+    left_rows += report.iterations - (lambda.array() > 0.0).count();
+  }
+  // Rows that entered and later left: the rebuild path ran.
+  EXPECT_GT(left_rows, 0);
+}
+
 TEST(ContactResponse, CoulombFrictionSticksInsideTheConeAndSlidesOnIt) {
   // One contact whose rows are decoupled (W diagonal): the closed form is λ_n = rhs_n/(ΔtW_nn),
   // λ_t = rhs_t/(ΔtW_tt) if |λ_t| ≤ μλ_n (stick), else μλ_n along it (slide).
