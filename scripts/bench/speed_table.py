@@ -50,18 +50,14 @@ def ratio(before, after):
     return f"{before / after:.2f}x" if before and after else "–"
 
 
-def main(out, base_rev):
-    result = {"base_rev": base_rev, "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-              "machine": platform.processor() or platform.machine()}
-    print(f"Before: {base_rev}; after: the working tree. Run of {result['date']}.\n")
-
-    # FEM, 200 steps from rest, and the settled step.
+def fem_table(out):
+    """FEM, 200 steps from rest, and the settled step; prints the table, returns its data."""
     fem = {run: fem_rows(out, run) for run in RUNS}
     step = {run: benchmark_medians(os.path.join(out, run, "fem_step.json")) for run in RUNS}
     print("| FEM (CG + lagged Cholesky) | before | after | speed-up | probe vs CHOLMOD, after "
           "(before) |")
     print("|---|---|---|---|---|")
-    result["fem"] = {}
+    data = {}
     for scene, block in (("block_small", 1), ("block_large", 2)):
         b, a = fem["before"][scene], fem["after"][scene]
         accuracy = lambda r: r["probe_trajectory_difference_from_cholmod_m"] / r[  # noqa: E731
@@ -75,15 +71,18 @@ def main(out, base_rev):
               f"{a['median_ms']:.2f} ms | {ratio(b['median_ms'], a['median_ms'])} | |")
         print(f"| {a['num_tets']:,} tets, settled step (fem_step_benchmark) | {settled[0]:.2f} ms | "
               f"{settled[1]:.2f} ms | {ratio(*settled)} | |")
-        result["fem"][scene] = {"before": b, "after": a, "settled_ms": settled}
+        data[scene] = {"before": b, "after": a, "settled_ms": settled}
+    return data
 
-    # Visual frames and device forces.
+
+def frame_table(out):
+    """Visual frames and device forces; prints the table, returns its data."""
     _, f_ref = read_forces(os.path.join(out, "reference"))
     print("\n| scene, frames with ≥ N contacts | before: frame (free FEM / response) | after | "
           "speed-up | device force RMS: after vs before | vs the 1 kHz reference, after "
           "(before) |")
     print("|---|---|---|---|---|---|")
-    result["frames"] = {}
+    data = {}
     for scene, min_contacts in (("block_press", 200), ("block_press_large", 300),
                                 ("block_press_friction", 200)):
         m = {run: frame_medians(os.path.join(out, run, scene), min_contacts) for run in RUNS}
@@ -99,14 +98,17 @@ def main(out, base_rev):
               f"{m['after']['max_contacts']}) | {cell(m['before'])} | {cell(m['after'])} | "
               f"{ratio(m['before']['total_ms'], m['after']['total_ms'])} | {between:.2e} N | "
               f"{vs_ref} |")
-        result["frames"][scene] = {"medians": m, "force_rms_after_vs_before_N": between}
+        data[scene] = {"medians": m, "force_rms_after_vs_before_N": between}
+    return data
 
-    # The warm friction step.
+
+def friction_table(out):
+    """The warm friction step at 200 contacts; prints the table, returns its data."""
     friction = {run: benchmark_medians(os.path.join(out, run, "friction.json")) for run in RUNS}
     print("\n| warm friction step, 200 contacts (600 rows) | before | after | speed-up | "
           "Coulomb residual left, after |")
     print("|---|---|---|---|---|")
-    result["friction"] = {}
+    data = {}
     for sweeps in (1, 2, 5):
         name = f"BM_HapticFrictionWarm/200/{sweeps}"
         t = [friction[run][name]["real_time"] if name in friction[run] else None for run in RUNS]
@@ -114,8 +116,17 @@ def main(out, base_rev):
         residual = friction["after"][name].get("residual", float("nan"))
         print(f"| {sweeps} sweep{'s' if sweeps > 1 else ''} a step | {fmt(t[0])} | {fmt(t[1])} | "
               f"{ratio(t[0], t[1])} | {residual:.1e} |")
-        result["friction"][sweeps] = t
+        data[sweeps] = t
+    return data
 
+
+def main(out, base_rev):
+    result = {"base_rev": base_rev, "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+              "machine": platform.processor() or platform.machine()}
+    print(f"Before: {base_rev}; after: the working tree. Run of {result['date']}.\n")
+    result["fem"] = fem_table(out)
+    result["frames"] = frame_table(out)
+    result["friction"] = friction_table(out)
     tmp = os.path.join(out, "speed.json.tmp")
     with open(tmp, "w") as f:
         json.dump(result, f, indent=1)
