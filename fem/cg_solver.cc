@@ -11,11 +11,20 @@ void MultiplySymmetric(const Eigen::SparseMatrix<double>& A, const Eigen::Vector
   const int* outer = A.outerIndexPtr();
   const int* rows = A.innerIndexPtr();
   const double* values = A.valuePtr();
-  y->resize(A.rows());
+  y->setZero(A.rows());
+  double* out = y->data();
+  const double* in = x.data();
   for (Eigen::Index j = 0; j < A.cols(); ++j) {
+    int k = outer[j];
+    const int end = outer[j + 1];
+    const double x_j = in[j];
     double sum = 0.0;
-    for (int k = outer[j]; k < outer[j + 1]; ++k) sum += values[k] * x[rows[k]];
-    (*y)[j] = sum;
+    if (k < end && rows[k] == j) sum = values[k++] * x_j;  // the diagonal, first in its column
+    for (; k < end; ++k) {
+      sum += values[k] * in[rows[k]];
+      out[rows[k]] += values[k] * x_j;
+    }
+    out[j] += sum;
   }
 }
 
@@ -38,7 +47,7 @@ void ConjugateGradientSolver::PreparePreconditioner(const Eigen::SparseMatrix<do
   for (int n = 0; n < num_nodes; ++n) {
     Eigen::Matrix3d block;
     for (int c = 0; c < 3; ++c)
-      for (int r = 0; r < 3; ++r) block(r, c) = A.coeff(3 * n + r, 3 * n + c);
+      for (int r = c; r < 3; ++r) block(r, c) = block(c, r) = A.coeff(3 * n + r, 3 * n + c);
     block_inverse_[n] = block.inverse();
   }
 }

@@ -36,7 +36,8 @@ class ConjugateGradientSolver final : public LinearSolver {
   Eigen::VectorXd r_, z_, p_, Ap_;              // scratch, sized on first use
 };
 
-// y = A x for symmetric A in column-major storage, read as rows (a gather per row).
+// y = A x for symmetric A of which the lower triangle is stored (column-major, rows sorted, as
+// StiffnessAssembler builds it): each off-diagonal entry a_ij adds to y_i and, as a_ji, to y_j.
 void MultiplySymmetric(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& x,
                        Eigen::VectorXd* y);
 

@@ -20,9 +20,9 @@ struct SolveReport {
 class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
-  // Solves A x = b for symmetric positive definite A (full storage). On entry *x is the initial
-  // guess (CG warm start; ignored by direct solvers). The sparsity pattern of A must stay the
-  // same between calls (it is analysed once).
+  // Solves A x = b for symmetric positive definite A, lower triangle stored (StiffnessAssembler).
+  // On entry *x is the initial guess (CG warm start; ignored by direct solvers). The sparsity
+  // pattern of A must stay the same between calls (it is analysed once).
   virtual SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
                             Eigen::VectorXd* x) = 0;
 

@@ -32,7 +32,8 @@ MaxFrequencyEstimate EstimateMaxFrequency(const Model& model, double tolerance,
   MaxFrequencyEstimate estimate;
   double lambda = 0.0;
   for (estimate.iterations = 1; estimate.iterations <= max_iterations; ++estimate.iterations) {
-    const Eigen::VectorXd y = inv_sqrt_mass.cwiseProduct(K * inv_sqrt_mass.cwiseProduct(x));  // A x
+    const Eigen::VectorXd y = inv_sqrt_mass.cwiseProduct(K.selfadjointView<Eigen::Lower>() *
+                                                         inv_sqrt_mass.cwiseProduct(x));  // A x
     const double next = x.dot(y);  // Rayleigh quotient, |x| = 1
     estimate.relative_change = std::abs(next - lambda) / std::abs(next);
     lambda = next;

@@ -19,24 +19,33 @@ int FindValueIndex(const Eigen::SparseMatrix<double>& A, int row, int col) {
 StiffnessAssembler::StiffnessAssembler(const Model& model) {
   const int num_dofs = model.num_dofs();
   std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(static_cast<size_t>(model.num_tets()) * 144);
+  entries.reserve(static_cast<size_t>(model.num_tets()) * 78);
   for (int t = 0; t < model.num_tets(); ++t)
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b)
         for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c)
-            entries.emplace_back(3 * model.mesh.tets(a, t) + r, 3 * model.mesh.tets(b, t) + c, 0.0);
+          for (int c = 0; c < 3; ++c) {
+            const int row = 3 * model.mesh.tets(a, t) + r, col = 3 * model.mesh.tets(b, t) + c;
+            if (row >= col) entries.emplace_back(row, col, 0.0);
+          }
   pattern_.resize(num_dofs, num_dofs);
   pattern_.setFromTriplets(entries.begin(), entries.end());
   pattern_.makeCompressed();
 
+  // Pair (a, b ≥ a) of a tet is block (low, high) of the lower triangle, low the larger node:
+  // columns 3·high + c hold rows 3·low + r. For a = b only the rows r ≥ c exist, from the diagonal.
   block_value_index_.resize(model.num_tets());
-  for (int t = 0; t < model.num_tets(); ++t)
+  for (int t = 0; t < model.num_tets(); ++t) {
+    int pair = 0;
     for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b)
+      for (int b = a; b < 4; ++b, ++pair) {
+        const int na = model.mesh.tets(a, t), nb = model.mesh.tets(b, t);
+        const int low = std::max(na, nb), high = std::min(na, nb);
         for (int c = 0; c < 3; ++c)
-          block_value_index_[t][12 * a + 3 * b + c] =
-              FindValueIndex(pattern_, 3 * model.mesh.tets(a, t), 3 * model.mesh.tets(b, t) + c);
+          block_value_index_[t][3 * pair + c] =
+              FindValueIndex(pattern_, 3 * low + (a == b ? c : 0), 3 * high + c);
+      }
+  }
   diagonal_value_index_.resize(num_dofs);
   for (int i = 0; i < num_dofs; ++i) diagonal_value_index_[i] = FindValueIndex(pattern_, i, i);
 }
@@ -47,31 +56,32 @@ void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::M
   std::fill(values, values + K->nonZeros(), 0.0);
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
-    const double mu_Pa = rest.lame_mu_Pa;
-    const double lambda_Pa = rest.lame_lambda_Pa;
+    const double mu_V = rest.lame_mu_Pa * rest.volume_m3;
+    const double lambda_V = rest.lame_lambda_Pa * rest.volume_m3;
     const Eigen::Matrix<double, 3, 4>& b = rest.shape_gradients_1_m;
     const Eigen::Matrix<double, 3, 4> c = rotations[t] * b;
     const Eigen::Matrix4d gram = b.transpose() * b;  // b_a · b_b
-    const std::array<int, 48>& index = block_value_index_[t];
-    // K_ab = V (μ c_b c_aᵀ + λ c_a c_bᵀ + μ (b_a·b_b) I) and K_ba = K_abᵀ: each pair is computed
-    // once (10 blocks, not 16) and scattered to both places.
+    const std::array<int, 30>& index = block_value_index_[t];
+    // K_ab = V (μ c_b c_aᵀ + λ c_a c_bᵀ + μ (b_a·b_b) I): each pair is computed once (10 blocks,
+    // not 16) and only its lower-triangle copy is stored.
+    int pair = 0;
     for (int a = 0; a < 4; ++a) {
-      for (int bb = a; bb < 4; ++bb) {
-        Eigen::Matrix3d block = (mu_Pa * rest.volume_m3) * (c.col(bb) * c.col(a).transpose()) +
-                                (lambda_Pa * rest.volume_m3) * (c.col(a) * c.col(bb).transpose());
-        block.diagonal().array() += mu_Pa * rest.volume_m3 * gram(a, bb);
-        for (int col = 0; col < 3; ++col) {
-          double* column = values + index[12 * a + 3 * bb + col];
-          column[0] += block(0, col);
-          column[1] += block(1, col);
-          column[2] += block(2, col);
-        }
-        if (bb == a) continue;
-        for (int col = 0; col < 3; ++col) {
-          double* column = values + index[12 * bb + 3 * a + col];
-          column[0] += block(col, 0);
-          column[1] += block(col, 1);
-          column[2] += block(col, 2);
+      for (int bb = a; bb < 4; ++bb, ++pair) {
+        Eigen::Matrix3d block = mu_V * (c.col(bb) * c.col(a).transpose()) +
+                                lambda_V * (c.col(a) * c.col(bb).transpose());
+        block.diagonal().array() += mu_V * gram(a, bb);
+        const int* column = index.data() + 3 * pair;
+        if (bb == a) {  // rows r ≥ c of the diagonal block
+          values[column[0]] += block(0, 0), values[column[0] + 1] += block(1, 0);
+          values[column[0] + 2] += block(2, 0);
+          values[column[1]] += block(1, 1), values[column[1] + 1] += block(2, 1);
+          values[column[2]] += block(2, 2);
+        } else if (model.mesh.tets(a, t) > model.mesh.tets(bb, t)) {  // K_ab at (node a, node b)
+          for (int col = 0; col < 3; ++col)
+            for (int row = 0; row < 3; ++row) values[column[col] + row] += block(row, col);
+        } else {  // K_ba = K_abᵀ at (node b, node a)
+          for (int col = 0; col < 3; ++col)
+            for (int row = 0; row < 3; ++row) values[column[col] + row] += block(col, row);
         }
       }
     }

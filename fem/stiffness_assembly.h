@@ -6,6 +6,13 @@
 // and rotating it only needs the rotated gradients c = R b:
 //   R K_ab Rᵀ = V [ μ (b_a·b_b) I + μ c_b c_aᵀ + λ c_a c_bᵀ ].
 // This is what makes assembly cheap: no 12×12 products per tet.
+//
+// Only the lower triangle (row ≥ column) is stored: K is symmetric, CHOLMOD reads only that half,
+// and the products with K (fem/cg_solver.h MultiplySymmetric) use each stored entry twice. Against
+// full storage this halves the scattered writes of assembly and the matrix a product streams:
+// assembly 4.4 → 3.6 ms at 28.8k tets, the whole step's mean 17.2 → 15.6 ms (same machine, same
+// hour; docs/BENCHMARKS.md for the measured before and after). Read it as a full matrix with
+// K.selfadjointView<Eigen::Lower>().
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -18,7 +25,7 @@ namespace hapsim::fem {
 
 class StiffnessAssembler {
  public:
-  // Builds the symmetric (full storage, column-major) pattern of all node pairs sharing a tet.
+  // Builds the lower triangle (column-major) of the pattern of all node pairs sharing a tet.
   explicit StiffnessAssembler(const Model& model);
 
   // Overwrites the values of *K (which must have this assembler's pattern; see MakeMatrix) with
@@ -34,9 +41,11 @@ class StiffnessAssembler {
 
  private:
   Eigen::SparseMatrix<double> pattern_;
-  // Per tet, per block (a, b) and column c of it: the value index of row 3·node_a in column
-  // 3·node_b + c; rows 3·node_a + r follow at + r because rows are sorted within a column.
-  std::vector<std::array<int, 48>> block_value_index_;
+  // Per tet, per node pair p = (a, b ≥ a) in the order (0,0) (0,1) .. (3,3), and column c of its
+  // block in the lower triangle (columns of the smaller node, rows of the larger): the value index
+  // of the block's first row in that column; the other rows follow at + 1, + 2 because rows are
+  // sorted within a column. A diagonal block (a = b) holds rows r ≥ c, from the diagonal entry.
+  std::vector<std::array<int, 30>> block_value_index_;
   std::vector<int> diagonal_value_index_;
 };
 

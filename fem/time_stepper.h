@@ -59,7 +59,8 @@ class TimeStepper {
   // Element rotations of the last step (at the positions it started from).
   const std::vector<Eigen::Matrix3d>& rotations() const { return rotations_; }
   const LinearSolver* solver() const { return solver_.get(); }
-  // A = M + Δt D + Δt² K of the last CalcFreeVelocityChange (identity rows/columns at fixed dofs).
+  // A = M + Δt D + Δt² K of the last CalcFreeVelocityChange (identity rows/columns at fixed dofs);
+  // its lower triangle, as K is stored (fem/stiffness_assembly.h).
   const Eigen::SparseMatrix<double>& system_matrix() const { return system_; }
   // The same A at rest (every element rotation the identity): the matrix whose inverse the
   // warped contact compliance precomputes (fem/warped_compliance.h).

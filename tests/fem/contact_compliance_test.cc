@@ -53,7 +53,8 @@ TEST(ContactCompliance, CholmodMatchesDenseInverse) {
   stepper.CalcFreeVelocityChange(state, &dv);
   const Eigen::SparseMatrix<double> J = MakeContactRows(model, 12, 3);
   const Eigen::MatrixXd W = stepper.CalcCompliance(J);
-  const Eigen::MatrixXd A = Eigen::MatrixXd(stepper.system_matrix());
+  const Eigen::MatrixXd A = Eigen::MatrixXd(
+      Eigen::SparseMatrix<double>(stepper.system_matrix().selfadjointView<Eigen::Lower>()));
   const Eigen::MatrixXd Jd = Eigen::MatrixXd(J);
   const Eigen::MatrixXd expected = Jd * A.ldlt().solve(Jd.transpose());
   EXPECT_LT((W - expected).norm(), 1e-10 * expected.norm());
@@ -78,7 +79,8 @@ TEST(ContactCompliance, LaggedFactorApproximatesTheCurrentCompliance) {
   stepper.CalcFreeVelocityChange(MakeRestState(model), &dv);  // factor at rest
   stepper.CalcFreeVelocityChange(state, &dv);                 // A at the bent state
   const Eigen::SparseMatrix<double> J = MakeContactRows(model, 12, 4);
-  const Eigen::MatrixXd A = Eigen::MatrixXd(stepper.system_matrix());
+  const Eigen::MatrixXd A = Eigen::MatrixXd(
+      Eigen::SparseMatrix<double>(stepper.system_matrix().selfadjointView<Eigen::Lower>()));
   const Eigen::MatrixXd Jd = Eigen::MatrixXd(J);
   const Eigen::MatrixXd exact = Jd * A.ldlt().solve(Jd.transpose());
   const double relative_error = (stepper.CalcCompliance(J) - exact).norm() / exact.norm();
@@ -97,7 +99,8 @@ Eigen::MatrixXd CalcDenseCompliance(TimeStepper* stepper, const State& state,
                                     const Eigen::SparseMatrix<double>& J) {
   Eigen::VectorXd dv;
   stepper->CalcFreeVelocityChange(state, &dv);
-  const Eigen::MatrixXd A = Eigen::MatrixXd(stepper->system_matrix());
+  const Eigen::MatrixXd A = Eigen::MatrixXd(
+      Eigen::SparseMatrix<double>(stepper->system_matrix().selfadjointView<Eigen::Lower>()));
   const Eigen::MatrixXd Jd = Eigen::MatrixXd(J);
   return Jd * A.ldlt().solve(Jd.transpose());
 }
@@ -126,7 +129,8 @@ TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
   EXPECT_EQ(warped.num_cached_nodes(), [&] {  // each node solved once, on first use
     std::vector<int> nodes;
     for (int k = 0; k < J.outerSize(); ++k)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(J, k); it; ++it) nodes.push_back(it.col() / 3);
+      for (Eigen::SparseMatrix<double>::InnerIterator it(J, k); it; ++it)
+        nodes.push_back(it.col() / 3);
     std::sort(nodes.begin(), nodes.end());
     return static_cast<int>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
   }());

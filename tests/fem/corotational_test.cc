@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "fem/cg_solver.h"
 #include "fem/lattice_mesher.h"
 #include "fem/model.h"
 #include "fem/polar_decomposition.h"
@@ -53,7 +54,7 @@ Eigen::MatrixXd AssembleDense(const Model& model, const std::vector<Eigen::Matri
   const StiffnessAssembler assembler(model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
   assembler.Assemble(model, rotations, &K);
-  return Eigen::MatrixXd(K);
+  return Eigen::MatrixXd(Eigen::SparseMatrix<double>(K.selfadjointView<Eigen::Lower>()));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -129,7 +130,7 @@ double StiffnessDirectionalError(const Model& model, const Eigen::VectorXd& x_m,
   const StiffnessAssembler assembler(model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
   assembler.Assemble(model, rotations, &K);
-  const Eigen::VectorXd K_delta = K * direction;
+  const Eigen::VectorXd K_delta = K.selfadjointView<Eigen::Lower>() * direction;
   const double step_m = kFdStep * kCell_m;
   const Eigen::VectorXd fd = -(CalcElasticForceAt(model, x_m + step_m * direction, kind) -
                                CalcElasticForceAt(model, x_m - step_m * direction, kind)) /
@@ -432,6 +433,18 @@ TEST(WarpedStiffness, EqualsRotatedTextbookElementStiffness) {
   // arbitrary (the formulas hold for any R_e, not only the polar one).
   const Eigen::Matrix<double, 12, 12> K_e =
       MakeTextbookElementStiffness(model.tet_rest[0], model.material);
+  // The same tet with its nodes listed in another order: local node a is global node
+  // order[a], so the lower triangle receives blocks K_ab both as they are (a's node larger) and
+  // transposed (b's larger). P maps local dofs to global ones.
+  TetMesh permuted_mesh = mesh;
+  const int order[4] = {2, 0, 3, 1};
+  Eigen::Matrix<double, 12, 12> P = Eigen::Matrix<double, 12, 12>::Zero();
+  for (int a = 0; a < 4; ++a) {
+    permuted_mesh.tets(a, 0) = order[a];
+    permuted_mesh.rest_positions_m.col(order[a]) = mesh.rest_positions_m.col(a);
+    P.block<3, 3>(3 * order[a], 3 * a).setIdentity();
+  }
+  const Model permuted_model = MakeModel(permuted_mesh, MakeMaterial(), {});
   for (int trial = 0; trial < 5; ++trial) {
     const Eigen::Matrix3d R = random.Rotation();
     Eigen::Matrix<double, 12, 12> R_big = Eigen::Matrix<double, 12, 12>::Zero();
@@ -439,6 +452,8 @@ TEST(WarpedStiffness, EqualsRotatedTextbookElementStiffness) {
     const Eigen::MatrixXd K = AssembleDense(model, {R});
     const Eigen::Matrix<double, 12, 12> K_slow = R_big * K_e * R_big.transpose();
     EXPECT_LE((K - K_slow).norm(), kAssemblyRoundOff * K_slow.norm());
+    const Eigen::MatrixXd K_permuted = AssembleDense(permuted_model, {R});
+    EXPECT_LE((K_permuted - P * K_slow * P.transpose()).norm(), kAssemblyRoundOff * K_slow.norm());
 
     // Force f = −R K_e (Rᵀx − X) and energy ½ uᵀ K_e u with u = Rᵀx − X.
     const Eigen::VectorXd x_m = TransformPoints(R, Eigen::Vector3d::Zero(),
@@ -451,6 +466,29 @@ TEST(WarpedStiffness, EqualsRotatedTextbookElementStiffness) {
     EXPECT_NEAR(CalcElasticEnergy(model, x_m, {R}), 0.5 * u_m.dot(K_e * u_m),
                 kAssemblyRoundOff * K_e.norm() * u_m.squaredNorm());
   }
+}
+
+// MultiplySymmetric reads only the stored lower triangle; its product must equal the dense
+// product with the full symmetric matrix, which is built independently of it by Eigen.
+TEST(WarpedStiffness, ProductFromTheLowerTriangleEqualsTheFullProduct) {
+  const Model model = MakeBlockModel();
+  Random random(19);
+  const Eigen::VectorXd x_m =
+      TransformPoints(ArbitraryRotation(), Eigen::Vector3d::Zero(), model.rest_positions_m) +
+      0.1 * kCell_m * random.Vector(model.num_dofs());
+  std::vector<Eigen::Matrix3d> rotations;
+  CalcElementRotations(model, x_m, ElasticityKind::kCorotational, &rotations);
+  const StiffnessAssembler assembler(model);
+  Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
+  assembler.Assemble(model, rotations, &K);
+  for (Eigen::Index col = 0; col < K.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K, col); it; ++it)
+      ASSERT_GE(it.row(), it.col());  // only the lower triangle is stored
+  const Eigen::VectorXd v = random.Vector(model.num_dofs());
+  Eigen::VectorXd Kv;
+  MultiplySymmetric(K, v, &Kv);
+  const Eigen::VectorXd expected = AssembleDense(model, rotations) * v;
+  EXPECT_LE((Kv - expected).norm(), kAssemblyRoundOff * expected.norm());
 }
 
 }  // namespace

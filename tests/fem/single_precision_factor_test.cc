@@ -31,7 +31,8 @@ Eigen::SparseMatrix<double> MakeSystemMatrix() {
 
 TEST(SinglePrecisionFactor, SolvesToFloatAccuracyAgainstADenseSolve) {
   const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
-  const Eigen::MatrixXd A_dense = Eigen::MatrixXd(A);
+  const Eigen::MatrixXd A_dense =
+      Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>()));
   const Eigen::LDLT<Eigen::MatrixXd> dense(A_dense);
   const Eigen::VectorXd eigenvalues =
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A_dense, Eigen::EigenvaluesOnly).eigenvalues();

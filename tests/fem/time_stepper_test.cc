@@ -237,7 +237,10 @@ double DenseMaxOmegaSquared(const Model& model) {
   assembler.Assemble(
       model, std::vector<Eigen::Matrix3d>(model.num_tets(), Eigen::Matrix3d::Identity()), &K);
   const Eigen::VectorXd inv_sqrt_mass = model.dof_mass_kg.cwiseSqrt().cwiseInverse();
-  Eigen::MatrixXd B = inv_sqrt_mass.asDiagonal() * Eigen::MatrixXd(K) * inv_sqrt_mass.asDiagonal();
+  Eigen::MatrixXd B =
+      inv_sqrt_mass.asDiagonal() *
+      Eigen::MatrixXd(Eigen::SparseMatrix<double>(K.selfadjointView<Eigen::Lower>())) *
+      inv_sqrt_mass.asDiagonal();
   for (int i = 0; i < model.num_dofs(); ++i)
     if (model.dof_is_fixed[i]) B.row(i).setZero(), B.col(i).setZero();
   return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(B, Eigen::EigenvaluesOnly)
