@@ -10,8 +10,8 @@
 // Only the lower triangle (row ≥ column) is stored: K is symmetric, CHOLMOD reads only that half,
 // and the products with K (fem/cg_solver.h MultiplySymmetric) use each stored entry twice. Against
 // full storage this halves the scattered writes of assembly and the matrix a product streams:
-// assembly 4.4 → 3.6 ms at 28.8k tets, the whole step's mean 17.2 → 15.6 ms (same machine, same
-// hour; docs/BENCHMARKS.md for the measured before and after). Read it as a full matrix with
+// assembly 4.5 → 3.8 ms at 28.8k tets and 0.49 → 0.43 ms at 3.6k, the 3.6k step's mean 1.35 →
+// 1.24 ms (fem --bench, both builds alternating, 2026-11-26). Read it as a full matrix with
 // K.selfadjointView<Eigen::Lower>().
 
 #include <Eigen/Core>
