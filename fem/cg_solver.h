@@ -20,6 +20,9 @@ class ConjugateGradientSolver final : public LinearSolver {
 
   int num_factorizations() const override { return num_factorizations_; }
   CholmodFactor* factor() override { return factor_.is_factored() ? &factor_ : nullptr; }
+  void AnalyzePattern(const Eigen::SparseMatrix<double>& A) override {
+    if (options_.preconditioner == PreconditionerKind::kLaggedCholesky) factor_.Analyze(A);
+  }
 
  private:
   void PreparePreconditioner(const Eigen::SparseMatrix<double>& A);

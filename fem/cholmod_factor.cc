@@ -59,15 +59,20 @@ CholmodFactor::~CholmodFactor() {
   cholmod_finish(&common_);
 }
 
-bool CholmodFactor::Factorize(const Eigen::SparseMatrix<double>& A) {
+void CholmodFactor::Analyze(const Eigen::SparseMatrix<double>& A) {
   if (!A.isCompressed()) throw std::invalid_argument("CholmodFactor needs a compressed matrix");
+  if (factor_ && A.nonZeros() == analysed_nonzeros_) return;
   cholmod_sparse A_view = ViewAsCholmod(A);
-  if (!factor_ || A.nonZeros() != analysed_nonzeros_) {
-    cholmod_free_factor(&factor_, &common_);
-    factor_ = cholmod_analyze(&A_view, &common_);
-    if (!factor_) throw std::runtime_error("CHOLMOD symbolic analysis failed");
-    analysed_nonzeros_ = A.nonZeros();
-  }
+  cholmod_free_factor(&factor_, &common_);
+  factored_ = false;
+  factor_ = cholmod_analyze(&A_view, &common_);
+  if (!factor_) throw std::runtime_error("CHOLMOD symbolic analysis failed");
+  analysed_nonzeros_ = A.nonZeros();
+}
+
+bool CholmodFactor::Factorize(const Eigen::SparseMatrix<double>& A) {
+  Analyze(A);
+  cholmod_sparse A_view = ViewAsCholmod(A);
   cholmod_factorize(&A_view, factor_, &common_);
   if (common_.status == CHOLMOD_OUT_OF_MEMORY) throw std::runtime_error("CHOLMOD out of memory");
   factored_ = common_.status == CHOLMOD_OK;

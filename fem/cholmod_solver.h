@@ -12,6 +12,7 @@ class CholmodSolver final : public LinearSolver {
   SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
                     Eigen::VectorXd* x) override;
   CholmodFactor* factor() override { return &factor_; }
+  void AnalyzePattern(const Eigen::SparseMatrix<double>& A) override { factor_.Analyze(A); }
   int num_factorizations() const override { return num_factorizations_; }
 
  private:

@@ -30,6 +30,11 @@ class LinearSolver {
   // a lagged Cholesky preconditioner holds one of an earlier A. Contact compliance uses it.
   virtual CholmodFactor* factor() { return nullptr; }
 
+  // The pattern A will have: a solver that factors does its ordering and symbolic analysis now
+  // (TimeStepper calls it at construction, where the pattern is built) instead of in the first
+  // Solve.
+  virtual void AnalyzePattern(const Eigen::SparseMatrix<double>& A) {}
+
   // Numeric sparse Cholesky factorisations done so far: one per Solve for CholmodSolver, those
   // of the lagged preconditioner for CG (0 with block Jacobi).
   virtual int num_factorizations() const = 0;

@@ -29,6 +29,7 @@ TimeStepper::TimeStepper(const Model& model, const FemOptions& options, double d
         fixed_offdiagonal_value_index_.push_back(k);
     }
   delta_v_m_s_.setZero(model.num_dofs());
+  if (options.integrator == IntegratorKind::kImplicitEuler) solver_->AnalyzePattern(system_);
 }
 
 StepStats TimeStepper::Step(State* state) {
@@ -82,8 +83,8 @@ void TimeStepper::TurnStiffnessIntoSystemMatrix(Eigen::SparseMatrix<double>* K) 
 
 Eigen::SparseMatrix<double> TimeStepper::MakeRestSystemMatrix() const {
   Eigen::SparseMatrix<double> A = assembler_.MakeMatrix();
-  assembler_.Assemble(model_, std::vector<Eigen::Matrix3d>(model_.num_tets(),
-                                                           Eigen::Matrix3d::Identity()), &A);
+  assembler_.Assemble(
+      model_, std::vector<Eigen::Matrix3d>(model_.num_tets(), Eigen::Matrix3d::Identity()), &A);
   TurnStiffnessIntoSystemMatrix(&A);
   return A;
 }
