@@ -1,8 +1,10 @@
 #include "contact/haptic_contact_rows.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 namespace hapsim::contact {
@@ -10,6 +12,58 @@ namespace hapsim::contact {
 void StampNewContactRows(ContactRows* rows) {
   static std::atomic<std::uint64_t> last_stamp{0};
   rows->stamp = ++last_stamp;
+}
+
+ContactRowCache::ContactRowCache(int max_rows)
+    : W(max_rows, max_rows), U(max_rows, 6), body_rhs(max_rows), mu(max_rows / 3 + 1) {}
+
+bool ContactRowCache::Holds(const ContactRows& rows) const {
+  const int m = rows.num_rows();
+  if (m != n) return false;
+  if (rows.stamp != 0) return rows.stamp == stamp;
+  // Empty rows have null data(), which memcmp must not be given even for 0 bytes.
+  const auto same = [](const double* a, const double* b, Eigen::Index size) {
+    return size == 0 || std::memcmp(a, b, sizeof(double) * size) == 0;
+  };
+  if (rows.friction_coefficient.size() != num_mu ||
+      !same(mu.data(), rows.friction_coefficient.data(), num_mu) ||
+      !same(body_rhs.data(), rows.body_rhs.data(), m))
+    return false;
+  for (int c = 0; c < 3; ++c)
+    if (!same(U.col(c).data(), rows.J_v.col(c).data(), m) ||
+        !same(U.col(3 + c).data(), rows.J_w.col(c).data(), m))
+      return false;
+  for (int c = 0; c < m; ++c)
+    if (!same(W.col(c).data(), rows.W_body.col(c).data(), m)) return false;
+  return true;
+}
+
+bool ContactRowCache::Take(const ContactRows& rows) {
+  n = rows.num_rows();
+  stamp = rows.stamp;
+  num_mu = static_cast<int>(rows.friction_coefficient.size());
+  body_rhs.head(n) = rows.body_rhs;
+  mu.head(num_mu) = rows.friction_coefficient;
+  U.topLeftCorner(n, 3) = rows.J_v;
+  U.topRightCorner(n, 3) = rows.J_w;
+  W.topLeftCorner(n, n) = rows.W_body;
+  // One pass over the lower triangle and its mirror: the largest entry, the largest asymmetry,
+  // and a sum that is finite iff every entry is (NaN escapes the max, not the sum).
+  constexpr double kSymmetryTolerance = 1e-9;
+  double scale = 0.0, asymmetry = 0.0, sum = 0.0;
+  for (int j = 0; j < n; ++j) {
+    for (int i = j; i < n; ++i) {
+      const double lower = W(i, j), upper = W(j, i);
+      sum += lower + upper;
+      scale = std::max(scale, std::abs(lower));
+      asymmetry = std::max(asymmetry, std::abs(lower - upper));
+    }
+  }
+  const bool ok = std::isfinite(sum) && body_rhs.head(n).allFinite() && U.topRows(n).allFinite() &&
+                  asymmetry <= kSymmetryTolerance * scale &&
+                  (rows.lambda_frame_N.size() == 0 || rows.lambda_frame_N.allFinite());
+  if (!ok) n = -1;  // nothing cached
+  return ok;
 }
 
 ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body,

@@ -31,16 +31,38 @@ struct ContactRows {
   Eigen::VectorXd friction_coefficient;
   // Identity for the solvers' caches. 0 (the default) promises nothing: a solver compares the
   // rows it is given with its copy bitwise, O(n²) (~65 µs at 600 rows, about half of a
-  // one-sweep friction step there). Rows stamped by StampNewContactRows promise that rows with equal stamps are equal, so
-  // a solver compares the stamp alone; the two producers that feed the haptic loop (the visual
-  // frame's export and the LCM decode) stamp what they fill, and rows changed in place must be
-  // stamped again.
+  // one-sweep friction step there). Rows stamped by StampNewContactRows promise that rows with
+  // equal stamps are equal, so a solver compares the stamp alone; the two producers that feed the
+  // haptic loop (the visual frame's export and the LCM decode) stamp what they fill, and rows
+  // changed in place must be stamped again.
   std::uint64_t stamp = 0;
   int num_rows() const { return static_cast<int>(J_v.rows()); }
 };
 
 // Gives `rows` a stamp no other rows in this process have had (an atomic counter from 1).
 void StampNewContactRows(ContactRows* rows);
+
+// A haptic solver's copy of the last rows it was handed (HapticLcpSolver, HapticFrictionSolver:
+// both keep per-row work across the steps of a frame, so they must know when the rows change).
+// Preallocated for max_rows; allocates nothing after.
+struct ContactRowCache {
+  explicit ContactRowCache(int max_rows);
+
+  // Whether `rows` are the cached ones: by stamp when they carry one (ContactRows::stamp), else
+  // bitwise (memcmp, ~4× faster than Eigen's ==). Precondition: HasConsistentShape(rows).
+  bool Holds(const ContactRows& rows) const;
+  // Copies `rows` (at most max_rows) and checks them once: every entry finite, W_body symmetric
+  // to 1e-9 of its largest entry. False, with nothing cached, if they fail.
+  bool Take(const ContactRows& rows);
+
+  int n = -1;               // rows cached; −1 before the first, or after a failed Take
+  std::uint64_t stamp = 0;  // their ContactRows::stamp
+  Eigen::MatrixXd W;        // (max × max) W_body, full storage
+  Eigen::Matrix<double, Eigen::Dynamic, 6> U;  // (max × 6) [J_v J_ω]
+  Eigen::VectorXd body_rhs;                    // (max)
+  Eigen::VectorXd mu;                          // (max / 3 + 1) μ per contact, friction rows only
+  int num_mu = 0;                              // entries of mu cached
+};
 
 // The checks both haptic solvers make of rows they are handed: W_body square of num_rows,
 // body_rhs, J_w and lambda_frame_N (if given) of num_rows rows, friction_coefficient one finite

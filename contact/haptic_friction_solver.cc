@@ -16,27 +16,20 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using MatrixX6d = Eigen::Matrix<double, Eigen::Dynamic, 6>;
 
-// W_body is accepted as symmetric when |W_ij − W_ji| ≤ this × max |W| (as HapticLcpSolver).
-constexpr double kSymmetryTolerance = 1e-9;
-
 }  // namespace
 
 // All scratch, sized once for max_rows. n rows, m = n/3 contacts; λ and the sums kept with it.
-struct HapticFrictionSolver::Workspace {
+// The rows themselves (n, W, U, body_rhs, mu) are the ContactRowCache it extends.
+struct HapticFrictionSolver::Workspace : ContactRowCache {
   Workspace(int max_rows_in, int max_sweeps_in)
-      : max_rows(max_rows_in),
+      : ContactRowCache(max_rows_in),
+        max_rows(max_rows_in),
         max_sweeps(max_sweeps_in),
-        W(max_rows_in, max_rows_in),
-        U(max_rows_in, 6),
-        body_rhs(max_rows_in),
-        mu(max_rows_in / 3 + 1),
         rhs(max_rows_in),
         lambda(max_rows_in),
         y(max_rows_in),
         W_diagonal(max_rows_in / 3 + 1) {}
 
-  bool SameRows(const ContactRows& rows) const;
-  bool CopyRows(const ContactRows& rows);
   void StartFrom(const Eigen::VectorXd& lambda_start);
   // The 3 × 3 blocks of W = W_body + U S Uᵀ at each contact (rows 3i..3i+2), for this step's S:
   // the sweeps read each once per contact, so they are formed once a step. False if a normal
@@ -58,61 +51,12 @@ struct HapticFrictionSolver::Workspace {
 
   const int max_rows;
   const int max_sweeps;
-  int n = -1;               // rows of the cached set; −1 before the first, or after a failure
-  std::uint64_t stamp = 0;  // ContactRows::stamp of the cached set
-  Eigen::MatrixXd W;        // (max × max) W_body, full storage (its columns update y)
-  MatrixX6d U;              // (max × 6) [J_v J_ω]
-  Eigen::VectorXd body_rhs, mu;
   Matrix6d S = Matrix6d::Zero();            // this step's tool compliance
   Eigen::VectorXd rhs;                      // this step's body_rhs − U s_free
   Eigen::VectorXd lambda, y;                // λ and W_body λ
   std::vector<Eigen::Matrix3d> W_diagonal;  // per contact, this step's (CalcDiagonalBlocks)
   Vector6d g = Vector6d::Zero();            // Uᵀλ
 };
-
-// Stamped rows: the stamp (ContactRows::stamp). Else bitwise, as HapticLcpSolver.
-bool HapticFrictionSolver::Workspace::SameRows(const ContactRows& rows) const {
-  const int m = rows.num_rows();
-  if (m != n) return false;
-  if (rows.stamp != 0) return rows.stamp == stamp;
-  // Empty rows have null data(), which memcmp must not be given even for 0 bytes.
-  const auto same = [](const double* a, const double* b, int size) {
-    return size == 0 || std::memcmp(a, b, sizeof(double) * size) == 0;
-  };
-  if (!same(body_rhs.data(), rows.body_rhs.data(), m) ||
-      !same(mu.data(), rows.friction_coefficient.data(), m / 3))
-    return false;
-  for (int c = 0; c < 3; ++c)
-    if (!same(U.col(c).data(), rows.J_v.col(c).data(), m) ||
-        !same(U.col(3 + c).data(), rows.J_w.col(c).data(), m))
-      return false;
-  for (int c = 0; c < m; ++c)
-    if (!same(W.col(c).data(), rows.W_body.col(c).data(), m)) return false;
-  return true;
-}
-
-bool HapticFrictionSolver::Workspace::CopyRows(const ContactRows& rows) {
-  n = rows.num_rows();
-  stamp = rows.stamp;
-  body_rhs.head(n) = rows.body_rhs;
-  mu.head(n / 3) = rows.friction_coefficient;
-  U.topLeftCorner(n, 3) = rows.J_v;
-  U.topRightCorner(n, 3) = rows.J_w;
-  W.topLeftCorner(n, n) = rows.W_body;
-  double scale = 0.0, asymmetry = 0.0, sum = 0.0;  // the sum is finite iff every entry is
-  for (int j = 0; j < n; ++j) {
-    for (int i = j; i < n; ++i) {
-      sum += W(i, j) + W(j, i);
-      scale = std::max(scale, std::abs(W(i, j)));
-      asymmetry = std::max(asymmetry, std::abs(W(i, j) - W(j, i)));
-    }
-  }
-  const bool ok = std::isfinite(sum) && body_rhs.head(n).allFinite() && U.topRows(n).allFinite() &&
-                  asymmetry <= kSymmetryTolerance * scale &&
-                  (rows.lambda_frame_N.size() == 0 || rows.lambda_frame_N.allFinite());
-  if (!ok) n = -1;
-  return ok;
-}
 
 // λ, y = W_body λ and g = Uᵀλ from a start (zero-sized: λ = 0). Its normal impulses are clamped
 // at zero and tangential ones into the disc, so that every iterate is admissible.
@@ -200,7 +144,7 @@ Eigen::Ref<const Eigen::VectorXd> HapticFrictionSolver::last_impulses() const {
 bool HapticFrictionSolver::Prepare(const ContactRows& rows) {
   Workspace& ws = *ws_;
   if (rows.num_rows() > ws.max_rows || rows.rows_per_contact != 3 || !HasConsistentShape(rows) ||
-      !ws.CopyRows(rows))
+      !ws.Take(rows))
     return false;
   ws.StartFrom(rows.lambda_frame_N);
   return true;
@@ -223,8 +167,8 @@ bool HapticFrictionSolver::Solve(const ContactRows& rows, const ToolStepSystem& 
   const double dt_s = tool.dt_s;
   Vector6d s_free;
   if (!CalcToolCompliance(tool, F_hat_N, T_hat_N_m, &ws.S, &s_free)) return false;
-  if (!ws.SameRows(rows)) {
-    if (!ws.CopyRows(rows)) return false;
+  if (!ws.Holds(rows)) {
+    if (!ws.Take(rows)) return false;
     ws.StartFrom(rows.lambda_frame_N);
   }
   if (n == 0) return true;

@@ -28,7 +28,6 @@ using BorderVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, k
 // A row enters when c_i < −kEnteringTolerance · max(1, ‖rhs‖∞), as in SolveContactImpulses.
 constexpr double kEnteringTolerance = 1e-12;
 // W_body is accepted as symmetric when |W_ij − W_ji| ≤ this × max |W|.
-constexpr double kSymmetryTolerance = 1e-9;
 // A converged solve whose complementarity residual (CalcResidual) exceeds this is redone from a
 // fresh factorisation. Exact solves reach ~1e-14; the tests ask for 1e-10.
 constexpr double kRetryResidual = 1e-9;
@@ -85,12 +84,11 @@ bool FactorCholeskyInPlace(Eigen::Ref<Eigen::MatrixXd> K) {
 // (one forward substitution) per change; with r_B = body_rhs_B − U_B s_free everything
 // step-dependent in the border is 6-dimensional, and x_B = L⁻ᵀ(h − Y [s_free + y; ξ]) costs one
 // back substitution per solve.
-struct HapticLcpSolver::Workspace {
+// The rows themselves (n, W, U, body_rhs) are the ContactRowCache it extends.
+struct HapticLcpSolver::Workspace : ContactRowCache {
   explicit Workspace(int max_rows_in)
-      : max_rows(max_rows_in),
-        W(max_rows_in, max_rows_in),
-        U(max_rows_in, 6),
-        body_rhs(max_rows_in),
+      : ContactRowCache(max_rows_in),
+        max_rows(max_rows_in),
         U_bar(max_rows_in, 6),
         base_rows(max_rows_in, -1),
         base_pos(max_rows_in, -1),
@@ -124,8 +122,6 @@ struct HapticLcpSolver::Workspace {
   double W_lower(int i, int j) const { return i >= j ? W(i, j) : W(j, i); }
   double W_bar(int i, int j) const { return W_lower(i, j) + U_bar.row(i).dot(U.row(j)); }
 
-  bool SameRows(const ContactRows& rows) const;
-  bool CopyRows(const ContactRows& rows);
   bool Rebase();
   void ForwardSolveInPlace(int first, Eigen::Ref<Eigen::VectorXd> v) const;
   void BackSolveInPlace(Eigen::Ref<Eigen::VectorXd> v) const;
@@ -150,12 +146,6 @@ struct HapticLcpSolver::Workspace {
   }
 
   const int max_rows;
-  // The rows of the last call (the cache key); n = −1 before the first.
-  int n = -1;
-  std::uint64_t stamp = 0;  // ContactRows::stamp of the cached set
-  Eigen::MatrixXd W;        // (max x max) W_body
-  MatrixX6d U;              // (max x 6) [J_v J_ω]
-  Eigen::VectorXd body_rhs;
   // This step's tool: S = blockdiag(A_v⁻¹, M⁻¹A_L⁻¹), s_free = (v_free, ω_free).
   Matrix6d S = Matrix6d::Zero();
   Vector6d s_free = Vector6d::Zero();
@@ -185,49 +175,6 @@ struct HapticLcpSolver::Workspace {
   BorderVector rho, xi, coef;
   Eigen::PartialPivLU<BorderMatrix> C_lu;
 };
-
-// Stamped rows: the stamp (ContactRows::stamp). Else a bitwise comparison, column by column
-// (memcmp: ~4× faster than Eigen's ==).
-bool HapticLcpSolver::Workspace::SameRows(const ContactRows& rows) const {
-  const int m = rows.num_rows();
-  if (m != n) return false;
-  if (rows.stamp != 0) return rows.stamp == stamp;
-  const auto same = [m](const double* a, const double* b) {
-    return std::memcmp(a, b, sizeof(double) * m) == 0;
-  };
-  if (!same(body_rhs.data(), rows.body_rhs.data())) return false;
-  for (int c = 0; c < 3; ++c)
-    if (!same(U.col(c).data(), rows.J_v.col(c).data()) ||
-        !same(U.col(3 + c).data(), rows.J_w.col(c).data()))
-      return false;
-  for (int c = 0; c < m; ++c)
-    if (!same(W.col(c).data(), rows.W_body.col(c).data())) return false;
-  return true;
-}
-
-bool HapticLcpSolver::Workspace::CopyRows(const ContactRows& rows) {
-  n = rows.num_rows();
-  stamp = rows.stamp;
-  body_rhs.head(n) = rows.body_rhs;
-  U.topLeftCorner(n, 3) = rows.J_v;
-  U.topRightCorner(n, 3) = rows.J_w;
-  W.topLeftCorner(n, n) = rows.W_body;
-  // One pass over the lower triangle and its mirror: the largest entry, the largest asymmetry,
-  // and a sum that is finite iff every entry is (NaN escapes the max, not the sum).
-  double scale = 0.0, asymmetry = 0.0, sum = 0.0;
-  for (int j = 0; j < n; ++j) {
-    for (int i = j; i < n; ++i) {
-      const double lower = W(i, j), upper = W(j, i);
-      sum += lower + upper;
-      scale = std::max(scale, std::abs(lower));
-      asymmetry = std::max(asymmetry, std::abs(lower - upper));
-    }
-  }
-  const bool ok = std::isfinite(sum) && body_rhs.head(n).allFinite() && U.topRows(n).allFinite() &&
-                  asymmetry <= kSymmetryTolerance * scale;
-  if (!ok) n = -1;  // nothing cached
-  return ok;
-}
 
 // v ← L⁻¹ v for a v that is zero above row `first` (only rows first.. are touched).
 void HapticLcpSolver::Workspace::ForwardSolveInPlace(int first,
@@ -524,7 +471,7 @@ bool HapticLcpSolver::Prepare(const ContactRows& rows, const ToolStepSystem& too
     return false;
   if (!CalcToolCompliance(tool, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), &ws.S,
                           &ws.s_free) ||
-      !ws.CopyRows(rows)) {
+      !ws.Take(rows)) {
     ws.n = -1;
     return false;
   }
@@ -569,8 +516,8 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
     last_solved_ = true;
     return true;
   }
-  const bool new_rows = !ws.SameRows(rows);
-  if (new_rows && !ws.CopyRows(rows)) return false;
+  const bool new_rows = !ws.Holds(rows);
+  if (new_rows && !ws.Take(rows)) return false;
   ws.r.head(n) = ws.body_rhs.head(n);
   ws.r.head(n).noalias() -= ws.U.topRows(n) * ws.s_free;
   if (new_rows) {

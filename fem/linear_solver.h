@@ -33,7 +33,7 @@ class LinearSolver {
   // The pattern A will have: a solver that factors does its ordering and symbolic analysis now
   // (TimeStepper calls it at construction, where the pattern is built) instead of in the first
   // Solve.
-  virtual void AnalyzePattern(const Eigen::SparseMatrix<double>& A) {}
+  virtual void AnalyzePattern(const Eigen::SparseMatrix<double>& /*A*/) {}
 
   // Numeric sparse Cholesky factorisations done so far: one per Solve for CholmodSolver, those
   // of the lagged preconditioner for CG (0 with block Jacobi).

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <set>
 #include <string>
@@ -359,6 +360,17 @@ TEST(HapticLcpSolver, RejectsAnAsymmetricBodyBlockAndRecovers) {
   EXPECT_FALSE(solver.Solve(bad, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c));
   EXPECT_EQ(F_c, Eigen::Vector3d::Zero());
   ExpectMatchesReference(&solver, p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, "after rejection");
+  // New rows whose frame impulse (the first guess of the active set) is not a number are refused
+  // the same way: the check is ContactRowCache's, shared with the friction solver. (The same rows
+  // as the cached ones are not read again, and their guess is not needed.)
+  HapticLcpSolver fresh(10);
+  ContactRows nan_guess = p.rows;
+  nan_guess.lambda_frame_N = Eigen::VectorXd::Zero(nan_guess.num_rows());
+  nan_guess.lambda_frame_N[2] = std::numeric_limits<double>::quiet_NaN();
+  F_c.setOnes();
+  EXPECT_FALSE(fresh.Solve(nan_guess, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c));
+  EXPECT_EQ(F_c, Eigen::Vector3d::Zero());
+  ExpectMatchesReference(&fresh, p.rows, p.tool, p.F_hat_N, p.T_hat_N_m, "after a NaN guess");
   // No rows: no force.
   ContactRows none;
   EXPECT_TRUE(solver.Solve(none, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c));
