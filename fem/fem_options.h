@@ -26,7 +26,7 @@ enum class PreconditionerKind { kLaggedCholesky, kBlockJacobi };
 // 28.8k tets (3.1 against 5.8 ms: L no longer overflows the L3 cache), 1.3x at 3.6k. The float
 // factor leaves a residual near CG's 1e-6 tolerance, so about one step in six needs a second
 // iteration (1.4 a step against 1.25 over 200 steps from rest); net, the 28.8k step's mean is
-// 15.5 against 17.8 ms, the 3.6k step's the same (1.37 ms; L fits in cache either way), and
+// 15.5 against 17.3 ms, the 3.6k step's 1.23 against 1.26 (L fits in cache either way), and
 // block_press's frames are faster (docs/BENCHMARKS.md, issue 13). Answers agree to CG's
 // tolerance: device forces within 5e-8 N RMS, the same number of refactorisations.
 enum class FactorPrecision { kSingle, kDouble };
