@@ -6,7 +6,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <stdexcept>
 
 namespace hapsim::contact {
@@ -27,7 +26,6 @@ using BorderVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, k
 
 // A row enters when c_i < −kEnteringTolerance · max(1, ‖rhs‖∞), as in SolveContactImpulses.
 constexpr double kEnteringTolerance = 1e-12;
-// W_body is accepted as symmetric when |W_ij − W_ji| ≤ this × max |W|.
 // A converged solve whose complementarity residual (CalcResidual) exceeds this is redone from a
 // fresh factorisation. Exact solves reach ~1e-14; the tests ask for 1e-10.
 constexpr double kRetryResidual = 1e-9;

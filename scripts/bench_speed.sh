@@ -20,6 +20,9 @@ cd "$(dirname "$0")/.."
 # One core, as issue 13's targets are stated: Debian's CHOLMOD is built with OpenMP and would
 # otherwise run parts of its factorisations on a second thread (BLAS is openblas-serial).
 export OMP_NUM_THREADS=1
+# The tree the "after" build is made from, now (setup.sh builds it next): "-dirty" if it differs
+# from its commit.
+after_rev=$(git describe --always --dirty)
 scripts/setup.sh
 base_rev=${1:-4eceff2}
 out=out/speed
@@ -54,5 +57,5 @@ for run in before after; do
     --benchmark_out="$out/$run/friction.json" --benchmark_out_format=json > /dev/null
 done
 # Debian's interpreter (the one python3-matplotlib is installed for; no chart here, but the same).
-/usr/bin/python3 scripts/bench/speed_table.py "$out" "$base_rev" | tee "$out/speed.md"
+/usr/bin/python3 scripts/bench/speed_table.py "$out" "$base_rev" "$after_rev" | tee "$out/speed.md"
 echo "speed: outputs in $out/"

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The before/after tables of scripts/bench_speed.sh, from its outputs.
 
-Usage: scripts/bench/speed_table.py OUT_DIR BASE_REV
+Usage: scripts/bench/speed_table.py OUT_DIR BASE_REV AFTER_REV
 
 OUT_DIR holds before/ and after/ (each: fem/fem_bench.json, fem_step.json, friction.json and the
 `hapsim sim` folders) and reference/ (block_press at 1 kHz). Prints Markdown and writes
@@ -120,10 +120,12 @@ def friction_table(out):
     return data
 
 
-def main(out, base_rev):
-    result = {"base_rev": base_rev, "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+def main(out, base_rev, after_rev):
+    result = {"base_rev": base_rev, "after_rev": after_rev,
+              "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
               "machine": platform.processor() or platform.machine()}
-    print(f"Before: {base_rev}; after: the working tree. Run of {result['date']}.\n")
+    print(f"Before: {base_rev}; after: {after_rev} (the tree built when the run began). "
+          f"Tables written {result['date']}.\n")
     result["fem"] = fem_table(out)
     result["frames"] = frame_table(out)
     result["friction"] = friction_table(out)
@@ -134,6 +136,6 @@ def main(out, base_rev):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
+    if len(sys.argv) != 4:
         sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2])
+    main(sys.argv[1], sys.argv[2], sys.argv[3])
