@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 namespace hapsim::fem {
@@ -17,6 +18,8 @@ void MultiplySymmetric(const Eigen::SparseMatrix<double>& A, const Eigen::Vector
   for (Eigen::Index j = 0; j < A.cols(); ++j) {
     int k = outer[j];
     const int end = outer[j + 1];
+    // Full storage would count every off-diagonal entry twice.
+    assert((k == end || rows[k] >= j) && "MultiplySymmetric needs the lower triangle only");
     const double x_j = in[j];
     double sum = 0.0;
     if (k < end && rows[k] == j) sum = values[k++] * x_j;  // the diagonal, first in its column

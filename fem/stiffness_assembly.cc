@@ -1,6 +1,8 @@
 #include "fem/stiffness_assembly.h"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace hapsim::fem {
 namespace {
@@ -47,7 +49,14 @@ StiffnessAssembler::StiffnessAssembler(const Model& model) {
       }
   }
   diagonal_value_index_.resize(num_dofs);
-  for (int i = 0; i < num_dofs; ++i) diagonal_value_index_[i] = FindValueIndex(pattern_, i, i);
+  for (int i = 0; i < num_dofs; ++i) {
+    diagonal_value_index_[i] = FindValueIndex(pattern_, i, i);
+    // The mass and the fixed-dof identity are written there (TimeStepper): a node in no tet has
+    // no entry, and no stiffness or mass either.
+    if (diagonal_value_index_[i] < 0)
+      throw std::invalid_argument("StiffnessAssembler: node " + std::to_string(i / 3) +
+                                  " belongs to no tet");
+  }
 }
 
 void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::Matrix3d>& rotations,
