@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -489,6 +491,24 @@ TEST(WarpedStiffness, ProductFromTheLowerTriangleEqualsTheFullProduct) {
   MultiplySymmetric(K, v, &Kv);
   const Eigen::VectorXd expected = AssembleDense(model, rotations) * v;
   EXPECT_LE((Kv - expected).norm(), kAssemblyRoundOff * expected.norm());
+}
+
+// A node in no tet would have no diagonal entry for its mass: refused with its index.
+TEST(WarpedStiffness, ANodeInNoTetIsRefused) {
+  TetMesh mesh;
+  mesh.rest_positions_m.resize(3, 5);
+  mesh.rest_positions_m << 0.0, 0.01, 0.0, 0.0, 0.05,  //
+      0.0, 0.0, 0.01, 0.0, 0.05,                       //
+      0.0, 0.0, 0.0, 0.01, 0.05;
+  mesh.tets.resize(4, 1);
+  mesh.tets << 0, 1, 2, 3;
+  const Model model = MakeModel(mesh, MakeMaterial(), {});
+  try {
+    const StiffnessAssembler assembler(model);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("node 4"), std::string::npos) << error.what();
+  }
 }
 
 }  // namespace
