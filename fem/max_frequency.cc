@@ -14,8 +14,9 @@ MaxFrequencyEstimate EstimateMaxFrequency(const Model& model, double tolerance,
   const int n = model.num_dofs();
   const StiffnessAssembler assembler(model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
-  assembler.Assemble(
-      model, std::vector<Eigen::Matrix3d>(model.num_tets(), Eigen::Matrix3d::Identity()), &K);
+  assembler.Assemble(model,
+                     std::vector<Eigen::Matrix3d>(model.num_tets(), Eigen::Matrix3d::Identity()),
+                     /*scale=*/1.0, &K);
   // x ↦ M^(−1/2) K M^(−1/2) x on the free dofs (fixed dofs held at zero).
   Eigen::VectorXd inv_sqrt_mass(n);
   bool any_free = false;

@@ -60,13 +60,13 @@ StiffnessAssembler::StiffnessAssembler(const Model& model) {
 }
 
 void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::Matrix3d>& rotations,
-                                  Eigen::SparseMatrix<double>* K) const {
+                                  double scale, Eigen::SparseMatrix<double>* K) const {
   double* values = K->valuePtr();
   std::fill(values, values + K->nonZeros(), 0.0);
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
-    const double mu_V = rest.lame_mu_Pa * rest.volume_m3;
-    const double lambda_V = rest.lame_lambda_Pa * rest.volume_m3;
+    const double mu_V = scale * rest.lame_mu_Pa * rest.volume_m3;
+    const double lambda_V = scale * rest.lame_lambda_Pa * rest.volume_m3;
     const Eigen::Matrix<double, 3, 4>& b = rest.shape_gradients_1_m;
     const Eigen::Matrix<double, 3, 4> c = rotations[t] * b;
     const Eigen::Matrix4d gram = b.transpose() * b;  // b_a · b_b

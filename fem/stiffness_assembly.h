@@ -29,8 +29,9 @@ class StiffnessAssembler {
   explicit StiffnessAssembler(const Model& model);
 
   // Overwrites the values of *K (which must have this assembler's pattern; see MakeMatrix) with
-  // Σ_e R_e K_e R_eᵀ. Allocates nothing.
-  void Assemble(const Model& model, const std::vector<Eigen::Matrix3d>& rotations,
+  // scale · Σ_e R_e K_e R_eᵀ. The implicit step wants (Δt β + Δt²) K: scaling the element
+  // constants saves a pass over the matrix. Allocates nothing.
+  void Assemble(const Model& model, const std::vector<Eigen::Matrix3d>& rotations, double scale,
                 Eigen::SparseMatrix<double>* K) const;
 
   // A matrix with the pattern and zero values.

@@ -3,7 +3,6 @@
 #include <stdexcept>
 
 #include "core/stopwatch.h"
-#include "fem/cg_solver.h"
 #include "fem/corotational.h"
 
 namespace hapsim::fem {
@@ -69,23 +68,25 @@ void TimeStepper::Advance(const Eigen::VectorXd& dv_m_s, State* state) const {
   state->x_m += dt_s_ * state->v_m_s;
 }
 
-void TimeStepper::TurnStiffnessIntoSystemMatrix(Eigen::SparseMatrix<double>* K) const {
-  const double h = dt_s_;
+void TimeStepper::AddMassAndFixedDofs(Eigen::SparseMatrix<double>* A) const {
   const double alpha = model_.material.rayleigh_alpha_1_s;
-  const double beta = model_.material.rayleigh_beta_s;
-  double* values = K->valuePtr();
-  Eigen::Map<Eigen::VectorXd>(values, K->nonZeros()) *= h * beta + h * h;
+  double* values = A->valuePtr();
   for (int i = 0; i < model_.num_dofs(); ++i)
-    values[assembler_.diagonal_value_index()[i]] += (1.0 + h * alpha) * model_.dof_mass_kg[i];
+    values[assembler_.diagonal_value_index()[i]] += (1.0 + dt_s_ * alpha) * model_.dof_mass_kg[i];
   for (int k : fixed_offdiagonal_value_index_) values[k] = 0.0;
   for (int i : fixed_dofs_) values[assembler_.diagonal_value_index()[i]] = 1.0;
 }
 
+double TimeStepper::StiffnessScale() const {
+  return dt_s_ * (model_.material.rayleigh_beta_s + dt_s_);
+}
+
 Eigen::SparseMatrix<double> TimeStepper::MakeRestSystemMatrix() const {
   Eigen::SparseMatrix<double> A = assembler_.MakeMatrix();
-  assembler_.Assemble(
-      model_, std::vector<Eigen::Matrix3d>(model_.num_tets(), Eigen::Matrix3d::Identity()), &A);
-  TurnStiffnessIntoSystemMatrix(&A);
+  assembler_.Assemble(model_,
+                      std::vector<Eigen::Matrix3d>(model_.num_tets(), Eigen::Matrix3d::Identity()),
+                      StiffnessScale(), &A);
+  AddMassAndFixedDofs(&A);
   return A;
 }
 
@@ -99,14 +100,17 @@ StepStats TimeStepper::CalcImplicitVelocityChange(const State& state, Eigen::Vec
   CalcElementRotations(model_, state.x_m, options_.elasticity, &rotations_);
   stats.rotations_s = stage.Lap();
 
-  assembler_.Assemble(model_, rotations_, &system_);
-  CalcElasticForce(model_, state.x_m, rotations_, &elastic_force_N_);
-  MultiplySymmetric(system_, state.v_m_s, &stiffness_times_v_N_);
-  // Δt F̃ = Δt (f_ext + f_el − αM v − (β + Δt) K v)
-  rhs_ = h *
-         (external_force_N_ + elastic_force_N_ -
-          alpha * model_.dof_mass_kg.cwiseProduct(state.v_m_s) - (beta + h) * stiffness_times_v_N_);
-  TurnStiffnessIntoSystemMatrix(&system_);
+  // With the rotations held, f_el is affine in x (f_el(x) = −Σ_e R_e K_e (R_eᵀ x_e − X_e)), so
+  //   f_el(x) − (β + Δt) K v = f_el(x + (β + Δt) v):
+  // one element pass at the shifted positions gives the elastic, damping and implicit terms of
+  // Δt F̃ = Δt (f_ext + f_el − αM v − (β + Δt) K v), with no product with K.
+  shifted_x_m_ = state.x_m + (beta + h) * state.v_m_s;
+  CalcElasticForce(model_, shifted_x_m_, rotations_, &elastic_force_N_);
+  rhs_ = h * (external_force_N_ + elastic_force_N_ -
+              alpha * model_.dof_mass_kg.cwiseProduct(state.v_m_s));
+  // A = (1 + Δt α) M + (Δt β + Δt²) K: K is assembled already scaled.
+  assembler_.Assemble(model_, rotations_, StiffnessScale(), &system_);
+  AddMassAndFixedDofs(&system_);
   for (int i : fixed_dofs_) rhs_[i] = 0.0;
   stats.assembly_s = stage.Lap();
 
@@ -127,14 +131,11 @@ StepStats TimeStepper::CalcExplicitVelocityChange(const State& state, Eigen::Vec
   CalcElementRotations(model_, state.x_m, options_.elasticity, &rotations_);
   stats.rotations_s = stage.Lap();
 
-  CalcElasticForce(model_, state.x_m, rotations_, &elastic_force_N_);
+  // f_el(x) − β K v = f_el(x + β v) with the rotations held (as in the implicit step).
+  shifted_x_m_ = state.x_m + beta * state.v_m_s;
+  CalcElasticForce(model_, shifted_x_m_, rotations_, &elastic_force_N_);
   rhs_ =
       external_force_N_ + elastic_force_N_ - alpha * model_.dof_mass_kg.cwiseProduct(state.v_m_s);
-  if (beta > 0.0) {  // stiffness damping needs K v
-    assembler_.Assemble(model_, rotations_, &system_);
-    MultiplySymmetric(system_, state.v_m_s, &stiffness_times_v_N_);
-    rhs_ -= beta * stiffness_times_v_N_;
-  }
   stats.assembly_s = stage.Lap();
 
   *dv_m_s = h * rhs_.cwiseQuotient(model_.dof_mass_kg);

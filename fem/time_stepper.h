@@ -69,8 +69,11 @@ class TimeStepper {
  private:
   StepStats CalcImplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s);
   StepStats CalcExplicitVelocityChange(const State& state, Eigen::VectorXd* dv_m_s);
-  // K → A = (1 + Δt α) M + (Δt β + Δt²) K in place, with identity rows and columns at fixed dofs.
-  void TurnStiffnessIntoSystemMatrix(Eigen::SparseMatrix<double>* K) const;
+  // Δt β + Δt², the factor of K in A.
+  double StiffnessScale() const;
+  // (Δt β + Δt²) K → A = (1 + Δt α) M + (Δt β + Δt²) K in place, with identity rows and columns
+  // at fixed dofs.
+  void AddMassAndFixedDofs(Eigen::SparseMatrix<double>* A) const;
 
   const Model& model_;
   FemOptions options_;
@@ -83,7 +86,7 @@ class TimeStepper {
   // Scratch.
   std::vector<Eigen::Matrix3d> rotations_;
   Eigen::SparseMatrix<double> system_;  // K, then A in place
-  Eigen::VectorXd elastic_force_N_, stiffness_times_v_N_, rhs_, delta_v_m_s_, scratch_rhs_;
+  Eigen::VectorXd shifted_x_m_, elastic_force_N_, rhs_, delta_v_m_s_, scratch_rhs_;
 };
 
 // Gravity on the lumped masses: f = m_n g for every node (3N, N).

@@ -66,7 +66,7 @@ void BM_ForcesAndStiffness(benchmark::State& bench) {
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
   Eigen::VectorXd force_N;
   for (auto _ : bench) {
-    assembler.Assemble(f.body.model, rotations, &K);
+    assembler.Assemble(f.body.model, rotations, /*scale=*/1.0, &K);
     fem::CalcElasticForce(f.body.model, f.state.x_m, rotations, &force_N);
     benchmark::DoNotOptimize(K.valuePtr());
     benchmark::DoNotOptimize(force_N.data());

@@ -55,7 +55,7 @@ Eigen::Matrix3d ArbitraryRotation() {
 Eigen::MatrixXd AssembleDense(const Model& model, const std::vector<Eigen::Matrix3d>& rotations) {
   const StiffnessAssembler assembler(model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
-  assembler.Assemble(model, rotations, &K);
+  assembler.Assemble(model, rotations, /*scale=*/1.0, &K);
   return Eigen::MatrixXd(Eigen::SparseMatrix<double>(K.selfadjointView<Eigen::Lower>()));
 }
 
@@ -131,7 +131,7 @@ double StiffnessDirectionalError(const Model& model, const Eigen::VectorXd& x_m,
   CalcElementRotations(model, x_m, kind, &rotations);
   const StiffnessAssembler assembler(model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
-  assembler.Assemble(model, rotations, &K);
+  assembler.Assemble(model, rotations, /*scale=*/1.0, &K);
   const Eigen::VectorXd K_delta = K.selfadjointView<Eigen::Lower>() * direction;
   const double step_m = kFdStep * kCell_m;
   const Eigen::VectorXd fd = -(CalcElasticForceAt(model, x_m + step_m * direction, kind) -
@@ -482,7 +482,7 @@ TEST(WarpedStiffness, ProductFromTheLowerTriangleEqualsTheFullProduct) {
   CalcElementRotations(model, x_m, ElasticityKind::kCorotational, &rotations);
   const StiffnessAssembler assembler(model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
-  assembler.Assemble(model, rotations, &K);
+  assembler.Assemble(model, rotations, /*scale=*/1.0, &K);
   for (Eigen::Index col = 0; col < K.outerSize(); ++col)
     for (Eigen::SparseMatrix<double>::InnerIterator it(K, col); it; ++it)
       ASSERT_GE(it.row(), it.col());  // only the lower triangle is stored

@@ -68,7 +68,7 @@ inline StaticSolveReport SolveStaticEquilibrium(const Model& model, ElasticityKi
     residual_N += external_force_N;
     for (int i = 0; i < model.num_dofs(); ++i)
       if (model.dof_is_fixed[i]) residual_N[i] = 0.0;
-    assembler.Assemble(model, rotations, &K);
+    assembler.Assemble(model, rotations, /*scale=*/1.0, &K);
     double max_diagonal = 0.0;
     for (int index : assembler.diagonal_value_index())
       max_diagonal = std::max(max_diagonal, std::abs(K.valuePtr()[index]));

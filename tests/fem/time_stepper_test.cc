@@ -234,8 +234,9 @@ Model MakeSmallCantilever(double alpha_1_s = 0.0, double beta_s = 0.0) {
 double DenseMaxOmegaSquared(const Model& model) {
   const StiffnessAssembler assembler(model);
   Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
-  assembler.Assemble(
-      model, std::vector<Eigen::Matrix3d>(model.num_tets(), Eigen::Matrix3d::Identity()), &K);
+  assembler.Assemble(model,
+                     std::vector<Eigen::Matrix3d>(model.num_tets(), Eigen::Matrix3d::Identity()),
+                     /*scale=*/1.0, &K);
   const Eigen::VectorXd inv_sqrt_mass = model.dof_mass_kg.cwiseSqrt().cwiseInverse();
   Eigen::MatrixXd B =
       inv_sqrt_mass.asDiagonal() *
@@ -527,6 +528,60 @@ TEST(TimeStepper, ConjugateGradientAgreesWithCholmod) {
     std::printf("CG %s (%s): %d iterations in 10 steps, worst |v_cg - v_cholmod| / |dv| = %.2e\n",
                 ToString(preconditioner), factor, iterations, worst_ratio);
   }
+}
+
+// The step's formula written out densely, term by term (DESIGN.md §2), at a rotated, strained and
+// moving state with both Rayleigh terms: the stepper forms f_el − (β + Δt) K v as f_el at
+// x + (β + Δt) v and assembles K already scaled, and must still solve exactly this.
+TEST(TimeStepper, StepsSolveTheDenseFormula) {
+  const Model model = MakeSmallCantilever(/*alpha_1_s=*/0.5, /*beta_s=*/2e-3);
+  const double dt_s = 5e-3;
+  Random random(7);
+  State state = MakeDeflectedState(model, 0.3);
+  const Eigen::Matrix3d turn = random.Rotation();
+  for (int n = 0; n < model.num_nodes(); ++n)
+    state.x_m.segment<3>(3 * n) = turn * state.x_m.segment<3>(3 * n);
+  state.v_m_s = test::ZeroFixedDofs(model, 0.05 * random.Vector(model.num_dofs()));
+  const Eigen::VectorXd gravity_N = CalcGravityForce(model, {0.0, 0.0, -kGravity_m_s2});
+
+  std::vector<Eigen::Matrix3d> rotations;
+  CalcElementRotations(model, state.x_m, ElasticityKind::kCorotational, &rotations);
+  const StiffnessAssembler assembler(model);
+  Eigen::SparseMatrix<double> K_lower = assembler.MakeMatrix();
+  assembler.Assemble(model, rotations, /*scale=*/1.0, &K_lower);
+  const Eigen::MatrixXd K(Eigen::SparseMatrix<double>(K_lower.selfadjointView<Eigen::Lower>()));
+  Eigen::VectorXd f_el_N;
+  CalcElasticForce(model, state.x_m, rotations, &f_el_N);
+  const double alpha = model.material.rayleigh_alpha_1_s, beta = model.material.rayleigh_beta_s;
+  const Eigen::VectorXd M = model.dof_mass_kg, v = state.v_m_s;
+
+  // Implicit: A Δv = Δt (f_ext + f_el − αM v − (β + Δt) K v), identity rows at fixed dofs.
+  Eigen::MatrixXd A = dt_s * (beta + dt_s) * K;
+  A.diagonal() += (1.0 + dt_s * alpha) * M;
+  Eigen::VectorXd rhs =
+      dt_s * (gravity_N + f_el_N - alpha * M.cwiseProduct(v) - (beta + dt_s) * (K * v));
+  for (int i = 0; i < model.num_dofs(); ++i)
+    if (model.dof_is_fixed[i]) A.row(i).setZero(), A.col(i).setZero(), A(i, i) = 1.0, rhs[i] = 0;
+  const Eigen::VectorXd implicit_expected = A.ldlt().solve(rhs);
+  TimeStepper implicit(model, MakeOptions(IntegratorKind::kImplicitEuler, SolverKind::kCholmod),
+                       dt_s, gravity_N);
+  Eigen::VectorXd dv;
+  implicit.CalcFreeVelocityChange(state, &dv);
+  // Both are direct solves of a system with κ ~ 1e3: round-off, far below the Kv term's share.
+  EXPECT_LE((dv - implicit_expected).norm(), 1e-10 * implicit_expected.norm());
+  const Eigen::VectorXd kv_term = dt_s * (beta + dt_s) * (K * v);
+  ASSERT_GT(A.ldlt().solve(test::ZeroFixedDofs(model, kv_term)).norm(),
+            1e-3 * implicit_expected.norm());  // the term being checked matters
+
+  // Explicit: Δv = Δt M⁻¹ (f_ext + f_el − αM v − β K v) on the free dofs.
+  const Eigen::VectorXd explicit_expected = test::ZeroFixedDofs(
+      model,
+      dt_s * (gravity_N + f_el_N - alpha * M.cwiseProduct(v) - beta * (K * v)).cwiseQuotient(M));
+  TimeStepper symplectic(model, MakeOptions(IntegratorKind::kExplicitEuler, SolverKind::kCholmod),
+                         dt_s, gravity_N);
+  symplectic.CalcFreeVelocityChange(state, &dv);
+  EXPECT_LE((test::ZeroFixedDofs(model, dv) - explicit_expected).norm(),
+            1e-12 * explicit_expected.norm());
 }
 
 // ---------------------------------------------------------------------------------------------
