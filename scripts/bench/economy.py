@@ -47,7 +47,10 @@ BENCH_ONLY = {"hertz_indentation": "bench-only (the indentation experiment's Her
               "cantilever": "bench-only (the cantilever experiment; no tool)",
               "block_press_friction": "block_press with the friction law (issue 13), measured "
                                       "against its reference in docs/CONTACT.md: its frame's "
-                                      "friction sweeps take ~150 ms, past the sweeps' budget"}
+                                      "friction sweeps take ~150 ms, past the sweeps' budget",
+              "block_press_large": "block_press on the 28,800-tet block (issue 13): a speed "
+                                   "scene, measured by scripts/bench_speed.sh; its finest "
+                                   "variant here (~97k tets) would not fit the bench's budget"}
 # Per scene: the finest mesh's factor (cells × f; an ellipsoid's cell size / f) and a shortened
 # script (time.num_steps) where the full one would not fit the bench's budget; why, for the page.
 PLAN = {
