@@ -1,10 +1,22 @@
 #include "fem/cholmod_factor.h"
 
+#include <omp.h>
+
 #include <stdexcept>
 #include <vector>
 
 namespace hapsim::fem {
 namespace {
+
+// Debian's CHOLMOD is built with OpenMP and asks for CHOLMOD_OMP_NUM_THREADS = 4 threads (a
+// compile-time constant in a num_threads clause, which OMP_NUM_THREADS does not override) in the
+// supernodal factorisation's scatter loops. On this 2-core machine, where the haptic process
+// holds a core, those threads mostly wait on each other: a factorisation took 12.0 ms wall for
+// 6.7 ms of the calling thread's CPU at 3.6k tets, and 178 ms for 118 ms at 28.8k; run on the
+// calling thread alone it takes 4.9 and 108 ms (BM_Factorize, 2026-11-26). With no active
+// parallel level allowed every OpenMP region runs on the calling thread. The setting belongs to
+// the calling thread, so it is made before each call into CHOLMOD, not once.
+void KeepCholmodOnCallingThread() { omp_set_max_active_levels(0); }
 
 // A CHOLMOD view (no copy) of a compressed column-major symmetric matrix, reading its lower half.
 cholmod_sparse ViewAsCholmod(const Eigen::SparseMatrix<double>& A) {
@@ -63,6 +75,7 @@ void CholmodFactor::Analyze(const Eigen::SparseMatrix<double>& A) {
   if (!A.isCompressed()) throw std::invalid_argument("CholmodFactor needs a compressed matrix");
   if (factor_ && A.nonZeros() == analysed_nonzeros_) return;
   cholmod_sparse A_view = ViewAsCholmod(A);
+  KeepCholmodOnCallingThread();
   cholmod_free_factor(&factor_, &common_);
   factored_ = false;
   factor_ = cholmod_analyze(&A_view, &common_);
@@ -73,6 +86,7 @@ void CholmodFactor::Analyze(const Eigen::SparseMatrix<double>& A) {
 bool CholmodFactor::Factorize(const Eigen::SparseMatrix<double>& A) {
   Analyze(A);
   cholmod_sparse A_view = ViewAsCholmod(A);
+  KeepCholmodOnCallingThread();
   cholmod_factorize(&A_view, factor_, &common_);
   if (common_.status == CHOLMOD_OUT_OF_MEMORY) throw std::runtime_error("CHOLMOD out of memory");
   factored_ = common_.status == CHOLMOD_OK;
@@ -89,6 +103,7 @@ void CholmodFactor::SolveSinglePrecision(const Eigen::VectorXd& b, Eigen::Vector
 void CholmodFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
   if (!factored_) throw std::logic_error("CholmodFactor::Solve before a successful Factorize");
   cholmod_dense b_view = ViewAsCholmod(b);
+  KeepCholmodOnCallingThread();
   if (!cholmod_solve2(CHOLMOD_A, factor_, &b_view, nullptr, &solution_, nullptr, &work_y_, &work_e_,
                       &common_))
     throw std::runtime_error("CHOLMOD solve failed");
@@ -99,6 +114,7 @@ Eigen::MatrixXd CholmodFactor::SolveColumns(const Eigen::MatrixXd& B) {
   if (!factored_)
     throw std::logic_error("CholmodFactor::SolveColumns before a successful Factorize");
   cholmod_dense B_view = ViewAsCholmod(B);
+  KeepCholmodOnCallingThread();
   cholmod_dense* X = cholmod_solve(CHOLMOD_A, factor_, &B_view, &common_);
   if (!X) throw std::runtime_error("CHOLMOD solve failed");
   Eigen::MatrixXd result =
@@ -119,6 +135,7 @@ Eigen::MatrixXd CholmodFactor::CalcInverseQuadraticForm(const Eigen::SparseMatri
   Jt.makeCompressed();
   cholmod_sparse Jt_view = ViewAsCholmod(Jt);
   Jt_view.stype = 0;  // unsymmetric (rectangular)
+  KeepCholmodOnCallingThread();
   cholmod_sparse* PJt = cholmod_spsolve(CHOLMOD_P, factor_, &Jt_view, &common_);
   cholmod_sparse* Z = PJt ? cholmod_spsolve(CHOLMOD_L, factor_, PJt, &common_) : nullptr;
   cholmod_free_sparse(&PJt, &common_);
