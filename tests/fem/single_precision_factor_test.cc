@@ -1,6 +1,7 @@
 // The single-precision copy of a CHOLMOD factor (fem/single_precision_factor.h) against a dense
 // solve of the same system matrix (a second method): equal to float accuracy, i.e. far closer
 // than a preconditioner needs and far from exact, which shows it really is the float path.
+#include <dirent.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -68,6 +69,32 @@ TEST(SinglePrecisionFactor, RefusedWithoutACopy) {
   ASSERT_TRUE(factor.Factorize(MakeSystemMatrix()));
   Eigen::VectorXd x;
   EXPECT_THROW(factor.SolveSinglePrecision(Eigen::VectorXd::Ones(3), &x), std::logic_error);
+}
+
+// Threads of this process, from /proc/self/task.
+int CountThreads() {
+  DIR* tasks = opendir("/proc/self/task");
+  if (!tasks) return -1;
+  int count = 0;
+  while (const dirent* entry = readdir(tasks))
+    if (entry->d_name[0] != '.') ++count;
+  closedir(tasks);
+  return count;
+}
+
+// Debian's CHOLMOD asks for 4 OpenMP threads inside its supernodal factorisation; CholmodFactor
+// keeps it on the calling thread (fem/cholmod_factor.cc). A thread started by OpenMP would stay
+// in its pool after the call, so the process must have as many threads after as before (one for
+// gtest; a sanitizer may add its own).
+TEST(CholmodFactor, FactorisesOnTheCallingThreadOnly) {
+  const int threads_before = CountThreads();
+  ASSERT_GE(threads_before, 1);
+  const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
+  CholmodFactor factor;
+  ASSERT_TRUE(factor.Factorize(A));
+  Eigen::VectorXd x;
+  factor.Solve(Eigen::VectorXd::Ones(A.rows()), &x);
+  EXPECT_EQ(CountThreads(), threads_before);
 }
 
 }  // namespace
