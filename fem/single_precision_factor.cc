@@ -8,6 +8,39 @@ namespace {
 
 using BlockMap = Eigen::Map<const Eigen::MatrixXf, 0, Eigen::OuterStride<>>;
 
+// Supernodes of at most this many columns take plain loops instead of Eigen's dense kernels:
+// most supernodes are one mesh node (3 columns; 413 of 489 on the 3.6k-tet block, 2478 of 3000 on
+// the 28.8k one), and for them the setup of Eigen's triangular solve and product cost more than
+// the arithmetic.
+constexpr int kSmallSupernodeColumns = 4;
+
+// Forward step of one small supernode: y_cols ← D⁻¹ y_cols (D the lower-triangular diagonal
+// block), then y[rows] −= B y_cols (B the rows below), reading L column by column as stored.
+void SolveSmallForward(const float* L, int nsrow, int nscol, const int* rows_below, float* y_cols,
+                       float* y) {
+  for (int c = 0; c < nscol; ++c) {
+    const float* column = L + c * nsrow;
+    const float y_c = y_cols[c] / column[c];
+    y_cols[c] = y_c;
+    for (int r = c + 1; r < nscol; ++r) y_cols[r] -= column[r] * y_c;
+    for (int i = 0, below = nsrow - nscol; i < below; ++i)
+      y[rows_below[i]] -= column[nscol + i] * y_c;
+  }
+}
+
+// Backward step: y_cols ← D⁻ᵀ (y_cols − Bᵀ y[rows]).
+void SolveSmallBackward(const float* L, int nsrow, int nscol, const int* rows_below, float* y_cols,
+                        const float* y) {
+  for (int c = nscol - 1; c >= 0; --c) {
+    const float* column = L + c * nsrow;
+    float sum = y_cols[c];
+    for (int i = 0, below = nsrow - nscol; i < below; ++i)
+      sum -= column[nscol + i] * y[rows_below[i]];
+    for (int r = c + 1; r < nscol; ++r) sum -= column[r] * y_cols[r];
+    y_cols[c] = sum / column[c];
+  }
+}
+
 std::vector<int> CopyInts(const void* data, size_t size) {
   const int* begin = static_cast<const int*>(data);
   return std::vector<int>(begin, begin + size);
@@ -38,6 +71,11 @@ void SinglePrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) 
   for (int sn = 0; sn < num_super; ++sn) {
     const int k1 = super_[sn], nscol = super_[sn + 1] - k1;
     const int nsrow = pi_[sn + 1] - pi_[sn], below = nsrow - nscol;
+    if (nscol <= kSmallSupernodeColumns) {
+      SolveSmallForward(values_.data() + px_[sn], nsrow, nscol, s_.data() + pi_[sn] + nscol,
+                        y_.data() + k1, y_.data());
+      continue;
+    }
     const BlockMap block(values_.data() + px_[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
     auto y_cols = y_.segment(k1, nscol);
     block.topRows(nscol).triangularView<Eigen::Lower>().solveInPlace(y_cols);
@@ -51,6 +89,11 @@ void SinglePrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) 
   for (int sn = num_super - 1; sn >= 0; --sn) {
     const int k1 = super_[sn], nscol = super_[sn + 1] - k1;
     const int nsrow = pi_[sn + 1] - pi_[sn], below = nsrow - nscol;
+    if (nscol <= kSmallSupernodeColumns) {
+      SolveSmallBackward(values_.data() + px_[sn], nsrow, nscol, s_.data() + pi_[sn] + nscol,
+                         y_.data() + k1, y_.data());
+      continue;
+    }
     const BlockMap block(values_.data() + px_[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
     auto y_cols = y_.segment(k1, nscol);
     if (below > 0) {
