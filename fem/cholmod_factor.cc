@@ -1,19 +1,23 @@
 #include "fem/cholmod_factor.h"
 
-#include <omp.h>
-
 #include <stdexcept>
 #include <vector>
+
+// The one OpenMP routine used, from libgomp, the runtime Debian's CHOLMOD is built against (linked
+// in fem/CMakeLists.txt). Declared here rather than through <omp.h>: clang does not search GCC's
+// private include directory, and LLVM's omp.h is another package.
+extern "C" void omp_set_max_active_levels(int max_levels);
 
 namespace hapsim::fem {
 namespace {
 
 // Debian's CHOLMOD is built with OpenMP and asks for CHOLMOD_OMP_NUM_THREADS = 4 threads (a
 // compile-time constant in a num_threads clause, which OMP_NUM_THREADS does not override) in the
-// supernodal factorisation's scatter loops. On this 2-core machine, where the haptic process
-// holds a core, those threads mostly wait on each other: a factorisation took 12.0 ms wall for
-// 6.7 ms of the calling thread's CPU at 3.6k tets, and 178 ms for 118 ms at 28.8k; run on the
-// calling thread alone it takes 4.9 and 108 ms (BM_Factorize, 2026-11-26). With no active
+// supernodal factorisation's scatter loops. On this 2-core machine, with a one-thread job on the
+// other core as the haptic process would be, those threads mostly wait on each other: a
+// factorisation took 12.0 ms wall for 6.7 ms of the calling thread's CPU at 3.6k tets, and 178 ms
+// for 118 ms at 28.8k; on the calling thread alone it takes 4.9 and 108 ms (BM_Factorize,
+// 2026-11-26). They also took CPU from that other job. With no active
 // parallel level allowed every OpenMP region runs on the calling thread. The setting belongs to
 // the calling thread, so it is made before each call into CHOLMOD, not once.
 void KeepCholmodOnCallingThread() { omp_set_max_active_levels(0); }

@@ -16,7 +16,8 @@
 
 namespace hapsim::fem {
 
-// R_e for every tet at positions x_m (3N): CalcRotationOfDeformation(F_e), or I for kLinear.
+// R_e for every tet at positions x_m (3N): the rotation of F_e (CalcRotationsOfDeformation, many
+// tets at a time), or I for kLinear.
 // `rotations` must have num_tets() entries (resized if not).
 void CalcElementRotations(const Model& model, const Eigen::VectorXd& x_m, ElasticityKind kind,
                           std::vector<Eigen::Matrix3d>* rotations);

@@ -36,9 +36,14 @@ struct SolverOptions {
   PreconditionerKind preconditioner = PreconditionerKind::kLaggedCholesky;
   double relative_tolerance = 1e-6;  // CG stops at ‖r‖ ≤ tol · ‖b‖
   int max_iterations = 1000;         // CG iteration cap
-  // kLaggedCholesky: a numeric factorisation costs about as much as 40–60 preconditioned CG
-  // iterations on the reference blocks (measured here: 236 ms vs 6 ms at 28.8k tets, 16 ms vs
-  // 0.27 ms at 3.6k tets), hence the default. Deterministic: counts iterations, not time.
+  // kLaggedCholesky: the stale factor's extra iterations allowed before a new factor, about what a
+  // numeric factorisation costs in preconditioned CG iterations. Chosen when a factorisation took
+  // 40–60 (236 ms vs 6 ms at 28.8k tets, 16 vs 0.27 ms at 3.6k). Since CHOLMOD runs on one thread
+  // and the float factor's apply is faster (2026-11-26) it is nearer 25–30 (107 vs ~3.6 ms, 4.9
+  // vs ~0.2 ms), but a budget of 25 measured no better: fem 200-step means 1.05 vs 1.12 ms at
+  // 3.6k, 13.0–14.0 vs 13.5–14.3 ms at 28.8k; block_press_large's mean frame 74–79 vs 70 ms
+  // (two runs each), where a fresh factor leaves 2–3 iterations a solve rather than 1.
+  // Deterministic: counts iterations, not time.
   int refactor_budget_iterations = 50;
   FactorPrecision factor_precision = FactorPrecision::kSingle;  // kLaggedCholesky only
 };

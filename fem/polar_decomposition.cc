@@ -106,8 +106,10 @@ struct alignas(64) LaneBlock {
     double x[9];
     for (int k = 0; k < 9; ++k) x[k] = b->x[k][l] * inverse;
     // x[r + 3c] = X(r, c).
-    const double det = x[0] * (x[4] * x[8] - x[7] * x[5]) - x[1] * (x[3] * x[8] - x[6] * x[5]) +
-                       x[2] * (x[3] * x[7] - x[6] * x[4]);
+    // Eigen's 3×3 determinant, X(0,0)(X(1,1)X(2,2) − X(1,2)X(2,1)) − X(0,1)(..) + X(0,2)(..),
+    // term for term, so the fast-path test decides as the scalar function's does.
+    const double det = x[0] * (x[4] * x[8] - x[7] * x[5]) - x[3] * (x[1] * x[8] - x[7] * x[2]) +
+                       x[6] * (x[1] * x[5] - x[4] * x[2]);
     const bool fast = (scale > 0.0) & (scale <= std::numeric_limits<double>::max()) &
                       (det >= kMinRelativeDeterminant);  // each false for NaN
     for (int k = 0; k < 9; ++k) b->x[k][l] = fast ? x[k] : (k % 4 == 0 ? 1.0 : 0.0);

@@ -8,7 +8,8 @@
 // This is what makes assembly cheap: no 12×12 products per tet.
 //
 // Only the lower triangle (row ≥ column) is stored: K is symmetric, CHOLMOD reads only that half,
-// and the products with K (fem/cg_solver.h MultiplySymmetric) use each stored entry twice. Against
+// and CG's products with A = M + … K (fem/cg_solver.h MultiplySymmetric) use each stored entry
+// twice. Against
 // full storage this halves the scattered writes of assembly and the matrix a product streams:
 // assembly 4.5 → 3.8 ms at 28.8k tets and 0.49 → 0.43 ms at 3.6k, the 3.6k step's mean 1.35 →
 // 1.24 ms (fem --bench, both builds alternating, 2026-11-26). Read it as a full matrix with

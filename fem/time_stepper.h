@@ -60,7 +60,8 @@ class TimeStepper {
   const std::vector<Eigen::Matrix3d>& rotations() const { return rotations_; }
   const LinearSolver* solver() const { return solver_.get(); }
   // A = M + Δt D + Δt² K of the last CalcFreeVelocityChange (identity rows/columns at fixed dofs);
-  // its lower triangle, as K is stored (fem/stiffness_assembly.h).
+  // its lower triangle, as K is stored (fem/stiffness_assembly.h). Implicit integrator only: the
+  // explicit step assembles no matrix.
   const Eigen::SparseMatrix<double>& system_matrix() const { return system_; }
   // The same A at rest (every element rotation the identity): the matrix whose inverse the
   // warped contact compliance precomputes (fem/warped_compliance.h).
@@ -85,7 +86,7 @@ class TimeStepper {
   std::vector<int> fixed_dofs_;
   // Scratch.
   std::vector<Eigen::Matrix3d> rotations_;
-  Eigen::SparseMatrix<double> system_;  // K, then A in place
+  Eigen::SparseMatrix<double> system_;  // (Δt β + Δt²) K, then A in place (implicit only)
   Eigen::VectorXd shifted_x_m_, elastic_force_N_, rhs_, delta_v_m_s_, scratch_rhs_;
 };
 

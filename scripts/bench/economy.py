@@ -41,7 +41,8 @@ from economy_report import chart, markdown
 sys.path.insert(0, os.path.join(REPO, "scripts"))
 from compare_modes import errors, read_forces  # noqa: E402
 
-# Bench-only scenes: measured by their own experiments (indentation, cantilever), not interactive.
+# Bench-only scenes: measured by their own experiments (indentation, cantilever) or scripts
+# (block_press_friction, block_press_large), not swept here.
 BENCH_ONLY = {"hertz_indentation": "bench-only (the indentation experiment's Hertz press)",
               "flat_punch": "bench-only (the indentation experiment's Boussinesq press)",
               "cantilever": "bench-only (the cantilever experiment; no tool)",

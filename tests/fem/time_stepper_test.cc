@@ -573,6 +573,25 @@ TEST(TimeStepper, StepsSolveTheDenseFormula) {
   ASSERT_GT(A.ldlt().solve(test::ZeroFixedDofs(model, kv_term)).norm(),
             1e-3 * implicit_expected.norm());  // the term being checked matters
 
+  // The same A at rest (every rotation I), as the warped compliance factors it.
+  Eigen::SparseMatrix<double> K_rest_lower = assembler.MakeMatrix();
+  assembler.Assemble(model,
+                     std::vector<Eigen::Matrix3d>(model.num_tets(), Eigen::Matrix3d::Identity()),
+                     /*scale=*/1.0, &K_rest_lower);
+  Eigen::MatrixXd A_rest =
+      dt_s * (beta + dt_s) *
+      Eigen::MatrixXd(Eigen::SparseMatrix<double>(K_rest_lower.selfadjointView<Eigen::Lower>()));
+  A_rest.diagonal() += (1.0 + dt_s * alpha) * M;
+  for (int i = 0; i < model.num_dofs(); ++i)
+    if (model.dof_is_fixed[i]) A_rest.row(i).setZero(), A_rest.col(i).setZero(), A_rest(i, i) = 1;
+  const Eigen::SparseMatrix<double> A_rest_lower = implicit.MakeRestSystemMatrix();
+  EXPECT_LE(
+      (Eigen::MatrixXd(Eigen::SparseMatrix<double>(A_rest_lower.selfadjointView<Eigen::Lower>())) -
+       A_rest)
+          .cwiseAbs()
+          .maxCoeff(),
+      1e-14 * A_rest.cwiseAbs().maxCoeff());
+
   // Explicit: Δv = Δt M⁻¹ (f_ext + f_el − αM v − β K v) on the free dofs.
   const Eigen::VectorXd explicit_expected = test::ZeroFixedDofs(
       model,
