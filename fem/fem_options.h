@@ -22,11 +22,13 @@ enum class SolverKind { kConjugateGradient, kCholmod };
 enum class PreconditionerKind { kLaggedCholesky, kBlockJacobi };
 
 // Precision of the lagged Cholesky factor's triangular solves (CG itself is double). kSingle
-// applies a float copy of the factor (fem/single_precision_factor.h): one apply 1.9x faster at
-// 28.8k tets (3.1 against 5.8 ms: L no longer overflows the L3 cache), 1.3x at 3.6k. The float
+// applies a float copy of the factor (fem/single_precision_factor.h): one apply 2.7x faster at
+// 28.8k tets (2.4 against 6.5 ms: L no longer overflows the L3 cache), 1.6x at 3.6k (0.12
+// against 0.20 ms; BM_FactorSolve, 2026-11-26). The float
 // factor leaves a residual near CG's 1e-6 tolerance, so about one step in six needs a second
 // iteration (1.4 a step against 1.25 over 200 steps from rest); net, the 28.8k step's mean is
-// 15.5 against 17.3 ms, the 3.6k step's 1.23 against 1.26 (L fits in cache either way), and
+// 13.1 against 15.4 ms, the 3.6k step's 0.83 against 1.20 (bench_fem.sh, 2026-11-26 05:42; 0.81
+// against 0.87 in a run 20 minutes before: the 3.6k means are noisy), and
 // block_press's frames are faster (docs/BENCHMARKS.md, issue 13). Answers agree to CG's
 // tolerance: device forces within 5e-8 N RMS, the same number of refactorisations.
 enum class FactorPrecision { kSingle, kDouble };
