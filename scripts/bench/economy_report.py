@@ -34,9 +34,15 @@ def chart(bench, scenes):
                          marker="s" if knob == "combined" else "o", s=22, zorder=3,
                          label=KNOB_NAMES[knob])
             # The combined runs' labels go below their squares: a combination that moved one
-            # knob only sits on that knob's point, whose label is above it.
-            offset = (4, -9) if knob == "combined" else (4, 3)
-            for r in mine:
+            # knob only sits on that knob's point, whose label is above it. A knob's own labels
+            # alternate above and below along the cost axis, so that neighbours (20 and 25 Hz)
+            # do not print over each other.
+            # A point a combined square sits on keeps its label above.
+            for i, r in enumerate(sorted(mine, key=lambda r: r["cost_ms_per_s"])):
+                under_square = knob != "combined" and any(
+                    c["cost_ms_per_s"] == r["cost_ms_per_s"] for c in extra)
+                below = knob == "combined" or (i % 2 and not under_square)
+                offset = (4, -9) if below else (4, 3)
                 axis.annotate(r["label"], (r["cost_ms_per_s"], max(r["rms_error_N"], floor)),
                               textcoords="offset points", xytext=offset, fontsize=6.5,
                               color=COLORS[knob])
@@ -56,6 +62,9 @@ def chart(bench, scenes):
                         else f"{name}: the finest is needed") +
                  f"\n(dashed: tolerance {result['tolerance_N']:.3g} N)")
         axis.title.set_fontsize(10)
+        # A panel spanning less than a decade labels its minor ticks (3×10⁻², 4×10⁻², ...):
+        # smaller figures keep them apart.
+        axis.tick_params(which="both", labelsize=7)
         axis.grid(True, which="both", alpha=0.3)
         for handle, label in zip(*axis.get_legend_handles_labels()):
             legend.setdefault(label, handle)
