@@ -290,7 +290,16 @@ def fast_markdown(result):
                  for mode in modes}
     least_pen = {mode: min(p["haptic_penetration_m"] for p in points if p["mode"] == mode)
                  for mode in modes}
-    why = {"lcp": " (its 1 kHz problem keeps the frame's inactive rows within the margin)",
+    # Since issue 13's smaller lcp models the frame sends only the rows an approach at
+    # haptic.lcp_reach_m_s (5 mm/s by default) or the tool's present approach engages within
+    # the frame: a tool that starts faster between frames meets no row, as in the linear mode
+    # (with lcp_reach_m_s: 0, every row, it held 0.004 mm at 0.5 m/s; checked by hand,
+    # 2026-11-26). Said from the run's own figures, not assumed.
+    lcp_fails = worst_pen.get("lcp", 0.0) > PENETRATION_LIMIT_M
+    why = {"lcp": (" (its model now carries only the rows an approach at haptic.lcp_reach_m_s "
+                   "engages within a frame, so a tool faster than that between frames meets no "
+                   "row; with every row, lcp_reach_m_s 0, it held)" if lcp_fails else
+                   " (its 1 kHz problem keeps the frame's inactive rows within the margin)"),
            "coupling": " (the device feels the visual tool, which the frame's constraints hold)",
            "penalty": f", and at least {1e3 * least_pen.get('penalty', 0.0):.2f} mm even slowly: "
                       "it sinks by F/k into the frame's surface whatever the speed (a soft "
