@@ -292,13 +292,12 @@ def fast_markdown(result):
                  for mode in modes}
     # Since issue 13's smaller lcp models the frame sends only the rows an approach at
     # haptic.lcp_reach_m_s (5 mm/s by default) or the tool's present approach engages within
-    # the frame: a tool that starts faster between frames meets no row, as in the linear mode
-    # (with lcp_reach_m_s: 0, every row, it held 0.004 mm at 0.5 m/s; checked by hand,
-    # 2026-11-26). Said from the run's own figures, not assumed.
+    # the frame: a tool that starts faster between frames meets no row, as in the linear mode.
+    # Which of the two explanations is printed follows the run's own figures.
     lcp_fails = worst_pen.get("lcp", 0.0) > PENETRATION_LIMIT_M
-    why = {"lcp": (" (its model now carries only the rows an approach at haptic.lcp_reach_m_s "
+    why = {"lcp": (" (its model carries only the rows an approach at haptic.lcp_reach_m_s "
                    "engages within a frame, so a tool faster than that between frames meets no "
-                   "row; with every row, lcp_reach_m_s 0, it held)" if lcp_fails else
+                   "row)" if lcp_fails else
                    " (its 1 kHz problem keeps the frame's inactive rows within the margin)"),
            "coupling": " (the device feels the visual tool, which the frame's constraints hold)",
            "penalty": f", and at least {1e3 * least_pen.get('penalty', 0.0):.2f} mm even slowly: "
