@@ -16,10 +16,11 @@ namespace {
 // supernodal factorisation's scatter loops. On this 2-core machine, with a one-thread job on the
 // other core as the haptic process would be, those threads mostly wait on each other: a
 // factorisation took 12.0 ms wall for 6.7 ms of the calling thread's CPU at 3.6k tets, and 178 ms
-// for 118 ms at 28.8k; on the calling thread alone it takes 4.9 and 108 ms (BM_Factorize,
-// 2026-11-26). They also took CPU from that other job. With no active parallel level allowed,
-// every OpenMP region runs on the calling thread. The setting belongs to the calling thread, so it
-// is made before each call into CHOLMOD, not once.
+// for 118 ms at 28.8k (a hand run before this setting, 2026-11-26: no command reproduces it now);
+// on the calling thread alone it takes 4.9 and 108 ms (BM_Factorize regenerates those). The
+// threads also took CPU from that other job. With no active parallel level allowed, every
+// OpenMP region runs on the calling thread. The setting belongs to the calling thread, so it is
+// made before each call into CHOLMOD, not once.
 void KeepCholmodOnCallingThread() { omp_set_max_active_levels(0); }
 
 // A CHOLMOD view (no copy) of a compressed column-major symmetric matrix, reading its lower half.
