@@ -120,13 +120,16 @@
 //       tool: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}   # as objects'
 //       body: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}   # the body's
 //     lcp_max_rows: 512                # ≥ 1: rows the 1 kHz lcp solver holds (≈ 16 n² bytes);
-//                                      # a frame with more falls back to the linear model
+//                                      # the frame sends at most this many (the far candidates
+//                                      # last); more active ones fall back to the linear model
 //     lcp_friction_sweeps: 5           # ≥ 1, contact.law friction only: the lcp friction
 //                                      # solve's sweeps per haptic step (its time bound;
 //                                      # contact/haptic_friction_solver.h)
-//     lcp_reach_m_s: 0.005             # ≥ 0: the lcp model carries the frame's active contacts
-//                                      # and those an approach this fast engages within a frame
-//                                      # (smaller models; docs/CONTACT.md); 0: every candidate
+//     lcp_reach_m_s: 0.005             # ≥ 0: of the candidates the lcp model carries, the
+//                                      # active ones and those an approach this much faster
+//                                      # engages within a frame couple through the body; the
+//                                      # others travel uncoupled (smaller models;
+//                                      # docs/CONTACT.md). 0: all coupled
 //     safety:                          # optional: the haptic process's limits
 //     (device/haptic_safety.h)
 //       {max_force_N: 10, max_torque_N_m: 0.5, max_force_rate_N_s: 5000,
@@ -273,7 +276,7 @@ struct HapticScene {
   HapticMode mode = HapticMode::kLinear;
   int lcp_max_rows = 512;
   int lcp_friction_sweeps = 5;   // contact.law friction: Gauss–Seidel sweeps per lcp step
-  double lcp_reach_m_s = 0.005;  // lcp rows: active ones and those this approach engages; 0: all
+  double lcp_reach_m_s = 0.005;  // lcp rows coupled: active and those this approach engages
   device::SafetyLimits safety;
   int steps_per_frame = 0;  // rate_hz · dt_s (an integer ≥ 1); set only when there is a tool
   // penalty, material, impact modes (the rigid objects' materials come from `objects`).

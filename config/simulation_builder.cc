@@ -20,6 +20,7 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   options.compliance = scene.contact.compliance;
   options.model_compliance_step = scene.contact.model_compliance_step;
   options.lcp_reach_m_s = scene.haptic.lcp_reach_m_s;
+  options.lcp_max_rows = scene.haptic.lcp_max_rows;
   for (const RigidObjectScene& rigid : scene.rigid_objects)
     options.rigid_objects.push_back(rigid.object);
   return options;
@@ -62,8 +63,7 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
 }
 
 int LcpFrictionSweeps(const Scene& scene) {
-  return scene.contact.law == contact::ContactLaw::kFriction ? scene.haptic.lcp_friction_sweeps
-                                                              : 0;
+  return scene.contact.law == contact::ContactLaw::kFriction ? scene.haptic.lcp_friction_sweeps : 0;
 }
 
 device::MultirateOptions MakeMultirateOptions(const Scene& scene, device::HapticMode mode,

@@ -19,7 +19,7 @@ ContactRowCache::ContactRowCache(int max_rows)
 
 bool ContactRowCache::Holds(const ContactRows& rows) const {
   const int m = rows.num_rows();
-  if (m != n) return false;
+  if (m != n || rows.num_coupled_rows() != coupled || rows.rows_per_contact != per) return false;
   if (rows.stamp != 0) return rows.stamp == stamp;
   // Empty rows have null data(), which memcmp must not be given even for 0 bytes.
   const auto same = [](const double* a, const double* b, Eigen::Index size) {
@@ -33,26 +33,35 @@ bool ContactRowCache::Holds(const ContactRows& rows) const {
     if (!same(U.col(c).data(), rows.J_v.col(c).data(), m) ||
         !same(U.col(3 + c).data(), rows.J_w.col(c).data(), m))
       return false;
-  for (int c = 0; c < m; ++c)
-    if (!same(W.col(c).data(), rows.W_body.col(c).data(), m)) return false;
+  for (int c = 0; c < coupled; ++c)
+    if (!same(W.col(c).data(), rows.W_body.col(c).data(), coupled)) return false;
+  for (int c = coupled; c < m; ++c) {
+    const int own = c - (c - coupled) % per;
+    if (!same(W.col(c).data() + own, rows.W_body.col(c).data() + own, per)) return false;
+  }
   return true;
 }
 
 bool ContactRowCache::Take(const ContactRows& rows) {
   n = rows.num_rows();
+  coupled = rows.num_coupled_rows();
+  per = rows.rows_per_contact;
   stamp = rows.stamp;
   num_mu = static_cast<int>(rows.friction_coefficient.size());
   body_rhs.head(n) = rows.body_rhs;
   mu.head(num_mu) = rows.friction_coefficient;
   U.topLeftCorner(n, 3) = rows.J_v;
   U.topRightCorner(n, 3) = rows.J_w;
-  W.topLeftCorner(n, n) = rows.W_body;
+  W.topLeftCorner(coupled, coupled) = rows.W_body.topLeftCorner(coupled, coupled);
+  for (int a = coupled; a < n; a += per)
+    W.block(a, a, per, per) = rows.W_body.block(a, a, per, per);
   // One pass over the lower triangle and its mirror: the largest entry, the largest asymmetry,
   // and a sum that is finite iff every entry is (NaN escapes the max, not the sum).
   constexpr double kSymmetryTolerance = 1e-9;
   double scale = 0.0, asymmetry = 0.0, sum = 0.0;
   for (int j = 0; j < n; ++j) {
-    for (int i = j; i < n; ++i) {
+    const int last = j < coupled ? coupled : j - (j - coupled) % per + per;  // of j's block
+    for (int i = j; i < last; ++i) {
       const double lower = W(i, j), upper = W(j, i);
       sum += lower + upper;
       scale = std::max(scale, std::abs(lower));
@@ -64,6 +73,21 @@ bool ContactRowCache::Take(const ContactRows& rows) {
                   (rows.lambda_frame_N.size() == 0 || rows.lambda_frame_N.allFinite());
   if (!ok) n = -1;  // nothing cached
   return ok;
+}
+
+void ContactRowCache::MultiplyBody(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                   Eigen::Ref<Eigen::VectorXd> y) const {
+  y.head(coupled).noalias() = W.topLeftCorner(coupled, coupled) * x.head(coupled);
+  for (int a = coupled; a < n; a += per)
+    y.segment(a, per).noalias() = W.block(a, a, per, per) * x.segment(a, per);
+}
+
+void ContactRowCache::AddContactColumns(int a, const Eigen::Vector3d& delta,
+                                        Eigen::Ref<Eigen::VectorXd> y) const {
+  if (a < coupled)
+    y.head(coupled).noalias() += W.block(0, a, coupled, 3) * delta;
+  else
+    y.segment<3>(a).noalias() += W.block<3, 3>(a, a) * delta;
 }
 
 ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body,
@@ -133,6 +157,9 @@ bool HasConsistentShape(const ContactRows& rows) {
   if (rows.J_w.rows() != n || rows.W_body.rows() != n || rows.W_body.cols() != n ||
       rows.body_rhs.size() != n ||
       (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n))
+    return false;
+  if (rows.num_uncoupled_rows < 0 || rows.num_uncoupled_rows > n ||
+      rows.num_uncoupled_rows % std::max(rows.rows_per_contact, 1) != 0)
     return false;
   if (rows.rows_per_contact == 1) return rows.friction_coefficient.size() == 0;
   return rows.rows_per_contact == 3 && rows.friction_coefficient.size() * 3 == n &&

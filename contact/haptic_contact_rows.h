@@ -29,6 +29,13 @@ struct ContactRows {
   // contact; HapticFrictionSolver solves them. With 1 (normal rows only) it is empty.
   int rows_per_contact = 1;
   Eigen::VectorXd friction_coefficient;
+  // The last num_uncoupled_rows rows, whole contacts, couple through the body only within their
+  // own contact: W_body is zero between one of them and any row of another contact, and the
+  // solvers do not read those entries (they hold zeros all the same, for dense readers). The
+  // visual frame sends the candidate contacts the tool is not expected to reach within the frame
+  // this way (issue 13 item 5): every contact travels, but its coupling costs O(n) instead of
+  // O(n²) on the wire and in each haptic step. 0: every row may couple.
+  int num_uncoupled_rows = 0;
   // Identity for the solvers' caches. 0 (the default) promises nothing: a solver compares the
   // rows it is given with its copy bitwise, O(n²) (~65 µs at 600 rows, about half of a
   // one-sweep friction step there). Rows stamped by StampNewContactRows promise that rows with
@@ -37,6 +44,7 @@ struct ContactRows {
   // changed in place must be stamped again.
   std::uint64_t stamp = 0;
   int num_rows() const { return static_cast<int>(J_v.rows()); }
+  int num_coupled_rows() const { return num_rows() - num_uncoupled_rows; }
 };
 
 // Gives `rows` a stamp no other rows in this process have had (an atomic counter from 1).
@@ -55,9 +63,25 @@ struct ContactRowCache {
   // to 1e-9 of its largest entry. False, with nothing cached, if they fail.
   bool Take(const ContactRows& rows);
 
+  // W_body(i, j) for i ≥ j: the cached lower triangle where rows couple, 0 between an uncoupled
+  // contact and any other (ContactRows::num_uncoupled_rows).
+  double BodyLower(int i, int j) const {
+    return i < coupled || i - (i - coupled) % per <= j ? W(i, j) : 0.0;
+  }
+  // y = W_body x over the n rows (x, y: n entries), reading only what may be non-zero, both
+  // triangles as stored (as AddContactColumns reads them): O(coupled² + uncoupled · per).
+  void MultiplyBody(const Eigen::Ref<const Eigen::VectorXd>& x,
+                    Eigen::Ref<Eigen::VectorXd> y) const;
+  // y += W_body[:, a..a+3) δ for the three rows of friction contact a/3 (rows_per_contact 3).
+  void AddContactColumns(int a, const Eigen::Vector3d& delta, Eigen::Ref<Eigen::VectorXd> y) const;
+
   int n = -1;               // rows cached; −1 before the first, or after a failed Take
+  int coupled = 0;          // of them, the leading rows that may couple to others
+  int per = 1;              // rows per contact
   std::uint64_t stamp = 0;  // their ContactRows::stamp
-  Eigen::MatrixXd W;        // (max × max) W_body, full storage
+  // (max × max) W_body: its rows × rows block where they couple, each uncoupled contact's own
+  // block, both full (upper entries too); the rest is not written (BodyLower).
+  Eigen::MatrixXd W;
   Eigen::Matrix<double, Eigen::Dynamic, 6> U;  // (max × 6) [J_v J_ω]
   Eigen::VectorXd body_rhs;                    // (max)
   Eigen::VectorXd mu;                          // (max / 3 + 1) μ per contact, friction rows only
@@ -66,7 +90,8 @@ struct ContactRowCache {
 
 // The checks both haptic solvers make of rows they are handed: W_body square of num_rows,
 // body_rhs, J_w and lambda_frame_N (if given) of num_rows rows, friction_coefficient one finite
-// μ ≥ 0 per contact with rows_per_contact 3 (a whole number of contacts) and empty with 1.
+// μ ≥ 0 per contact with rows_per_contact 3 (a whole number of contacts) and empty with 1,
+// num_uncoupled_rows whole contacts of num_rows.
 // (The other entries' finiteness and W_body's symmetry are checked where a solver copies them.)
 bool HasConsistentShape(const ContactRows& rows);
 

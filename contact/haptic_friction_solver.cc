@@ -3,6 +3,8 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -26,34 +28,43 @@ struct HapticFrictionSolver::Workspace : ContactRowCache {
         rhs(max_rows_in),
         lambda(max_rows_in),
         y(max_rows_in),
-        W_diagonal(max_rows_in / 3 + 1) {}
+        W_diagonal(max_rows_in / 3 + 1),
+        W_diagonal_step(max_rows_in / 3 + 1, 0) {}
 
   void StartFrom(const Eigen::VectorXd& lambda_start);
-  // The 3 × 3 blocks of W = W_body + U S Uᵀ at each contact (rows 3i..3i+2), for this step's S:
-  // the sweeps read each once per contact, so they are formed once a step. False if a normal
-  // has no compliance (no Gauss–Seidel step exists for it).
-  bool CalcDiagonalBlocks() {
-    for (int i = 0; i < n / 3; ++i) {
+  // Contact i's 3 × 3 block of W = W_body + U S Uᵀ (rows 3i..3i+2) for this step's S, formed the
+  // first time the step needs it: the sweeps and the residual read only the blocks of contacts
+  // that carry load or are about to, so that the many that stay separated (the frame's far
+  // candidates) cost only their normal velocity. Null if the normal has no compliance (no
+  // Gauss–Seidel step exists for it).
+  const Eigen::Matrix3d* DiagonalBlock(int i) {
+    if (W_diagonal_step[i] != step) {
       const auto U_i = U.middleRows<3>(3 * i);
       W_diagonal[i] = W.block<3, 3>(3 * i, 3 * i) + U_i * S * U_i.transpose();
-      if (!(W_diagonal[i](0, 0) > 0.0)) return false;
+      W_diagonal_step[i] = step;
     }
-    return true;
+    return W_diagonal[i](0, 0) > 0.0 ? &W_diagonal[i] : nullptr;
   }
-  // c_i = Δt (y_i + U_i S g) − rhs_i, from the kept sums (h = S g).
+  // c_i = Δt (y_i + U_i S g) − rhs_i, from the kept sums (h = S g); and its normal row alone.
   Eigen::Vector3d CalcVelocity(int i, const Vector6d& h, double dt_s) const {
     return dt_s * (y.segment<3>(3 * i) + U.middleRows<3>(3 * i) * h) - rhs.segment<3>(3 * i);
   }
+  double CalcNormalVelocity(int i, const Vector6d& h, double dt_s) const {
+    return dt_s * (y[3 * i] + U.row(3 * i).dot(h)) - rhs[3 * i];
+  }
   double Sweep(double dt_s);
-  double CalcResidual(double dt_s) const;
+  double CalcResidual(double dt_s);
 
   const int max_rows;
   const int max_sweeps;
-  Matrix6d S = Matrix6d::Zero();            // this step's tool compliance
-  Eigen::VectorXd rhs;                      // this step's body_rhs − U s_free
-  Eigen::VectorXd lambda, y;                // λ and W_body λ
-  std::vector<Eigen::Matrix3d> W_diagonal;  // per contact, this step's (CalcDiagonalBlocks)
-  Vector6d g = Vector6d::Zero();            // Uᵀλ
+  Matrix6d S = Matrix6d::Zero();               // this step's tool compliance
+  Eigen::VectorXd rhs;                         // this step's body_rhs − U s_free
+  Eigen::VectorXd lambda, y;                   // λ and W_body λ
+  std::vector<Eigen::Matrix3d> W_diagonal;     // per contact, this step's (DiagonalBlock)
+  std::vector<std::uint64_t> W_diagonal_step;  // the step each was formed at
+  std::uint64_t step = 0;                      // Solve's count, from 1
+  bool singular_normal = false;                // a needed block had no normal compliance
+  Vector6d g = Vector6d::Zero();               // Uᵀλ
 };
 
 // λ, y = W_body λ and g = Uᵀλ from a start (zero-sized: λ = 0). Its normal impulses are clamped
@@ -69,8 +80,7 @@ void HapticFrictionSolver::Workspace::StartFrom(const Eigen::VectorXd& lambda_st
   } else {
     lambda.head(n).setZero();
   }
-  // W_body's columns times λ: a product Eigen evaluates without temporaries on the heap.
-  y.head(n).noalias() = W.topLeftCorner(n, n) * lambda.head(n);
+  MultiplyBody(lambda.head(n), y.head(n));
   g.noalias() = U.topRows(n).transpose() * lambda.head(n);
 }
 
@@ -81,22 +91,27 @@ double HapticFrictionSolver::Workspace::Sweep(double dt_s) {
   Vector6d h = S * g;
   for (int i = 0; i < n / 3; ++i) {
     const int a = 3 * i;
-    Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
     const Eigen::Vector3d old = lambda.segment<3>(a);
-    if (old[0] == 0.0 && c[0] >= 0.0) continue;  // separated and staying so (λ_t is 0 too)
-    const Eigen::Matrix3d& W_ii = W_diagonal[i];
+    // Separated and staying so (λ_t is 0 too): the normal velocity alone decides.
+    if (old[0] == 0.0 && CalcNormalVelocity(i, h, dt_s) >= 0.0) continue;
+    const Eigen::Matrix3d* W_ii = DiagonalBlock(i);
+    if (W_ii == nullptr) {
+      singular_normal = true;
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
     Eigen::Vector3d next;
-    next[0] = std::max(0.0, old[0] - c[0] / (dt_s * W_ii(0, 0)));
+    next[0] = std::max(0.0, old[0] - c[0] / (dt_s * (*W_ii)(0, 0)));
     // The tangential rows see the normal row's new impulse, as in the dense sweep.
-    c.tail<2>() += dt_s * W_ii.block<2, 1>(1, 0) * (next[0] - old[0]);
-    next.tail<2>() = StepTangentialImpulse(old.tail<2>(), c.tail<2>(), W_ii.block<2, 2>(1, 1), dt_s,
-                                           mu[i] * next[0]);
+    c.tail<2>() += dt_s * W_ii->block<2, 1>(1, 0) * (next[0] - old[0]);
+    next.tail<2>() = StepTangentialImpulse(old.tail<2>(), c.tail<2>(), W_ii->block<2, 2>(1, 1),
+                                           dt_s, mu[i] * next[0]);
     const Eigen::Vector3d delta = next - old;
     if (delta.isZero(0.0)) continue;
     const double change = delta.cwiseAbs().maxCoeff();
     if (!(change <= largest_change)) largest_change = change;  // NaN propagates
     lambda.segment<3>(a) = next;
-    y.head(n).noalias() += W.block(0, a, n, 3) * delta;
+    AddContactColumns(a, delta, y.head(n));
     const Vector6d dg = U.middleRows<3>(a).transpose() * delta;
     g += dg;
     h.noalias() += S * dg;
@@ -104,18 +119,22 @@ double HapticFrictionSolver::Workspace::Sweep(double dt_s) {
   return largest_change;
 }
 
-// CalcFrictionResidual's measure (contact_solver.h) from the kept sums.
-double HapticFrictionSolver::Workspace::CalcResidual(double dt_s) const {
+// CalcFrictionResidual's measure (contact_solver.h) from the kept sums. A separated contact
+// whose normal velocity is ≥ 0 meets the law exactly (λ = 0, and a disc of radius 0 moves
+// nothing): it adds nothing, and its block is not formed.
+double HapticFrictionSolver::Workspace::CalcResidual(double dt_s) {
   const Vector6d h = S * g;
   double residual = 0.0;
   for (int i = 0; i < n / 3; ++i) {
     const int a = 3 * i;
+    if (lambda[a] == 0.0 && CalcNormalVelocity(i, h, dt_s) >= 0.0) continue;
+    const Eigen::Matrix3d* W_ii = DiagonalBlock(i);
+    if (W_ii == nullptr) return std::numeric_limits<double>::infinity();  // not reached: swept
     const Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
-    const Eigen::Matrix3d& W_ii = W_diagonal[i];
     const Eigen::Vector2d lambda_t = lambda.segment<2>(a + 1);
     const Eigen::Vector2d moved = StepTangentialImpulse(
-        lambda_t, c.tail<2>(), W_ii.block<2, 2>(1, 1), dt_s, mu[i] * lambda[a]);
-    residual = std::max({residual, std::abs(std::min(lambda[a], c[0] / (dt_s * W_ii(0, 0)))),
+        lambda_t, c.tail<2>(), W_ii->block<2, 2>(1, 1), dt_s, mu[i] * lambda[a]);
+    residual = std::max({residual, std::abs(std::min(lambda[a], c[0] / (dt_s * (*W_ii)(0, 0)))),
                          (moved - lambda_t).norm()});
   }
   const double scale = lambda.head(n).lpNorm<Eigen::Infinity>();
@@ -170,10 +189,8 @@ bool HapticFrictionSolver::Solve(const ContactRows& rows, const ToolStepSystem& 
     ws.StartFrom(rows.lambda_frame_N);
   }
   if (n == 0) return true;
-  if (!ws.CalcDiagonalBlocks()) {
-    ws.n = -1;
-    return false;
-  }
+  ++ws.step;  // the diagonal blocks of S's previous step are stale
+  ws.singular_normal = false;
   ws.rhs.head(n) = ws.body_rhs.head(n);
   ws.rhs.head(n).noalias() -= ws.U.topRows(n) * s_free;
   while (last_iterations_ < ws.max_sweeps) {
@@ -182,7 +199,7 @@ bool HapticFrictionSolver::Solve(const ContactRows& rows, const ToolStepSystem& 
     if (!std::isfinite(change)) break;  // reported as a failure below
     if (change <= kTolerance * ws.lambda.head(n).lpNorm<Eigen::Infinity>()) break;
   }
-  if (!ws.lambda.head(n).allFinite()) {
+  if (ws.singular_normal || !ws.lambda.head(n).allFinite()) {
     ws.n = -1;  // start afresh next time
     return false;
   }

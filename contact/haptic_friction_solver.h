@@ -20,10 +20,13 @@
 // SolveContactImpulses' kFriction (contact_solver.h), so that the two agree to the tolerance.
 // W (n × n, dense) is never formed. The solver keeps y = W_body λ and g = Uᵀλ; a contact's local
 // velocity is c_i = Δt (y_i + U_i S g) − rhs_i (O(1) per contact), and a change δ of a contact's
-// three impulses costs y += W_body[:, i] δ (3n) and g += U_iᵀ δ. A contact that stays separated
-// (λ_i = 0, c_n ≥ 0) costs nothing more, so a sweep costs ~3n per contact that carries load.
-// A contact whose tangential block of W is not positive carries no friction
-// (StepTangentialImpulse); one whose normal compliance is not positive fails the solve.
+// three impulses costs y += W_body[:, i] δ (3 per coupled row, ContactRows::num_uncoupled_rows;
+// 9 for an uncoupled contact) and g += U_iᵀ δ. A contact that stays separated (λ_i = 0,
+// c_n ≥ 0) costs its normal velocity alone (its 3 × 3 block of W is formed only for contacts
+// that carry load or are about to), so a sweep costs ~3 n_coupled per contact that carries load
+// plus ~10 flops per separated one. A contact whose tangential block of W is not positive
+// carries no friction (StepTangentialImpulse); one whose normal compliance is not positive fails
+// the solve once a sweep reaches it.
 //
 // Warm start: the previous step's λ with the same rows (compared bitwise, as HapticLcpSolver
 // does), y and g kept; new rows start from the frame's impulses (ContactRows::lambda_frame_N, the
@@ -38,9 +41,10 @@
 // so that most contacts carry load, μ 0.5, F̂ moved ~0.01 N a step): a warm step of 1 / 5 / 20
 // sweeps takes 6.8 / 17 / 56 µs at 25 contacts, 26 / 62 / 204 µs at 70 and 149 / 330 / 1094 µs
 // at 200 (146 carrying load, 600 rows), leaving a Coulomb residual of ~4e-4 / 4e-5 / 1e-6 of the
-// largest impulse. At 200 contacts a sweep is ~45 µs (W_body is 2.9 MB, past the L2 cache) and
-// the bitwise comparison of the rows about as much again: issue 13's 100 µs needs fewer rows per
-// model (its item 5) or a cheaper identity of the rows than their bytes.
+// largest impulse. At 200 contacts a sweep is ~45 µs (W_body is 2.9 MB, past the L2 cache).
+// (Since then rows carry a stamp, so that the bitwise comparison of ~45 µs more is gone, and the
+// frame couples only the contacts the tool may reach: tests/bench/haptic_step_benchmark.cc's
+// BM_HapticFrictionStep has the step on block_press_friction's own rows.)
 
 #include <Eigen/Core>
 #include <memory>

@@ -117,7 +117,7 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   }
 
   // W̄_ij = W_body,ij (lower triangle) + U_i S̄ U_jᵀ.
-  double W_lower(int i, int j) const { return i >= j ? W(i, j) : W(j, i); }
+  double W_lower(int i, int j) const { return i >= j ? BodyLower(i, j) : BodyLower(j, i); }
   double W_bar(int i, int j) const { return W_lower(i, j) + U_bar.row(i).dot(U.row(j)); }
 
   bool Rebase();
@@ -216,7 +216,7 @@ bool HapticLcpSolver::Workspace::Rebase() {
   if (k0 > 0) {
     auto K = L.topLeftCorner(k0, k0);
     for (int b = 0; b < k0; ++b)
-      for (int a = b; a < k0; ++a) K(a, b) = W(base_rows[a], base_rows[b]);  // rows ascending
+      for (int a = b; a < k0; ++a) K(a, b) = BodyLower(base_rows[a], base_rows[b]);  // ascending
     K.triangularView<Eigen::Lower>() += U_bar_B.topRows(k0) * U_B.topRows(k0).transpose();
     ++num_factorizations;
     if (!FactorCholeskyInPlace(K)) {
@@ -356,7 +356,11 @@ bool HapticLcpSolver::Workspace::SolveOnActiveSet() {
 
 // w = W(t) x − r over all rows.
 void HapticLcpSolver::Workspace::CalcSlack() {
-  w.head(n).noalias() = W.topLeftCorner(n, n).selfadjointView<Eigen::Lower>() * x.head(n);
+  // W_body x: the coupled rows' block (lower triangle), then each uncoupled row's own entry.
+  w.head(coupled).noalias() =
+      W.topLeftCorner(coupled, coupled).selfadjointView<Eigen::Lower>() * x.head(coupled);
+  w.segment(coupled, n - coupled) =
+      W.diagonal().segment(coupled, n - coupled).cwiseProduct(x.segment(coupled, n - coupled));
   const Vector6d Ux = U.topRows(n).transpose() * x.head(n);
   const Vector6d SUx = S * Ux;
   w.head(n).noalias() += U.topRows(n) * SUx;
@@ -427,10 +431,12 @@ bool HapticLcpSolver::Workspace::RunActiveSet(double tolerance, int* iterations)
 }
 
 // ContactSolveReport's measure, max_i |min(λ_i, c_i/(Δt W_ii))| / max λ, from x = Δt λ and
-// c = w (after RunActiveSet).
+// c = w (after RunActiveSet). A row with λ_i = 0 and c_i ≥ 0 adds nothing (W_ii > 0): most of
+// the frame's far candidates, whose W_ii is then not formed.
 double HapticLcpSolver::Workspace::CalcResidual(double dt_s) const {
   double residual = 0.0;
   for (int i = 0; i < n; ++i) {
+    if (x[i] == 0.0 && w[i] >= 0.0) continue;
     const double W_ii = W(i, i) + U.row(i).dot(S * U.row(i).transpose());
     residual = std::max(residual, std::abs(std::min(x[i] / dt_s, w[i] / (dt_s * W_ii))));
   }

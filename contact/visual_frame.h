@@ -72,9 +72,13 @@ struct VisualFrameOptions {
   // mode (contact_rows()): normal rows, or with the friction law three rows per contact and
   // each contact's μ.
   bool export_contact_rows = false;
-  // Of those, only the active contacts and the ones an approach at this speed (m/s) could engage
-  // within the frame (ExportContactRows); 0: every candidate contact.
+  // Of those, only the active contacts and the ones an approach at this speed (m/s) beyond the
+  // tool's present one could engage within the frame keep their coupling through the body; the
+  // others travel with their own block of W_body alone (ExportContactRows). 0: all coupled.
   double lcp_reach_m_s = 0.0;
+  // At most this many rows are exported (the haptic solver's capacity, haptic.lcp_max_rows): the
+  // coupled ones, then the uncoupled contacts nearest to engaging. 0: no limit.
+  int lcp_max_rows = 0;
   // The scene's fixed rigid objects (contact/rigid_objects.h). They are model data, kept here so
   // that every user of the frame (sim, run, the tests) gets them from the one scene mapping
   // (config::MakeVisualFrameOptions).
@@ -119,10 +123,8 @@ class VisualFrame {
   // Results of the last Step.
   const LinearContactModel& linear_model() const { return linear_model_; }
   // Rows of the frame's contacts, linearised as the model is (empty unless
-  // options.export_contact_rows): all of them, or those options.lcp_reach_m_s keeps.
+  // options.export_contact_rows): every candidate, the coupled contacts first.
   const ContactRows& contact_rows() const { return contact_rows_; }
-  // Candidate rows the last frame did not export (options.lcp_reach_m_s).
-  int num_rows_withheld() const { return num_rows_withheld_; }
   const std::vector<Contact>& contacts() const { return contacts_; }
   const ContactJacobian& jacobian() const { return jacobian_; }
   const Eigen::VectorXd& impulses() const { return lambda_; }  // λ per row, N
@@ -220,7 +222,6 @@ class VisualFrame {
   ContactSolveReport last_solve_;
   LinearContactModel linear_model_;
   ContactRows contact_rows_;
-  int num_rows_withheld_ = 0;
 };
 
 }  // namespace hapsim::contact

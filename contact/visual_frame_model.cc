@@ -83,13 +83,18 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   if (options_.export_contact_rows) ExportContactRows(moved, b_all, held_m_s, tool, body);
 }
 
-// The rows that travel to the lcp step (issue 13 item 5): every contact the frame found active,
-// and every other one the tool could engage within the frame: its approach now, plus up to
-// lcp_reach_m_s more. Row i's target r_i = b_i − J_u,i u̇ (+ what the frame's force holds back)
-// is the approach speed it needs to engage (b closes its gap over a frame, less the body's own
-// normal velocity); the tool approaches it at −(J_v,i v + J_ω,i ω). A row kept back needs more
-// than v_reach beyond the tool's present approach: only a tool that speeds up toward it engages
-// it, and then the next frame has it, as the linear model has every contact. 0 sends them all.
+// The rows that travel to the lcp step (issue 13 item 5). Every candidate contact travels, for a
+// tool may cross the whole detection margin within one frame (a 0.5 m/s press covers 15 mm of a
+// 30 ms frame) and must meet a row there. What is cut is the coupling, W_body's O(n²) entries:
+// only the contacts the frame found active, and those the tool could engage within the frame at
+// its approach now plus up to lcp_reach_m_s more, keep their coupling to one another. Every
+// other contact keeps only its own block of W_body, as if pushing it moved no other contact: a
+// stiffer body, for the rest of a frame the tool was not expected to reach it in, and then the
+// next frame couples it. Row i's target r_i = b_i − J_u,i u̇ (+ what the frame's force holds
+// back) is the approach speed it needs to engage (b closes its gap over a frame, less the body's
+// own normal velocity); the tool approaches it at −(J_v,i v + J_ω,i ω). The coupled contacts come
+// first, then the others, the nearest to engaging first, as many as lcp_max_rows leaves room
+// for. lcp_reach_m_s = 0 couples them all.
 void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
                                     const Eigen::VectorXd& held_m_s, const ToolState& tool,
                                     const fem::State& body) {
@@ -97,34 +102,58 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   const Eigen::VectorXd rhs_all = b_all - J_all.J_u * body.v_m_s + held_m_s;
   const double reach_m_s = options_.lcp_reach_m_s;
   const Eigen::Vector3d w_W_rad_s = CalcAngularVelocity(tool_, tool);
-  std::vector<Contact> kept;
-  std::vector<int> rows;
-  std::vector<double> mu;
+  std::vector<size_t> coupled, uncoupled;           // contacts
+  std::vector<double> shortfall_m_s(moved.size());  // approach beyond the present one to engage
   for (size_t i = 0; i < moved.size(); ++i) {
     const int normal = rows_per_contact_ * static_cast<int>(i);
     const double tool_separating_m_s =
         J_all.J_v.row(normal).dot(tool.v_W_m_s) + J_all.J_w.row(normal).dot(w_W_rad_s);
-    if (reach_m_s > 0.0 && !(lambda_[normal] > 0.0) &&
-        !(rhs_all[normal] - tool_separating_m_s > -reach_m_s))
-      continue;
-    kept.push_back(moved[i]);
-    for (int d = 0; d < rows_per_contact_; ++d) rows.push_back(normal + d);
-    if (rows_per_contact_ == 3) mu.push_back(mu_per_contact_[static_cast<Eigen::Index>(i)]);
+    shortfall_m_s[i] = -(rhs_all[normal] - tool_separating_m_s);
+    const bool reachable =
+        reach_m_s == 0.0 || lambda_[normal] > 0.0 || shortfall_m_s[i] < reach_m_s;
+    (reachable ? coupled : uncoupled).push_back(i);
   }
-  const ContactJacobian J = CalcJacobian(kept, tool.x_W_m);
+  std::stable_sort(uncoupled.begin(), uncoupled.end(),
+                   [&](size_t a, size_t b) { return shortfall_m_s[a] < shortfall_m_s[b]; });
+  if (options_.lcp_max_rows > 0) {
+    const size_t room = static_cast<size_t>(options_.lcp_max_rows / rows_per_contact_);
+    uncoupled.resize(std::min(uncoupled.size(), room - std::min(room, coupled.size())));
+  }
+  std::vector<Contact> ordered;
+  std::vector<int> rows;
+  std::vector<double> mu;
+  for (const std::vector<size_t>* group : {&coupled, &uncoupled}) {
+    for (size_t i : *group) {
+      ordered.push_back(moved[i]);
+      for (int d = 0; d < rows_per_contact_; ++d)
+        rows.push_back(rows_per_contact_ * static_cast<int>(i) + d);
+      if (rows_per_contact_ == 3) mu.push_back(mu_per_contact_[static_cast<Eigen::Index>(i)]);
+    }
+  }
+  const ContactJacobian J = CalcJacobian(ordered, tool.x_W_m);
   Eigen::VectorXd rhs(static_cast<Eigen::Index>(rows.size()));
   Eigen::VectorXd lambda(rhs.size());
   for (size_t r = 0; r < rows.size(); ++r) {
     rhs[static_cast<Eigen::Index>(r)] = rhs_all[rows[r]];
     lambda[static_cast<Eigen::Index>(r)] = lambda_[rows[r]];
   }
-  const Eigen::VectorXd mu_kept =
+  const Eigen::VectorXd mu_ordered =
       Eigen::Map<const Eigen::VectorXd>(mu.data(), static_cast<Eigen::Index>(mu.size()));
   const Eigen::MatrixXd& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
-  contact_rows_ = MakeContactRows(J, W_body, rows, rhs, mu_kept);
+  contact_rows_ = MakeContactRows(J, W_body, rows, rhs, mu_ordered);
+  const int num_coupled = rows_per_contact_ * static_cast<int>(coupled.size());
+  const int n = contact_rows_.num_rows();
+  for (int r = num_coupled; r < n; ++r) {  // an uncoupled contact: its own block alone (zeros
+                                           // elsewhere, for dense readers)
+    const int own = r - (r - num_coupled) % rows_per_contact_;
+    for (int c = 0; c < n; ++c) {
+      if (c >= own && c < own + rows_per_contact_) continue;
+      contact_rows_.W_body(r, c) = contact_rows_.W_body(c, r) = 0.0;
+    }
+  }
+  contact_rows_.num_uncoupled_rows = n - num_coupled;
   contact_rows_.lambda_frame_N = lambda;
   StampNewContactRows(&contact_rows_);  // last: the rows are complete
-  num_rows_withheld_ = static_cast<int>(rhs_all.size() - rhs.size());
 }
 
 int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,

@@ -100,23 +100,6 @@ bool CheckRowArray(const std::vector<std::vector<double>>& rows, int num_rows, i
 // PackedRowStart(n) is the number of entries.
 std::int64_t PackedRowStart(std::int64_t i) { return i * (i + 1) / 2; }
 
-// contact_model_t.W_body_lower: num_rows (num_rows + 1) / 2 finite entries.
-bool CheckPackedLower(const hapsim_lcm::contact_model_t& msg, std::string* error) {
-  const std::int64_t expected = PackedRowStart(msg.num_rows);  // the start of row n: the size
-  if (msg.num_W_body_lower != expected ||
-      msg.W_body_lower.size() != static_cast<std::size_t>(expected)) {
-    SetError(error, "contact_model_t.W_body_lower: " + std::to_string(msg.W_body_lower.size()) +
-                        " entries, expected " + std::to_string(expected) +
-                        " (num_rows (num_rows + 1) / 2)");
-    return false;
-  }
-  if (!AllFinite(msg.W_body_lower.data(), msg.W_body_lower.size())) {
-    SetError(error, "contact_model_t.W_body_lower: non-finite entry");
-    return false;
-  }
-  return true;
-}
-
 // contact_model_t.rows_per_contact and its friction coefficients: 1 (or 0 without rows) and
 // none, or 3 with one finite μ ≥ 0 per three rows.
 bool CheckRowLayout(const hapsim_lcm::contact_model_t& msg, std::string* error) {
@@ -148,6 +131,57 @@ bool CheckRowLayout(const hapsim_lcm::contact_model_t& msg, std::string* error) 
   return true;
 }
 
+// A packed array of contact_model_t: `expected` entries (as `rule` says), declared and present,
+// all finite.
+bool CheckPackedArray(const std::vector<double>& entries, std::int32_t declared,
+                      std::int64_t expected, const char* field, const char* rule,
+                      std::string* error) {
+  if (declared != expected || entries.size() != static_cast<std::size_t>(expected)) {
+    SetError(error, std::string(field) + ": " + std::to_string(declared) + " declared, " +
+                        std::to_string(entries.size()) + " entries, expected " +
+                        std::to_string(expected) + " (" + rule + ")");
+    return false;
+  }
+  if (!AllFinite(entries.data(), entries.size())) {
+    SetError(error, std::string(field) + ": non-finite entry");
+    return false;
+  }
+  return true;
+}
+
+// contact_model_t's W_body: num_coupled_rows whole contacts of the num_rows, the packed lower
+// triangle of their block, and one packed block per uncoupled contact. After CheckRowLayout.
+bool CheckBodyCompliance(const hapsim_lcm::contact_model_t& msg, std::string* error) {
+  const int per = std::max<int>(msg.rows_per_contact, 1);
+  const int coupled = msg.num_coupled_rows;
+  if (coupled < 0 || coupled > msg.num_rows || coupled % per != 0) {
+    SetError(error, "contact_model_t.num_coupled_rows: " + std::to_string(coupled) + " of " +
+                        std::to_string(msg.num_rows) + " rows, expected whole contacts of " +
+                        std::to_string(per));
+    return false;
+  }
+  return CheckPackedArray(msg.W_body_lower, msg.num_W_body_lower, PackedRowStart(coupled),
+                          "contact_model_t.W_body_lower",
+                          "num_coupled_rows (num_coupled_rows + 1) / 2", error) &&
+         CheckPackedArray(msg.W_body_contact_lower, msg.num_W_body_contact_lower,
+                          (msg.num_rows - coupled) / per * PackedRowStart(per),
+                          "contact_model_t.W_body_contact_lower",
+                          "one packed rows_per_contact block per uncoupled contact", error);
+}
+
+// Where W_body[i][j] (j ≤ i, both in one block) travels in `msg`: its position in W_body_lower
+// for coupled rows, else in W_body_contact_lower. Precondition: CheckBodyCompliance, or for
+// the encoder the arrays sized. Message: contact_model_t, const or not.
+template <typename Message>
+auto& PackedBodyEntry(Message& msg, int i, int j) {
+  const int coupled = msg.num_coupled_rows;
+  if (i < coupled) return msg.W_body_lower[PackedRowStart(i) + j];
+  const int per = std::max<int>(msg.rows_per_contact, 1);
+  const int contact = (i - coupled) / per, start = coupled + contact * per;
+  return msg.W_body_contact_lower[contact * PackedRowStart(per) + PackedRowStart(i - start) +
+                                  (j - start)];
+}
+
 // Everything FromMessage(contact_model_t) rejects except the quaternion, which it reads itself.
 bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   if (!(std::isfinite(msg.dt_visual_s) && msg.dt_visual_s > 0.0)) {
@@ -177,13 +211,12 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
          CheckFinite(&msg.dTc_dT[0][0], 9, "contact_model_t.dTc_dT", error) &&
          CheckRowArray(msg.J_v, n, 3, "contact_model_t.J_v", error) &&
          CheckRowArray(msg.J_w, n, 3, "contact_model_t.J_w", error) &&
-         CheckPackedLower(msg, error) &&
          CheckSize(msg.body_rhs.size(), n, "contact_model_t.body_rhs", "entries", error) &&
          CheckFinite(msg.body_rhs.data(), n, "contact_model_t.body_rhs", error) &&
          CheckSize(msg.lambda_frame_N.size(), n, "contact_model_t.lambda_frame_N", "entries",
                    error) &&
          CheckFinite(msg.lambda_frame_N.data(), n, "contact_model_t.lambda_frame_N", error) &&
-         CheckRowLayout(msg, error);
+         CheckRowLayout(msg, error) && CheckBodyCompliance(msg, error);
 }
 
 // The ranges of the lcp rows that decoding alone cannot catch: J_v,i = −n_iᵀ is a unit normal;
@@ -200,9 +233,12 @@ bool CheckContactRowRanges(const hapsim_lcm::contact_model_t& msg, std::string* 
                           std::to_string(norm) + ", expected a unit normal");
       return false;
     }
-    if (msg.W_body_lower[PackedRowStart(i) + i] < 0.0) {
-      SetError(error, "contact_model_t.W_body_lower: negative diagonal entry in row " +
-                          std::to_string(i) + " (W_body must be positive semidefinite)");
+    if (PackedBodyEntry(msg, i, i) < 0.0) {
+      SetError(error,
+               std::string(i < msg.num_coupled_rows ? "contact_model_t.W_body_lower"
+                                                    : "contact_model_t.W_body_contact_lower") +
+                   ": negative diagonal entry in row " + std::to_string(i) +
+                   " (W_body must be positive semidefinite)");
       return false;
     }
     if (i % std::max<int>(msg.rows_per_contact, 1) == 0 && msg.lambda_frame_N[i] < 0.0) {
@@ -322,7 +358,9 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
 
   const int n = rows_or_null == nullptr ? 0 : rows_or_null->num_rows();
   msg.num_rows = n;
+  msg.num_coupled_rows = 0;
   msg.num_W_body_lower = 0;
+  msg.num_W_body_contact_lower = 0;
   msg.rows_per_contact = 1;
   msg.num_friction_coefficients = 0;
   if (n == 0) return msg;
@@ -331,13 +369,26 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
     throw std::invalid_argument("messages::ToMessage: ContactRows sizes disagree with J_v's " +
                                 std::to_string(n) + " rows or its friction layout");
   }
-  // Only the lower triangle travels: an asymmetric W_body would arrive changed.
+  // Only lower triangles travel, and of an uncoupled contact only its own block: an asymmetric
+  // W_body, or one not zero where the rows say it is, would arrive changed.
   if (rows.W_body != rows.W_body.transpose())
     throw std::invalid_argument("messages::ToMessage: ContactRows.W_body is not symmetric");
+  const int per = rows.rows_per_contact;
+  const int coupled = rows.num_coupled_rows();
+  for (int a = coupled; a < n; a += per) {
+    if (!(rows.W_body.block(a, 0, per, a).array() == 0.0).all())
+      throw std::invalid_argument("messages::ToMessage: ContactRows.W_body couples uncoupled row " +
+                                  std::to_string(a));
+  }
   msg.J_v.assign(n, std::vector<double>(3));
   msg.J_w.assign(n, std::vector<double>(3));
-  msg.num_W_body_lower = static_cast<std::int32_t>(PackedRowStart(n));
+  msg.num_coupled_rows = coupled;
+  msg.num_W_body_lower = static_cast<std::int32_t>(PackedRowStart(coupled));
   msg.W_body_lower.resize(msg.num_W_body_lower);
+  msg.num_W_body_contact_lower =
+      static_cast<std::int32_t>((n - coupled) / per * PackedRowStart(per));
+  msg.W_body_contact_lower.resize(msg.num_W_body_contact_lower);
+  msg.rows_per_contact = static_cast<std::int8_t>(per);
   msg.body_rhs.resize(n);
   msg.lambda_frame_N.assign(n, 0.0);
   for (int i = 0; i < n; ++i) {
@@ -345,11 +396,11 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
       msg.J_v[i][c] = rows.J_v(i, c);
       msg.J_w[i][c] = rows.J_w(i, c);
     }
-    for (int c = 0; c <= i; ++c) msg.W_body_lower[PackedRowStart(i) + c] = rows.W_body(i, c);
+    const int first = i < coupled ? 0 : i - (i - coupled) % per;  // of i's block
+    for (int c = first; c <= i; ++c) PackedBodyEntry(msg, i, c) = rows.W_body(i, c);
     msg.body_rhs[i] = rows.body_rhs[i];
     if (rows.lambda_frame_N.size() == n) msg.lambda_frame_N[i] = rows.lambda_frame_N[i];
   }
-  msg.rows_per_contact = static_cast<std::int8_t>(rows.rows_per_contact);
   msg.num_friction_coefficients = static_cast<std::int32_t>(rows.friction_coefficient.size());
   msg.friction_coefficient.assign(
       rows.friction_coefficient.data(),
@@ -388,9 +439,11 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
 
   // resize keeps the storage when the size is unchanged (no allocation; see adapters.h).
   const int n = msg.num_rows;
+  const int coupled = msg.num_coupled_rows;
+  const int per = std::max<int>(msg.rows_per_contact, 1);
   rows->J_v.resize(n, 3);
   rows->J_w.resize(n, 3);
-  rows->W_body.resize(n, n);
+  rows->W_body.setZero(n, n);  // between blocks that do not travel
   rows->body_rhs.resize(n);
   rows->lambda_frame_N.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -398,12 +451,14 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
       rows->J_v(i, c) = msg.J_v[i][c];
       rows->J_w(i, c) = msg.J_w[i][c];
     }
-    for (int c = 0; c <= i; ++c)
-      rows->W_body(i, c) = rows->W_body(c, i) = msg.W_body_lower[PackedRowStart(i) + c];
+    const int first = i < coupled ? 0 : i - (i - coupled) % per;  // of i's block
+    for (int c = first; c <= i; ++c)
+      rows->W_body(i, c) = rows->W_body(c, i) = PackedBodyEntry(msg, i, c);
     rows->body_rhs[i] = msg.body_rhs[i];
     rows->lambda_frame_N[i] = msg.lambda_frame_N[i];
   }
-  rows->rows_per_contact = std::max<int>(msg.rows_per_contact, 1);
+  rows->rows_per_contact = per;
+  rows->num_uncoupled_rows = n - coupled;
   rows->friction_coefficient.resize(msg.num_friction_coefficients);
   for (int i = 0; i < msg.num_friction_coefficients; ++i)
     rows->friction_coefficient[i] = msg.friction_coefficient[i];

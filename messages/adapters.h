@@ -107,17 +107,23 @@ struct ContactModelHeader {
   ToolState visual_tool;                                     // after the frame (coupling mode)
 };
 
-// rows_or_null: the lcp mode's rows, or null for num_rows = 0. Allocates (visual process).
+// rows_or_null: the lcp mode's rows, or null for num_rows = 0. W_body travels as the lower
+// triangle of the coupled rows' block and each uncoupled contact's own block
+// (ContactRows::num_uncoupled_rows, contact_model_t.num_coupled_rows). Throws
+// std::invalid_argument for rows of inconsistent shape, an asymmetric W_body, or one that is not
+// zero between an uncoupled contact and another row (it would arrive changed). Allocates
+// (visual process).
 hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
                                       const contact::ContactRows* rows_or_null,
                                       const ContactModelHeader& header);
 
 // Rejects, with the field's name in *error: any non-finite value; dt_visual_s or dt_haptic_s
 // ≤ 0; num_contacts or num_rows < 0; J_v, J_w, W_body or body_rhs whose sizes disagree with
-// num_rows; a J_v row that is not a unit normal, a negative diagonal of W_body or a negative
-// normal row of lambda_frame_N; rows_per_contact other than 1 or 3 (0 without rows), rows that
-// are not whole contacts, or friction coefficients not one finite μ ≥ 0 per contact of 3 rows;
-// a bad q_WT. (W_body is symmetric by construction: its lower triangle travels.)
+// num_rows (W_body's: with num_coupled_rows, itself whole contacts of at most num_rows); a J_v row
+// that is not a unit normal, a negative diagonal of W_body or a negative normal row of
+// lambda_frame_N; rows_per_contact other than 1 or 3 (0 without rows), rows that are not whole
+// contacts, or friction coefficients not one finite μ ≥ 0 per contact of 3 rows; a bad q_WT.
+// (W_body is symmetric by construction: its lower triangle travels.)
 //
 // rows may be null: the rows are then validated but not copied. Into a non-null rows the copy
 // reuses its storage: Eigen's resize allocates only when num_rows changes. Still, this is meant

@@ -130,8 +130,11 @@ bool CheckWireLayout<hapsim_lcm::contact_model_t>(const void* data, int size, st
   wire.Skip(3 + 3 + 4 * 9, kDouble, "F_c0_N ... dTc_dT");
   const std::int64_t rows = wire.ReadCount("num_rows");
   wire.Skip(2 * rows * 3, kDouble, "J_v and J_w (num_rows each)");
+  wire.Skip(1, kInt32, "num_coupled_rows");
   const std::int64_t lower = wire.ReadCount("num_W_body_lower");
   wire.Skip(lower, kDouble, "W_body_lower");
+  const std::int64_t contact_lower = wire.ReadCount("num_W_body_contact_lower");
+  wire.Skip(contact_lower, kDouble, "W_body_contact_lower");
   wire.Skip(2 * rows, kDouble, "body_rhs, lambda_frame_N");
   wire.Skip(1, kInt8, "rows_per_contact");
   const std::int64_t mus = wire.ReadCount("num_friction_coefficients");
@@ -204,6 +207,7 @@ void SizeArraysToCounts(hapsim_lcm::contact_model_t* msg) {
   msg->J_v.resize(msg->num_rows);
   msg->J_w.resize(msg->num_rows);
   msg->W_body_lower.resize(msg->num_W_body_lower);
+  msg->W_body_contact_lower.resize(msg->num_W_body_contact_lower);
   msg->body_rhs.resize(msg->num_rows);
   msg->lambda_frame_N.resize(msg->num_rows);
   msg->friction_coefficient.resize(msg->num_friction_coefficients);

@@ -290,15 +290,15 @@ def fast_markdown(result):
                  for mode in modes}
     least_pen = {mode: min(p["haptic_penetration_m"] for p in points if p["mode"] == mode)
                  for mode in modes}
-    # Since issue 13's smaller lcp models the frame sends only the rows an approach at
-    # haptic.lcp_reach_m_s (5 mm/s by default) or the tool's present approach engages within
-    # the frame: a tool that starts faster between frames meets no row, as in the linear mode.
-    # Which of the two explanations is printed follows the run's own figures.
+    # Since issue 13's smaller lcp models the frame couples through the body only the rows an
+    # approach at haptic.lcp_reach_m_s engages within the frame; the others travel uncoupled, so
+    # that a tool that starts faster between frames still meets them. Which of the two
+    # explanations is printed follows the run's own figures.
     lcp_fails = worst_pen.get("lcp", 0.0) > PENETRATION_LIMIT_M
-    why = {"lcp": (" (its model carries only the rows an approach at haptic.lcp_reach_m_s "
-                   "engages within a frame, so a tool faster than that between frames meets no "
-                   "row)" if lcp_fails else
-                   " (its 1 kHz problem keeps the frame's inactive rows within the margin)"),
+    why = {"lcp": (" (a tool faster than haptic.lcp_reach_m_s between frames meets rows that its "
+                   "model does not hold)" if lcp_fails else
+                   " (its 1 kHz problem keeps the frame's inactive rows within the margin, those "
+                   "it does not expect the tool to reach uncoupled)"),
            "coupling": " (the device feels the visual tool, which the frame's constraints hold)",
            "penalty": f", and at least {1e3 * least_pen.get('penalty', 0.0):.2f} mm even slowly: "
                       "it sinks by F/k into the frame's surface whatever the speed (a soft "

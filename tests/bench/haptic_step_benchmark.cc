@@ -14,19 +14,28 @@
 //  BM_HapticStep/mode:4  lcp_cold  the first step of each frame without Prepare: copy, check and
 //                                  factorise inside the step
 //
-// Counters: rows (contacts in the rows), model_contacts (active contacts in the linear model).
+// BM_HapticFrictionStep/mode:1, 2, 4: the same lcp steps on scenes/block_press_friction.yaml
+// (three rows per contact, the Coulomb solve at its haptic.lcp_friction_sweeps), or on the
+// scene HAPSIM_BENCH_FRICTION_SCENE names (e.g. a copy with a smaller haptic.lcp_max_rows, to
+// time the step without the frame's far, uncoupled candidates).
+//
+// Counters: rows (rows sent: 3 per contact with friction; of them uncoupled_rows, issue 13
+// item 5), model_contacts (active contacts in the linear model).
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <map>
 #include <memory>
+#include <string>
 
 #include "config/body_builder.h"
 #include "config/scene.h"
 #include "config/simulation_builder.h"
 #include "contact/visual_frame.h"
-#include "device/haptic_step.h"
 #include "core/scripted_trajectory.h"
+#include "device/haptic_step.h"
 
 namespace hapsim {
 namespace {
@@ -41,13 +50,15 @@ struct Frames {
   contact::ContactRows rows[2];  // two consecutive frames
 };
 
-// Runs the visual frames of the script up to the peak and keeps the last two frames' outputs.
-const Frames& GetFrames() {
-  static std::unique_ptr<Frames> frames;
+// Runs the visual frames of the scene's script up to the peak and keeps the last two frames'
+// outputs (once per scene).
+const Frames& GetFrames(const std::string& scene_path) {
+  static std::map<std::string, std::unique_ptr<Frames>> cache;
+  std::unique_ptr<Frames>& frames = cache[scene_path];
   if (frames) return *frames;
   frames = std::make_unique<Frames>();
   Frames& f = *frames;
-  f.scene = config::LoadScene("scenes/block_press.yaml");
+  f.scene = config::LoadScene(scene_path);
   const config::Body body = config::MakeBody(*f.scene.body, f.scene.gravity_m_s2);
   contact::VisualFrameOptions options = config::MakeVisualFrameOptions(f.scene);
   options.dt_s = f.scene.dt_s;
@@ -69,12 +80,13 @@ const Frames& GetFrames() {
   return f;
 }
 
-void BM_HapticStep(benchmark::State& bench) {
-  const Frames& f = GetFrames();
+void RunHapticStep(benchmark::State& bench, const std::string& scene_path) {
+  const Frames& f = GetFrames(scene_path);
   const int mode = static_cast<int>(bench.range(0));
   const config::Scene& scene = f.scene;
   device::HapticStep step(scene.tool->model, scene.coupling, scene.gravity_m_s2,
-                          1.0 / scene.haptic.rate_hz, f.tool_at_peak, /*lcp_max_rows=*/512);
+                          1.0 / scene.haptic.rate_hz, f.tool_at_peak, scene.haptic.lcp_max_rows,
+                          config::LcpFrictionSweeps(scene));
   step.SetContactModel(f.model[0]);
   if (mode == 1 || mode == 2 || mode == 4) step.SetContactRows(&f.rows[0]);
   long calls = 0, fallbacks = 0;
@@ -98,11 +110,25 @@ void BM_HapticStep(benchmark::State& bench) {
     benchmark::DoNotOptimize(out);
   }
   bench.counters["rows"] = f.rows[0].num_rows();
+  bench.counters["uncoupled_rows"] = f.rows[0].num_uncoupled_rows;
   bench.counters["model_contacts"] = f.model[0].num_contacts;
   bench.counters["lcp_fallbacks"] = static_cast<double>(fallbacks);
 }
 
+void BM_HapticStep(benchmark::State& bench) { RunHapticStep(bench, "scenes/block_press.yaml"); }
+void BM_HapticFrictionStep(benchmark::State& bench) {
+  RunHapticStep(bench, std::getenv("HAPSIM_BENCH_FRICTION_SCENE") != nullptr
+                           ? std::getenv("HAPSIM_BENCH_FRICTION_SCENE")
+                           : "scenes/block_press_friction.yaml");
+}
+
 BENCHMARK(BM_HapticStep)->DenseRange(0, 4)->ArgName("mode")->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HapticFrictionStep)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(4)
+    ->ArgName("mode")
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace hapsim

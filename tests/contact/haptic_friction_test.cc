@@ -210,6 +210,36 @@ TEST(HapticFrictionSolver, WarmStartFollowsTheReferenceAsTheWrenchChanges) {
   EXPECT_LT(warm_sweeps, cold_sweeps);
 }
 
+// Uncoupled contacts (ContactRows::num_uncoupled_rows, issue 13 item 5): converged steps equal
+// the dense reference on the rows with zeros there, and satisfy Coulomb's law on it, while the
+// solver's copy holds NaN there (never read); uncoupled contacts engage and release.
+TEST(HapticFrictionSolver, UncoupledContactsMatchTheReferenceWithoutReadingTheirZeros) {
+  const LcpProblem p = MakeLcpProblem(30, 43, 0.1, 1.0, 3, 0.5);
+  ContactRows zeros = p.rows, poisoned = p.rows;
+  UncoupleLastContacts(18, &zeros);
+  UncoupleLastContacts(18, &poisoned, /*poison=*/true);
+  HapticFrictionSolver solver(90, kManySweeps);
+  Eigen::ArrayXi times_loaded = Eigen::ArrayXi::Zero(18);  // per uncoupled contact, over the steps
+  constexpr int kSteps = 20;
+  for (int step = 0; step < kSteps; ++step) {
+    const double phase = 0.3 * step;
+    const Eigen::Vector3d F_hat =
+        p.F_hat_N +
+        Eigen::Vector3d(3.0 * std::cos(phase), 3.0 * std::sin(phase), 8.0 * std::sin(phase));
+    Eigen::Vector3d F_c, T_c;
+    ASSERT_TRUE(solver.Solve(poisoned, p.tool, F_hat, p.T_hat_N_m, &F_c, &T_c)) << step;
+    const DenseProblem dense = AssembleDense(zeros, p.tool, F_hat, p.T_hat_N_m);
+    const Eigen::VectorXd reference = SolveDense(dense, zeros.friction_coefficient, kDt_s);
+    EXPECT_LE((solver.last_impulses() - reference).norm(), 1e-8 * reference.norm()) << step;
+    ExpectCoulomb(dense, zeros.friction_coefficient, kDt_s, solver.last_impulses(), 1e-9,
+                  "step " + std::to_string(step));
+    for (int i = 0; i < 18; ++i) times_loaded[i] += solver.last_impulses()[3 * (12 + i)] > 0.0;
+  }
+  const int switching = ((times_loaded > 0) && (times_loaded < kSteps)).count();
+  std::printf("uncoupled contacts that engage and release: %d of 18\n", switching);
+  EXPECT_GT(switching, 0) << "precondition: uncoupled contacts engage and release";
+}
+
 // Cut off after one sweep a step, every iterate is admissible (λ_n ≥ 0, |λ_t| ≤ μλ_n: the tool
 // is never pulled), and pulling the tool away releases every contact within a few steps.
 TEST(HapticFrictionSolver, OneSweepIsAdmissibleAndReleaseNeverPulls) {
@@ -346,16 +376,17 @@ TEST(HapticLcpSolver, HandsFrictionRowsToItsFrictionSolve) {
 
 TEST(HapticFrictionSolver, AllocatesNothingAt510Rows) {
   if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer)";
-  const std::vector<LcpProblem> problems = {MakeLcpProblem(170, 61, 0.3, 1.0, 3, 0.5),
-                                            MakeLcpProblem(100, 62, 0.1, 1.0, 3, 1.0),
-                                            MakeLcpProblem(170, 63, 1.0, 30.0, 3, 0.2)};
+  std::vector<LcpProblem> problems = {
+      MakeLcpProblem(170, 61, 0.3, 1.0, 3, 0.5), MakeLcpProblem(100, 62, 0.1, 1.0, 3, 1.0),
+      MakeLcpProblem(170, 63, 1.0, 30.0, 3, 0.2), MakeLcpProblem(170, 64, 0.3, 1.0, 3, 0.5)};
+  UncoupleLastContacts(120, &problems.back().rows);  // the structured products too
   std::vector<ToolStepSystem> tools;
   for (int k = 0; k < 4; ++k) tools.push_back(MakeTool(0.05 * k));
   HapticFrictionSolver solver(512, 20);
   Eigen::Vector3d F_c, T_c;
   int failures = 0, active = 0;
   AllocationCounter counter;
-  for (int step = 0; step < 90; ++step) {
+  for (int step = 0; step < 120; ++step) {
     const LcpProblem& p = problems[(step / 30) % problems.size()];
     if (step % 30 == 0 && step > 0 && !solver.Prepare(p.rows)) ++failures;
     const Eigen::Vector3d F_hat = p.F_hat_N + Eigen::Vector3d(std::cos(0.2 * step), 0.0, 0.0);

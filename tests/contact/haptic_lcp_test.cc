@@ -76,14 +76,17 @@ void ExpectSolvesTheLcp(const Reference& ref, double dt_s, const Eigen::VectorXd
 
 // Solves with `solver`; checks the LCP conditions and compares λ, F_c and T_c with the
 // reference, errors relative to the size of the summed terms (Σ|λ| for F, Σ|J_ω||λ| for T)
-// since F_c, T_c may cancel.
+// since F_c, T_c may cancel. The reference solves `reference_rows` if given (the same rows with
+// zeros where the solver's have entries it must not read), else `rows`.
 void ExpectMatchesReference(HapticLcpSolver* solver, const ContactRows& rows,
                             const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
-                            const Eigen::Vector3d& T_hat_N_m, const std::string& where) {
+                            const Eigen::Vector3d& T_hat_N_m, const std::string& where,
+                            const ContactRows* reference_rows = nullptr) {
   Eigen::Vector3d F_c, T_c;
   ASSERT_TRUE(solver->Solve(rows, tool, F_hat_N, T_hat_N_m, &F_c, &T_c)) << where;
   EXPECT_LT(solver->last_residual(), 1e-10) << where;
-  const Reference ref = SolveReference(rows, tool, F_hat_N, T_hat_N_m);
+  const Reference ref =
+      SolveReference(reference_rows != nullptr ? *reference_rows : rows, tool, F_hat_N, T_hat_N_m);
   const Eigen::VectorXd lambda = solver->last_impulses();
   ExpectSolvesTheLcp(ref, tool.dt_s, lambda, where);
   const double lambda_scale = std::max(ref.lambda.norm(), 1e-300);
@@ -232,6 +235,29 @@ TEST(HapticLcpSolver, WarmStartFollowsChangingActiveSetsWithoutBias) {
   }
 }
 
+// Uncoupled contacts (ContactRows::num_uncoupled_rows, issue 13 item 5): the solve equals the
+// dense reference on the rows with zeros there, while the solver's own copy holds NaN there
+// (never read), over steps in which uncoupled rows engage and release.
+TEST(HapticLcpSolver, UncoupledContactsMatchTheReferenceWithoutReadingTheirZeros) {
+  const LcpProblem p = MakeLcpProblem(60, 77, 0.0, 1.0);
+  ContactRows zeros = p.rows, poisoned = p.rows;
+  UncoupleLastContacts(35, &zeros);
+  UncoupleLastContacts(35, &poisoned, /*poison=*/true);
+  HapticLcpSolver solver(64);
+  Eigen::ArrayXi times_active = Eigen::ArrayXi::Zero(35);  // per uncoupled row, over the steps
+  constexpr int kSteps = 30;
+  for (int step = 0; step < kSteps; ++step) {
+    const double phase = 0.4 * step;
+    const Eigen::Vector3d dF(4.0 * std::cos(phase), 4.0 * std::sin(phase), 8.0 * std::sin(phase));
+    ExpectMatchesReference(&solver, poisoned, MakeTool(0.01 * step), p.F_hat_N + dF, p.T_hat_N_m,
+                           "step " + std::to_string(step), &zeros);
+    times_active += (solver.last_impulses().tail(35).array() > 0.0).cast<int>();
+  }
+  const int switching = ((times_active > 0) && (times_active < kSteps)).count();
+  std::printf("uncoupled rows that engage and release: %d of 35\n", switching);
+  EXPECT_GT(switching, 0) << "precondition: uncoupled rows engage and release";
+}
+
 // New rows (a new visual frame) of the same or another size, alternating; also a stiff body
 // (W nearly the rank-6 tool part, condition ~1e5).
 TEST(HapticLcpSolver, NewRowsOfTheSameAndOtherSizes) {
@@ -289,16 +315,17 @@ TEST(HapticLcpSolver, AllContactsActiveMatchesTheLinearContactModel) {
 TEST(HapticLcpSolver, AllocatesNothingAfterConstruction) {
   if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer)";
   // Up to the capacity, with soft bodies so that the active blocks are large (~100 rows).
-  const std::vector<LcpProblem> problems = {
-      MakeLcpProblem(125, 11), MakeLcpProblem(150, 12, 1.0, 100.0), MakeLcpProblem(60, 13),
-      MakeLcpProblem(125, 14, 0.3, 30.0), MakeLcpProblem(6, 15)};
+  std::vector<LcpProblem> problems = {MakeLcpProblem(125, 11), MakeLcpProblem(150, 12, 1.0, 100.0),
+                                      MakeLcpProblem(60, 13),  MakeLcpProblem(125, 14, 0.3, 30.0),
+                                      MakeLcpProblem(6, 15),   MakeLcpProblem(150, 16)};
+  UncoupleLastContacts(100, &problems.back().rows);  // the structured products too
   std::vector<ToolStepSystem> tools;
   for (int k = 0; k < 8; ++k) tools.push_back(MakeTool(0.05 * k));
   HapticLcpSolver solver(150);
   Eigen::Vector3d F_c, T_c;
   int failures = 0, factorisations = 0;
   AllocationCounter counter;
-  for (int step = 0; step < 400; ++step) {
+  for (int step = 0; step < 480; ++step) {
     // A new frame every 40 steps; F̂ and the tool change every step.
     const LcpProblem& p = problems[(step / 40) % problems.size()];
     const double phase = 0.3 * step;

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -94,6 +95,21 @@ inline LcpProblem MakeLcpProblem(int n, unsigned seed, double press = 0.0, doubl
   p.F_hat_N += Eigen::Vector3d(0.3, -0.2, -3.0);  // F̃: gravity and the coupling
   p.T_hat_N_m += Eigen::Vector3d(0.01, 0.02, -0.005);
   return p;
+}
+
+// Declares the last `num_contacts` contacts of `rows` uncoupled (ContactRows::num_uncoupled_rows,
+// as the visual frame sends the contacts the tool is not expected to reach): W_body becomes zero
+// between each of them and every other contact's rows. With `poison`, NaN instead of zero
+// there: the solvers must not read those entries (give a dense reference the zeros).
+inline void UncoupleLastContacts(int num_contacts, ContactRows* rows, bool poison = false) {
+  const int per = rows->rows_per_contact, n = rows->num_rows();
+  rows->num_uncoupled_rows = per * num_contacts;
+  const double off = poison ? std::numeric_limits<double>::quiet_NaN() : 0.0;
+  for (int r = n - per * num_contacts; r < n; ++r) {
+    const int own = r - r % per;
+    for (int c = 0; c < n; ++c)
+      if (c < own || c >= own + per) rows->W_body(r, c) = rows->W_body(c, r) = off;
+  }
 }
 
 // The step's problem assembled densely, independently of the solvers' structured W:

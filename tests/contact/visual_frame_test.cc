@@ -108,22 +108,26 @@ TEST(VisualFrame, HapticStepComplianceYieldsMoreAndAgreesAtEqualSteps) {
               1e-9 * visual_equal.F_c0_N.norm());
 }
 
-// The lcp rows that travel (issue 13 item 5): with lcp_reach_m_s the frame exports exactly the
-// contacts of the all-rows export that are active (λ_n > 0) or that the tool's present approach
-// plus the reach engages (r_i − (J_v,i v + J_ω,i ω) > −v_reach), whole (three rows each with
-// friction, and their μ), bit for bit, in order; the frame itself is unchanged.
-TEST(VisualFrame, LcpRowsKeepTheActiveAndTheReachableContacts) {
+// The lcp rows that travel (issue 13 item 5): with lcp_reach_m_s the frame exports every contact
+// of the all-rows export, whole (three rows each with friction, and their μ), bit for bit: first,
+// in order, those that are active (λ_n > 0) or that the tool's present approach plus the reach
+// engages (shortfall s_i = −(r_i − (J_v,i v + J_ω,i ω)) < v_reach), with their W_body coupling;
+// then the others by s_i ascending, each with its own block of W_body and zeros to every other
+// row. With lcp_max_rows the uncoupled ones nearest to engaging fill what room is left. The
+// frame itself is unchanged.
+TEST(VisualFrame, LcpRowsCoupleTheActiveAndTheReachableContacts) {
   const fem::Model body = MakeSlab(0.02, 5e4, false);
   for (const ContactLaw law : {ContactLaw::kUnilateral, ContactLaw::kFriction}) {
     SCOPED_TRACE(ToString(law));
     const int per = law == ContactLaw::kFriction ? 3 : 1;
     ToolState tool_all;
-    const auto run = [&](double reach_m_s, ToolState* tool) {
+    const auto run = [&](double reach_m_s, int max_rows, ToolState* tool) {
       VisualFrameOptions options = MakeOptions(1.0 / 30.0, law, 0.0);
       options.response.solve.friction_coefficient = 0.4;
       options.haptic_dt_s = 1e-3;
       options.export_contact_rows = true;
       options.lcp_reach_m_s = reach_m_s;
+      options.lcp_max_rows = max_rows;
       options.detection.margin_m = 0.003;  // candidates up to 3 mm away: some cannot engage
       auto frame = std::make_unique<VisualFrame>(body, fem::FemOptions{},
                                                  fem::CalcGravityForce(body, {0, 0, -9.81}),
@@ -136,44 +140,58 @@ TEST(VisualFrame, LcpRowsKeepTheActiveAndTheReachableContacts) {
       return frame;
     };
     const double reach_m_s = 0.005;
-    ToolState tool_cut;
-    const auto all = run(0.0, &tool_all);
-    const auto cut = run(reach_m_s, &tool_cut);
+    const auto all = run(0.0, 0, &tool_all);
     const ContactRows& a = all->contact_rows();
-    const ContactRows& c = cut->contact_rows();
-    EXPECT_EQ(cut->contact_force_N(), all->contact_force_N());  // the frame is the same
     const Eigen::Vector3d w = CalcAngularVelocity(all->tool_model(), tool_all);
-    std::vector<int> kept;  // contacts
+    std::vector<int> coupled, uncoupled;  // contacts of `a`
+    std::vector<double> shortfall(a.num_rows() / per);
     for (int i = 0; i < a.num_rows() / per; ++i) {
       const int n = per * i;
-      const double tool_separating = a.J_v.row(n).dot(tool_all.v_W_m_s) + a.J_w.row(n).dot(w);
-      if (a.lambda_frame_N[n] > 0.0 || a.body_rhs[n] - tool_separating > -reach_m_s)
-        kept.push_back(i);
+      shortfall[i] = -(a.body_rhs[n] - (a.J_v.row(n).dot(tool_all.v_W_m_s) + a.J_w.row(n).dot(w)));
+      (a.lambda_frame_N[n] > 0.0 || shortfall[i] < reach_m_s ? coupled : uncoupled).push_back(i);
     }
+    std::stable_sort(uncoupled.begin(), uncoupled.end(),
+                     [&](int i, int j) { return shortfall[i] < shortfall[j]; });
     int active = 0;
     for (int i = 0; i < a.num_rows() / per; ++i) active += a.lambda_frame_N[per * i] > 0.0;
-    std::printf("%s: %d candidate contacts, %d active, %d kept\n", ToString(law),
-                a.num_rows() / per, active, static_cast<int>(kept.size()));
+    const int num_coupled = static_cast<int>(coupled.size());
+    std::printf("%s: %d candidate contacts, %d active, %d coupled\n", ToString(law),
+                a.num_rows() / per, active, num_coupled);
     ASSERT_GT(active, 0);
-    ASSERT_GT(static_cast<int>(kept.size()), active) << "precondition: an inactive row is kept";
-    ASSERT_LT(per * static_cast<int>(kept.size()), a.num_rows()) << "precondition: one withheld";
-    ASSERT_EQ(c.num_rows(), per * static_cast<int>(kept.size()));
-    EXPECT_EQ(c.rows_per_contact, per);
-    EXPECT_EQ(cut->num_rows_withheld(), a.num_rows() - c.num_rows());
-    EXPECT_EQ(all->num_rows_withheld(), 0);
-    for (size_t k = 0; k < kept.size(); ++k) {
-      if (per == 3) {
-        EXPECT_EQ(c.friction_coefficient[k], a.friction_coefficient[kept[k]]);
-      }
-      for (int d = 0; d < per; ++d) {
-        const int r = per * static_cast<int>(k) + d, i = per * kept[k] + d;
-        EXPECT_EQ(c.J_v.row(r), a.J_v.row(i)) << r;
-        EXPECT_EQ(c.J_w.row(r), a.J_w.row(i)) << r;
-        EXPECT_EQ(c.body_rhs[r], a.body_rhs[i]) << r;
-        EXPECT_EQ(c.lambda_frame_N[r], a.lambda_frame_N[i]) << r;
-        for (size_t q = 0; q < kept.size(); ++q)
-          for (int e = 0; e < per; ++e)
-            EXPECT_EQ(c.W_body(r, per * static_cast<int>(q) + e), a.W_body(i, per * kept[q] + e));
+    ASSERT_GT(num_coupled, active) << "precondition: an inactive contact is coupled";
+    ASSERT_GT(uncoupled.size(), 2u) << "precondition: uncoupled contacts to choose from";
+    EXPECT_EQ(a.num_uncoupled_rows, 0);
+    for (const int max_rows : {0, per * (num_coupled + 2)}) {
+      SCOPED_TRACE(max_rows);
+      ToolState tool_cut;
+      const auto cut = run(reach_m_s, max_rows, &tool_cut);
+      const ContactRows& c = cut->contact_rows();
+      EXPECT_EQ(cut->contact_force_N(), all->contact_force_N());  // the frame is the same
+      std::vector<int> order = coupled;
+      order.insert(order.end(), uncoupled.begin(),
+                   max_rows == 0 ? uncoupled.end() : uncoupled.begin() + 2);
+      const int num = static_cast<int>(order.size());
+      ASSERT_EQ(c.num_rows(), per * num);
+      EXPECT_EQ(c.rows_per_contact, per);
+      EXPECT_EQ(c.num_uncoupled_rows, per * (num - num_coupled));
+      for (int k = 0; k < num; ++k) {
+        if (per == 3) {
+          EXPECT_EQ(c.friction_coefficient[k], a.friction_coefficient[order[k]]);
+        }
+        for (int d = 0; d < per; ++d) {
+          const int r = per * k + d, i = per * order[k] + d;
+          EXPECT_EQ(c.J_v.row(r), a.J_v.row(i)) << r;
+          EXPECT_EQ(c.J_w.row(r), a.J_w.row(i)) << r;
+          EXPECT_EQ(c.body_rhs[r], a.body_rhs[i]) << r;
+          EXPECT_EQ(c.lambda_frame_N[r], a.lambda_frame_N[i]) << r;
+          for (int q = 0; q < num; ++q) {
+            const bool couples = (k < num_coupled && q < num_coupled) || k == q;
+            for (int e = 0; e < per; ++e) {
+              EXPECT_EQ(c.W_body(r, per * q + e), couples ? a.W_body(i, per * order[q] + e) : 0.0)
+                  << r << ", " << per * q + e;
+            }
+          }
+        }
       }
     }
   }

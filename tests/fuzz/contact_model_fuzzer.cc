@@ -66,7 +66,12 @@ void CheckAccepted(const contact::LinearContactModel& model, const contact::Cont
                "contact_model_t accepted a negative W_body diagonal or normal lambda");
   }
   CheckOrDie(contact::HasConsistentShape(rows),
-             "contact_model_t accepted rows whose friction layout is inconsistent");
+             "contact_model_t accepted rows whose friction or coupling layout is inconsistent");
+  // Uncoupled contacts (the last num_uncoupled_rows rows) couple to no other row.
+  const int per = rows.rows_per_contact, coupled = rows.num_coupled_rows();
+  for (int a = coupled; a < n; a += per)
+    CheckOrDie((rows.W_body.block(a, 0, per, a).array() == 0.0).all(),
+               "contact_model_t: an uncoupled contact couples to an earlier row");
 }
 
 // The frame's world (the geometric modes): whatever the message, WorldFromMessage either

@@ -6,11 +6,12 @@
 //   cmake --build build-fuzzcheck --target fuzz_make_seeds
 //   hapsim run scenes/block_press.yaml --duration 0.1 --log linear.lcm            (in a netns)
 //   hapsim run scenes/block_press.yaml --mode lcp --duration 0.6 --log lcp.lcm
-//   build-fuzzcheck/tests/fuzz/fuzz_make_seeds linear.lcm lcp.lcm tests/fuzz/corpus
+//   hapsim run scenes/peg_in_hole.yaml --mode penalty --duration 0.1 --log penalty.lcm
+//   build-fuzzcheck/tests/fuzz/fuzz_make_seeds linear.lcm lcp.lcm penalty.lcm tests/fuzz/corpus
 //
-// tests/fuzz/corpus/contact_model/world_objects is cut by hand from the log of
-// `hapsim run scenes/peg_in_hole.yaml --mode penalty`: its first CONTACT_MODEL, which carries the
-// frame's world (five objects' poses; docs/HAPTIC_MODES.md).
+// (Any build folder will do for fuzz_make_seeds.) contact_model/world_objects is the penalty
+// run's first CONTACT_MODEL, which carries the frame's world (five objects' poses;
+// docs/HAPTIC_MODES.md).
 //
 // Small on purpose: libFuzzer mutates small inputs faster, and the largest seed sets the input
 // size it explores.
@@ -112,16 +113,29 @@ void AppendEvent(std::int64_t number, std::int64_t timestamp_us, const std::stri
   *log += data;
 }
 
-// The first `n` rows of an lcp contact model (the leading block of W_body).
-hapsim_lcm::contact_model_t FirstRows(hapsim_lcm::contact_model_t msg, int n) {
-  msg.num_rows = n;
-  msg.J_v.resize(n);
-  msg.J_w.resize(n);
-  msg.num_W_body_lower = n * (n + 1) / 2;
+// Rows `first` of an lcp contact model, the first `coupled` of them coupled (the leading block of
+// W_body) and the rest from its uncoupled ones (their own blocks). Normal rows only.
+hapsim_lcm::contact_model_t SomeRows(hapsim_lcm::contact_model_t msg, int coupled, int uncoupled) {
+  if (msg.rows_per_contact != 1 || msg.num_coupled_rows < coupled ||
+      msg.num_rows - msg.num_coupled_rows < uncoupled)
+    throw std::runtime_error("SomeRows: the model has too few rows of a kind");
+  const auto pick = [&](auto* rows) {
+    auto picked = *rows;
+    picked.resize(coupled);
+    picked.insert(picked.end(), rows->begin() + msg.num_coupled_rows,
+                  rows->begin() + msg.num_coupled_rows + uncoupled);
+    *rows = picked;
+  };
+  pick(&msg.J_v);
+  pick(&msg.J_w);
+  pick(&msg.body_rhs);
+  pick(&msg.lambda_frame_N);
+  msg.num_rows = coupled + uncoupled;
+  msg.num_coupled_rows = coupled;
+  msg.num_W_body_lower = coupled * (coupled + 1) / 2;
   msg.W_body_lower.resize(msg.num_W_body_lower);
-  msg.body_rhs.resize(n);
-  msg.lambda_frame_N.resize(n);
-  msg.rows_per_contact = 1;
+  msg.num_W_body_contact_lower = uncoupled;
+  msg.W_body_contact_lower.resize(uncoupled);
   msg.num_friction_coefficients = 0;
   msg.friction_coefficient.clear();
   return msg;
@@ -141,7 +155,8 @@ hapsim_lcm::sim_frame_t TinyFrame(hapsim_lcm::sim_frame_t msg) {
   return msg;
 }
 
-void WriteMessageSeeds(const std::vector<Event>& linear, const std::vector<Event>& lcp) {
+void WriteMessageSeeds(const std::vector<Event>& linear, const std::vector<Event>& lcp,
+                       const std::vector<Event>& penalty) {
   // DEVICE_STATE: the first, one mid-run, a NaN position (the safety layer's case: it must pass
   // the adapter), a quaternion 1e-3 off unit (rejected).
   const auto states = Messages<hapsim_lcm::device_state_t>(linear, messages::kDeviceStateChannel);
@@ -171,17 +186,25 @@ void WriteMessageSeeds(const std::vector<Event>& linear, const std::vector<Event
   WriteMessage("contact_model", "linear", linear_models.back());
   const auto lcp_models =
       Messages<hapsim_lcm::contact_model_t>(lcp, messages::kContactModelChannel);
-  const auto with_rows = std::find_if(lcp_models.rbegin(), lcp_models.rend(),
-                                      [](const auto& m) { return m.num_rows >= 3; });
-  if (with_rows == lcp_models.rend()) throw std::runtime_error("no lcp model with 3 rows");
-  WriteMessage("contact_model", "lcp_3_rows", FirstRows(*with_rows, 3));
-  WriteMessage("contact_model", "lcp_1_row", FirstRows(*with_rows, 1));
+  const auto with_rows = std::find_if(lcp_models.rbegin(), lcp_models.rend(), [](const auto& m) {
+    return m.num_coupled_rows >= 3 && m.num_rows - m.num_coupled_rows >= 2;
+  });
+  if (with_rows == lcp_models.rend())
+    throw std::runtime_error("no lcp model with 3 coupled rows and 2 uncoupled");
+  WriteMessage("contact_model", "lcp_3_rows", SomeRows(*with_rows, 3, 0));
+  WriteMessage("contact_model", "lcp_1_row", SomeRows(*with_rows, 1, 0));
+  WriteMessage("contact_model", "lcp_2_coupled_2_uncoupled", SomeRows(*with_rows, 2, 2));
   // Friction rows (issue 13): the three rows read as one contact's normal, t1, t2, μ 0.5.
-  hapsim_lcm::contact_model_t friction = FirstRows(*with_rows, 3);
+  hapsim_lcm::contact_model_t friction = SomeRows(*with_rows, 3, 0);
   friction.rows_per_contact = 3;
   friction.num_friction_coefficients = 1;
   friction.friction_coefficient = {0.5};
   WriteMessage("contact_model", "lcp_friction_1_contact", friction);
+  const auto world = Messages<hapsim_lcm::contact_model_t>(penalty, messages::kContactModelChannel);
+  const auto with_world =
+      std::find_if(world.begin(), world.end(), [](const auto& m) { return m.num_objects > 0; });
+  if (with_world == world.end()) throw std::runtime_error("no penalty model with a world");
+  WriteMessage("contact_model", "world_objects", *with_world);
 
   const auto frames = Messages<hapsim_lcm::sim_frame_t>(lcp, messages::kSimFrameChannel);
   WriteMessage("sim_frame", "tiny", TinyFrame(frames.back()));
@@ -273,15 +296,16 @@ void WriteMeshSeeds() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 4) {
-    std::fprintf(stderr, "usage: %s LINEAR_RUN.lcm LCP_RUN.lcm CORPUS_DIR\n", argv[0]);
+  if (argc != 5) {
+    std::fprintf(stderr, "usage: %s LINEAR_RUN.lcm LCP_RUN.lcm PENALTY_RUN.lcm CORPUS_DIR\n",
+                 argv[0]);
     return 2;
   }
-  out_dir = argv[3];
+  out_dir = argv[4];
   try {
     const std::vector<Event> linear = ReadEvents(argv[1]);
     const std::vector<Event> lcp = ReadEvents(argv[2]);
-    WriteMessageSeeds(linear, lcp);
+    WriteMessageSeeds(linear, lcp, ReadEvents(argv[3]));
     WriteLogSeeds(linear, lcp);
     WriteMeshSeeds();
   } catch (const std::exception& e) {

@@ -258,6 +258,7 @@ void ExpectSameRowsAndHeader(const ContactModelFixture& in, const contact::Conta
   ExpectBitIdentical(rows.body_rhs, in.rows.body_rhs, "body_rhs");
   ExpectBitIdentical(rows.lambda_frame_N, in.rows.lambda_frame_N, "lambda_frame_N");
   EXPECT_EQ(rows.rows_per_contact, in.rows.rows_per_contact);
+  EXPECT_EQ(rows.num_uncoupled_rows, in.rows.num_uncoupled_rows);
   ExpectBitIdentical(rows.friction_coefficient, in.rows.friction_coefficient,
                      "friction_coefficient");
   EXPECT_EQ(header.utime, in.header.utime);
@@ -340,6 +341,57 @@ TEST(ContactModelMessage, PackedLowerTriangleHasTheExpectedLayout) {
   asymmetric.rows.W_body(0, 3) += 1e-15;
   EXPECT_THROW(ToMessage(asymmetric.model, &asymmetric.rows, asymmetric.header),
                std::invalid_argument);
+}
+
+// Contacts declared uncoupled (ContactRows::num_uncoupled_rows; issue 13 item 5: the visual
+// frame sends them last) travel as their own blocks: of 12 contacts, the last 6 uncoupled arrive
+// bit for bit after the packed triangle of the first 6 contacts' rows, one block each (1 entry
+// with normal rows, 6 with friction's threes). A W_body not zero where the rows declare it is
+// refused at the sender, and the new fields' inconsistencies at the receiver, by name.
+TEST(ContactModelMessage, UncoupledContactsTravelAsTheirOwnBlocks) {
+  for (const int per : {1, 3}) {
+    SCOPED_TRACE(per);
+    const int n = 12 * per, coupled = 6 * per;
+    ContactModelFixture in(n);
+    in.rows.rows_per_contact = per;
+    if (per == 3) in.rows.friction_coefficient = Eigen::VectorXd::LinSpaced(12, 0.0, 1.1);
+    in.rows.num_uncoupled_rows = n - coupled;
+    EXPECT_THROW(ToMessage(in.model, &in.rows, in.header), std::invalid_argument);
+    for (int r = coupled; r < n; ++r)
+      for (int c = 0; c < n; ++c)
+        if (c < r - (r - coupled) % per || c >= r - (r - coupled) % per + per)
+          in.rows.W_body(r, c) = in.rows.W_body(c, r) = 0.0;
+    const auto msg = EncodeDecode(ToMessage(in.model, &in.rows, in.header));
+    EXPECT_EQ(msg.num_coupled_rows, coupled);
+    EXPECT_EQ(msg.num_W_body_lower, coupled * (coupled + 1) / 2);
+    EXPECT_EQ(msg.num_W_body_contact_lower, 6 * per * (per + 1) / 2);
+    EXPECT_EQ(msg.W_body_contact_lower[0], in.rows.W_body(coupled, coupled));
+    if (per == 3) {
+      EXPECT_EQ(msg.W_body_contact_lower[4], in.rows.W_body(20, 19));  // [t2][t1]
+      EXPECT_EQ(msg.W_body_contact_lower[6], in.rows.W_body(21, 21));  // the next contact
+    }
+    contact::LinearContactModel model;
+    contact::ContactRows rows = ContactModelFixture(n).rows;  // stale, every entry non-zero
+    ContactModelHeader header;
+    std::string error;
+    ASSERT_TRUE(FromMessage(msg, &model, &rows, &header, &error)) << error;
+    ExpectBitIdentical(rows.W_body, in.rows.W_body, "W_body");
+    ExpectSameRowsAndHeader(in, rows, header);
+
+    const std::vector<std::pair<const char*, std::function<void(hapsim_lcm::contact_model_t*)>>>
+        cases = {{"num_coupled_rows", [n](auto* m) { m->num_coupled_rows = n + 3; }},
+                 {"num_coupled_rows", [](auto* m) { m->num_coupled_rows = -3; }},
+                 {"W_body_lower", [per](auto* m) { m->num_coupled_rows += per; }},
+                 {"W_body_contact_lower", [](auto* m) { m->W_body_contact_lower.pop_back(); }},
+                 {"W_body_contact_lower", [](auto* m) { m->W_body_contact_lower[0] = kNaN; }},
+                 {"W_body_contact_lower", [](auto* m) { m->W_body_contact_lower[0] = -1e-9; }}};
+    for (const auto& [field, corrupt] : cases) {
+      hapsim_lcm::contact_model_t bad = msg;
+      corrupt(&bad);
+      EXPECT_FALSE(FromMessage(bad, &model, &rows, &header, &error)) << field;
+      EXPECT_NE(error.find(field), std::string::npos) << field << ": " << error;
+    }
+  }
 }
 
 TEST(ContactModelMessage, RoundTripWithoutRowsEmptiesTheRows) {

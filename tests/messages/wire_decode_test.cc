@@ -42,6 +42,7 @@ hapsim_lcm::contact_model_t MakeContactModel(int rows) {
   msg.num_rows = rows;
   msg.J_v.assign(rows, {0.0, 0.0, -1.0});
   msg.J_w.assign(rows, {0.0, 0.01, 0.0});
+  msg.num_coupled_rows = rows;
   msg.num_W_body_lower = rows * (rows + 1) / 2;
   msg.W_body_lower.assign(msg.num_W_body_lower, 0.5);
   msg.body_rhs.assign(rows, 0.1);
@@ -130,9 +131,10 @@ TEST(WireDecode, EveryTypeRoundTripsThroughTheLayoutCheck) {
   }
 }
 
-// With no rows and no world a contact model ends in num_rows, num_W_body_lower (int32),
-// rows_per_contact (int8), num_friction_coefficients, num_body_nodes, num_objects (int32).
-std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 21; }
+// With no rows and no world a contact model ends in num_rows, num_coupled_rows,
+// num_W_body_lower, num_W_body_contact_lower (int32), rows_per_contact (int8),
+// num_friction_coefficients, num_body_nodes, num_objects (int32).
+std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 29; }
 std::size_t NumFrictionCoefficientsOffset() { return Encode(MakeContactModel(0)).size() - 12; }
 std::size_t NumBodyNodesOffset() { return Encode(MakeContactModel(0)).size() - 8; }
 
