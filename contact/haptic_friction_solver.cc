@@ -129,7 +129,10 @@ double HapticFrictionSolver::Workspace::CalcResidual(double dt_s) {
     const int a = 3 * i;
     if (lambda[a] == 0.0 && CalcNormalVelocity(i, h, dt_s) >= 0.0) continue;
     const Eigen::Matrix3d* W_ii = DiagonalBlock(i);
-    if (W_ii == nullptr) return std::numeric_limits<double>::infinity();  // not reached: swept
+    if (W_ii == nullptr) {  // a contact no sweep reached (cut off by max_sweeps) now approaches
+      singular_normal = true;
+      return std::numeric_limits<double>::infinity();
+    }
     const Eigen::Vector3d c = CalcVelocity(i, h, dt_s);
     const Eigen::Vector2d lambda_t = lambda.segment<2>(a + 1);
     const Eigen::Vector2d moved = StepTangentialImpulse(
@@ -199,11 +202,12 @@ bool HapticFrictionSolver::Solve(const ContactRows& rows, const ToolStepSystem& 
     if (!std::isfinite(change)) break;  // reported as a failure below
     if (change <= kTolerance * ws.lambda.head(n).lpNorm<Eigen::Infinity>()) break;
   }
+  if (!ws.singular_normal) last_residual_ = ws.CalcResidual(dt_s);
   if (ws.singular_normal || !ws.lambda.head(n).allFinite()) {
     ws.n = -1;  // start afresh next time
+    last_residual_ = 0.0;
     return false;
   }
-  last_residual_ = ws.CalcResidual(dt_s);
   for (int i = 0; i < n / 3; ++i) {
     const double normal = ws.lambda[3 * i];
     if (normal <= 0.0) continue;

@@ -90,16 +90,20 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
 // its approach now plus up to lcp_reach_m_s more, keep their coupling to one another. Every
 // other contact keeps only its own block of W_body, as if pushing it moved no other contact: a
 // stiffer body, for the rest of a frame the tool was not expected to reach it in, and then the
-// next frame couples it. Row i's target r_i = b_i − J_u,i u̇ (+ what the frame's force holds
-// back) is the approach speed it needs to engage (b closes its gap over a frame, less the body's
-// own normal velocity); the tool approaches it at −(J_v,i v + J_ω,i ω). The coupled contacts come
-// first, then the others, the nearest to engaging first, as many as lcp_max_rows leaves room
-// for. lcp_reach_m_s = 0 couples them all.
+// next frame couples it. Row i's target r_i = b_i − J_u,i u̇ + Δt_h (W_body λ_vis)_i is the
+// approach speed it needs to engage (b closes its gap over a frame, less the body's own normal
+// velocity, plus what the frame's force holds back: the 1 kHz solve's W_body λ adds that back
+// while λ stays near λ_vis); the tool approaches it at −(J_v,i v + J_ω,i ω). An uncoupled row
+// sees no other contact's λ, so its target leaves the hold-back out too: the frame's force at
+// the other contacts stays in u̇, as if they kept pushing as they did (its own λ_vis is 0: an
+// active contact is coupled). The coupled contacts come first, then the others, the nearest to
+// engaging first, as many as lcp_max_rows leaves room for. lcp_reach_m_s = 0 couples them all.
 void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
                                     const Eigen::VectorXd& held_m_s, const ToolState& tool,
                                     const fem::State& body) {
   const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
-  const Eigen::VectorXd rhs_all = b_all - J_all.J_u * body.v_m_s + held_m_s;
+  const Eigen::VectorXd rhs_uncoupled = b_all - J_all.J_u * body.v_m_s;
+  const Eigen::VectorXd rhs_all = rhs_uncoupled + held_m_s;
   const double reach_m_s = options_.lcp_reach_m_s;
   const Eigen::Vector3d w_W_rad_s = CalcAngularVelocity(tool_, tool);
   std::vector<size_t> coupled, uncoupled;           // contacts
@@ -133,15 +137,16 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   const ContactJacobian J = CalcJacobian(ordered, tool.x_W_m);
   Eigen::VectorXd rhs(static_cast<Eigen::Index>(rows.size()));
   Eigen::VectorXd lambda(rhs.size());
+  const int num_coupled = rows_per_contact_ * static_cast<int>(coupled.size());  // rows
   for (size_t r = 0; r < rows.size(); ++r) {
-    rhs[static_cast<Eigen::Index>(r)] = rhs_all[rows[r]];
+    rhs[static_cast<Eigen::Index>(r)] =
+        static_cast<int>(r) < num_coupled ? rhs_all[rows[r]] : rhs_uncoupled[rows[r]];
     lambda[static_cast<Eigen::Index>(r)] = lambda_[rows[r]];
   }
   const Eigen::VectorXd mu_ordered =
       Eigen::Map<const Eigen::VectorXd>(mu.data(), static_cast<Eigen::Index>(mu.size()));
   const Eigen::MatrixXd& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
   contact_rows_ = MakeContactRows(J, W_body, rows, rhs, mu_ordered);
-  const int num_coupled = rows_per_contact_ * static_cast<int>(coupled.size());
   const int n = contact_rows_.num_rows();
   for (int r = num_coupled; r < n; ++r) {  // an uncoupled contact: its own block alone (zeros
                                            // elsewhere, for dense readers)

@@ -113,7 +113,7 @@ TEST(VisualFrame, HapticStepComplianceYieldsMoreAndAgreesAtEqualSteps) {
 // in order, those that are active (λ_n > 0) or that the tool's present approach plus the reach
 // engages (shortfall s_i = −(r_i − (J_v,i v + J_ω,i ω)) < v_reach), with their W_body coupling;
 // then the others by s_i ascending, each with its own block of W_body and zeros to every other
-// row. With lcp_max_rows the uncoupled ones nearest to engaging fill what room is left. The
+// row, and a target without the other contacts' hold-back Δt_h (W_body λ_vis)_i. With lcp_max_rows the uncoupled ones nearest to engaging fill what room is left. The
 // frame itself is unchanged.
 TEST(VisualFrame, LcpRowsCoupleTheActiveAndTheReachableContacts) {
   const fem::Model body = MakeSlab(0.02, 5e4, false);
@@ -171,6 +171,7 @@ TEST(VisualFrame, LcpRowsCoupleTheActiveAndTheReachableContacts) {
       order.insert(order.end(), uncoupled.begin(),
                    max_rows == 0 ? uncoupled.end() : uncoupled.begin() + 2);
       const int num = static_cast<int>(order.size());
+      double largest_held = 0.0;  // over the uncoupled rows, m/s
       ASSERT_EQ(c.num_rows(), per * num);
       EXPECT_EQ(c.rows_per_contact, per);
       EXPECT_EQ(c.num_uncoupled_rows, per * (num - num_coupled));
@@ -182,7 +183,14 @@ TEST(VisualFrame, LcpRowsCoupleTheActiveAndTheReachableContacts) {
           const int r = per * k + d, i = per * order[k] + d;
           EXPECT_EQ(c.J_v.row(r), a.J_v.row(i)) << r;
           EXPECT_EQ(c.J_w.row(r), a.J_w.row(i)) << r;
-          EXPECT_EQ(c.body_rhs[r], a.body_rhs[i]) << r;
+          if (k < num_coupled) {
+            EXPECT_EQ(c.body_rhs[r], a.body_rhs[i]) << r;
+          } else {  // without the hold-back of the other contacts' frame force
+            const double held = 1e-3 * a.W_body.row(i).dot(a.lambda_frame_N);
+            EXPECT_NEAR(c.body_rhs[r], a.body_rhs[i] - held, 1e-12 * std::abs(a.body_rhs[i]))
+                << r;
+            largest_held = std::max(largest_held, std::abs(held));
+          }
           EXPECT_EQ(c.lambda_frame_N[r], a.lambda_frame_N[i]) << r;
           for (int q = 0; q < num; ++q) {
             const bool couples = (k < num_coupled && q < num_coupled) || k == q;
@@ -193,6 +201,7 @@ TEST(VisualFrame, LcpRowsCoupleTheActiveAndTheReachableContacts) {
           }
         }
       }
+      EXPECT_GT(largest_held, 1e-6) << "precondition: the hold-back matters";
     }
   }
 }
