@@ -13,8 +13,8 @@
 
 namespace hapsim::contact {
 
-// What the visual frame hands to the haptic step for the lcp mode: per contact row (normal rows
-// only), frozen at the frame.
+// What the visual frame hands to the haptic step for the lcp mode: per contact row (a normal row
+// per contact, or with friction three), frozen at the frame.
 struct ContactRows {
   Eigen::MatrixX3d J_v;      // (n x 3) −n_iᵀ, world
   Eigen::MatrixX3d J_w;      // (n x 3) −(r_i × n_i)ᵀ, world, m (lever from the tool's COM)

@@ -76,8 +76,8 @@ class HapticFrictionSolver {
   bool Solve(const ContactRows& rows, const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
              const Eigen::Vector3d& T_hat_N_m, Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m);
 
-  // Copies and checks new rows and sets up the warm start (y = W_body λ_frame, an O(n²) product)
-  // ahead of time, off the 1 kHz loop; the following Solve on the same rows starts warm.
+  // Copies and checks new rows and sets up the warm start (y = W_body λ_frame, an O(n_c² + n)
+  // product) ahead of time, off the 1 kHz loop; the following Solve on the same rows starts warm.
   // Returns false for rows Solve would reject (leaving no rows cached: the next Solve copies
   // afresh). Allocates nothing.
   bool Prepare(const ContactRows& rows);

@@ -24,8 +24,10 @@
 // Bartlett & Biegler's QPSchur 2006): one dense Cholesky factor of a base block W̄_BB, kept
 // while the rows stay the same, and a small dense border for the rank-6 tool change and the
 // rows that entered or left the active set since. Warm-started from the previous step's active
-// set, a haptic step with unchanged rows and contacts costs O(n²) (the complementarity check)
-// plus O(n·m + m³), m ≤ 6 + 32 border columns, and no factorisation of an n × n matrix.
+// set, a haptic step with unchanged rows and contacts costs O(n_c² + n) for the complementarity
+// check (n_c the rows that couple through W_body, ContactRows::num_uncoupled_rows; the others
+// only through the tool) plus O(n·m + m³), m ≤ 6 + 32 border columns, and no factorisation of
+// an n × n matrix.
 
 #include <Eigen/Core>
 #include <memory>
