@@ -316,6 +316,40 @@ TEST(HapticFrictionSolver, AChangeOfMuOrOfATargetAloneIsNewRows) {
   }
 }
 
+// The row cache with uncoupled contacts (ContactRows::num_uncoupled_rows), rows unstamped: a
+// change the solvers would read (a coupled entry, an uncoupled contact's own block, the split
+// itself) makes new rows; a change where the rows declare zeros (never read) does not. And
+// HasConsistentShape refuses a split that is not whole contacts of the rows.
+TEST(ContactRowCache, ComparesWhatTheSolversReadWithUncoupledContacts) {
+  LcpProblem p = MakeLcpProblem(10, 91, 0.2, 1.0, 3, 0.5);
+  UncoupleLastContacts(4, &p.rows);  // rows 18..29 uncoupled
+  ContactRowCache cache(30);
+  ASSERT_TRUE(cache.Take(p.rows));
+  EXPECT_TRUE(cache.Holds(p.rows));
+  const auto changed = [&](auto change) {
+    ContactRows rows = p.rows;
+    change(&rows);
+    return !cache.Holds(rows);
+  };
+  EXPECT_TRUE(changed([](ContactRows* r) { r->W_body(4, 1) += 1e-9; }));    // coupled block
+  EXPECT_TRUE(changed([](ContactRows* r) { r->W_body(23, 22) += 1e-9; }));  // uncoupled, own block
+  EXPECT_TRUE(changed([](ContactRows* r) { r->W_body(21, 23) += 1e-9; }));  // own, upper
+  EXPECT_FALSE(changed([](ContactRows* r) { r->W_body(25, 3) = 7.0; }));    // declared zero
+  EXPECT_TRUE(changed([](ContactRows* r) { r->num_uncoupled_rows = 9; }));
+  for (const int bad : {-3, 2, 33}) {
+    ContactRows rows = p.rows;
+    rows.num_uncoupled_rows = bad;
+    EXPECT_FALSE(HasConsistentShape(rows)) << bad;
+  }
+  // The solvers refuse such rows with zero force.
+  ContactRows rows = p.rows;
+  rows.num_uncoupled_rows = 2;
+  HapticFrictionSolver solver(30, 10);
+  Eigen::Vector3d F_c(1, 1, 1), T_c(1, 1, 1);
+  EXPECT_FALSE(solver.Solve(rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_c, &T_c));
+  EXPECT_EQ(F_c, Eigen::Vector3d::Zero());
+}
+
 // Stamped rows (ContactRows::stamp) are compared by their stamp alone: rows changed in place
 // without a new stamp are, by the contract, the cached ones; a new stamp makes them new rows,
 // solved as a cold solver solves them. Both solvers, friction and frictionless.
