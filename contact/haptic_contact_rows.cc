@@ -36,7 +36,7 @@ bool ContactRowCache::Holds(const ContactRows& rows) const {
   for (int c = 0; c < coupled; ++c)
     if (!same(W.col(c).data(), rows.W_body.col(c).data(), coupled)) return false;
   for (int c = coupled; c < m; ++c) {
-    const int own = c - (c - coupled) % per;
+    const int own = FirstRowOfBlock(c, coupled, per);
     if (!same(W.col(c).data() + own, rows.W_body.col(c).data() + own, per)) return false;
   }
   return true;
@@ -60,7 +60,7 @@ bool ContactRowCache::Take(const ContactRows& rows) {
   constexpr double kSymmetryTolerance = 1e-9;
   double scale = 0.0, asymmetry = 0.0, sum = 0.0;
   for (int j = 0; j < n; ++j) {
-    const int last = j < coupled ? coupled : j - (j - coupled) % per + per;  // of j's block
+    const int last = j < coupled ? coupled : FirstRowOfBlock(j, coupled, per) + per;  // block end
     for (int i = j; i < last; ++i) {
       const double lower = W(i, j), upper = W(j, i);
       sum += lower + upper;

@@ -47,6 +47,13 @@ struct ContactRows {
   int num_coupled_rows() const { return num_rows() - num_uncoupled_rows; }
 };
 
+// The first row of the W_body block that `row` lies in, for rows whose first `num_coupled` couple
+// and whose others come in uncoupled contacts of `per` rows (ContactRows::num_uncoupled_rows):
+// 0 for a coupled row, else the first row of its contact.
+inline int FirstRowOfBlock(int row, int num_coupled, int per) {
+  return row < num_coupled ? 0 : row - (row - num_coupled) % per;
+}
+
 // Gives `rows` a stamp no other rows in this process have had (an atomic counter from 1).
 void StampNewContactRows(ContactRows* rows);
 
@@ -66,7 +73,7 @@ struct ContactRowCache {
   // W_body(i, j) for i ≥ j: the cached lower triangle where rows couple, 0 between an uncoupled
   // contact and any other (ContactRows::num_uncoupled_rows).
   double BodyLower(int i, int j) const {
-    return i < coupled || i - (i - coupled) % per <= j ? W(i, j) : 0.0;
+    return FirstRowOfBlock(i, coupled, per) <= j ? W(i, j) : 0.0;
   }
   // y = W_body x over the n rows (x, y: n entries), reading only what may be non-zero, both
   // triangles as stored (as AddContactColumns reads them): O(coupled² + uncoupled · per).

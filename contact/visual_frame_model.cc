@@ -150,7 +150,7 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   const int n = contact_rows_.num_rows();
   for (int r = num_coupled; r < n; ++r) {  // an uncoupled contact: its own block alone (zeros
                                            // elsewhere, for dense readers)
-    const int own = r - (r - num_coupled) % rows_per_contact_;
+    const int own = FirstRowOfBlock(r, num_coupled, rows_per_contact_);
     for (int c = 0; c < n; ++c) {
       if (c >= own && c < own + rows_per_contact_) continue;
       contact_rows_.W_body(r, c) = contact_rows_.W_body(c, r) = 0.0;

@@ -396,7 +396,7 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
       msg.J_v[i][c] = rows.J_v(i, c);
       msg.J_w[i][c] = rows.J_w(i, c);
     }
-    const int first = i < coupled ? 0 : i - (i - coupled) % per;  // of i's block
+    const int first = contact::FirstRowOfBlock(i, coupled, per);
     for (int c = first; c <= i; ++c) PackedBodyEntry(msg, i, c) = rows.W_body(i, c);
     msg.body_rhs[i] = rows.body_rhs[i];
     if (rows.lambda_frame_N.size() == n) msg.lambda_frame_N[i] = rows.lambda_frame_N[i];
@@ -451,7 +451,7 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
       rows->J_v(i, c) = msg.J_v[i][c];
       rows->J_w(i, c) = msg.J_w[i][c];
     }
-    const int first = i < coupled ? 0 : i - (i - coupled) % per;  // of i's block
+    const int first = contact::FirstRowOfBlock(i, coupled, per);
     for (int c = first; c <= i; ++c)
       rows->W_body(i, c) = rows->W_body(c, i) = PackedBodyEntry(msg, i, c);
     rows->body_rhs[i] = msg.body_rhs[i];
