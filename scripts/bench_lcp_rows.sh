@@ -7,11 +7,13 @@
 #     reference` (the 1 kHz visual frame) over haptic.csv;
 #   - `hapsim run --mode lcp --log`: every CONTACT_MODEL's size, its rows and coupled rows;
 # and the fast press of docs/RESULTS.md's map (5 mm in 10 ms, 0.5 m/s, E = 5 MPa): the haptic
-# tool's penetration, as scripts/bench/stability_contact.py measures it.
+# tool's penetration, as scripts/bench/stability_contact.py measures it; and
+# scenes/block_press_friction.yaml as is: its models, and lcp's device force beside the coupling
+# and linear modes' against its reference.
 #
 # `hapsim run` crosses processes over LCM: run this in a private network namespace when root,
 #   unshare -n bash -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && scripts/bench_lcp_rows.sh'
-# About 3 minutes on 2 cores (the two references take most). Outputs in out/bench_lcp_rows/
+# About 7 minutes on 2 cores (the references take most). Outputs in out/bench_lcp_rows/
 # (rows.md: the table). Not part of ctest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -131,6 +133,16 @@ lines += ["", "fast press (5 mm in 10 ms, 0.5 m/s, E = 5 MPa), haptic tool penet
           ", ".join(f"{what} {fast_press(variant('fast_' + tag, 1.0, reach, press_fast), 'fast_' + tag):.3f} mm"
                     for reach, tag, what in ((0.0, "all", "every contact coupled"),
                                              (None, "default", "reachable ones coupled")))]
+# block_press_friction as is (three rows per contact, the default reach): its models, and the
+# device force of lcp beside coupling and linear against its reference (~4 min of the run).
+print("bench_lcp_rows: block_press_friction", file=sys.stderr, flush=True)
+friction = "scenes/block_press_friction.yaml"
+m = models(friction, "friction")
+reference = sim(friction, "friction", "reference")
+errors = ", ".join(f"{mode} {rms(sim(friction, 'friction', mode), reference):.4f} N"
+                   for mode in ("lcp", "coupling", "linear"))
+lines += ["", f"block_press_friction: rows {m['rows']} at peak ({m['coupled']} coupled), model "
+          f"{m['peak_kB']:.1f} / {m['median_kB']:.1f} kB peak / median; RMS vs reference: {errors}"]
 with open(os.path.join(OUT, "rows.md"), "w") as f:
     f.write("\n".join(lines) + "\n")
 print("\n".join(lines))
