@@ -46,17 +46,21 @@ void LiveRun::OnFrame(const lcm::ReceiveBuffer* buffer, const std::string& chann
     return;
   }
   timeline_->Add(msg);
-  last_frame_ns_.store(MonotonicNs());
+  last_message_ns_.store(MonotonicNs());
 }
 
 void LiveRun::OnHapticState(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
   hapsim_lcm::haptic_state_t msg;
-  if (gate_.Admit(buffer, channel, &msg) && timeline_) timeline_->Add(msg);
+  if (!gate_.Admit(buffer, channel, &msg) || !timeline_) return;
+  timeline_->Add(msg);
+  last_message_ns_.store(MonotonicNs());
 }
 
 void LiveRun::OnDeviceState(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
   hapsim_lcm::device_state_t msg;
-  if (gate_.Admit(buffer, channel, &msg) && timeline_) timeline_->Add(msg);
+  if (!gate_.Admit(buffer, channel, &msg) || !timeline_) return;
+  timeline_->Add(msg);
+  last_message_ns_.store(MonotonicNs());
 }
 
 std::optional<hapsim_lcm::run_info_t> LiveRun::WaitForRunInfo(double wait_s) const {
@@ -71,8 +75,8 @@ std::optional<hapsim_lcm::run_info_t> LiveRun::WaitForRunInfo(double wait_s) con
   return std::nullopt;
 }
 
-double LiveRun::SecondsSinceLastFrame() const {
-  const std::int64_t last = last_frame_ns_.load();
+double LiveRun::SecondsSinceLastMessage() const {
+  const std::int64_t last = last_message_ns_.load();
   if (last == 0) return std::numeric_limits<double>::infinity();
   return 1e-9 * static_cast<double>(MonotonicNs() - last);
 }

@@ -29,8 +29,12 @@ class LiveRun {
     std::lock_guard<std::mutex> lock(mutex_);
     return timeline_.get();
   }
-  // Seconds since the last SIM_FRAME arrived (infinity before the first).
-  double SecondsSinceLastFrame() const;
+  // Seconds since the last message of the run arrived, from either process (infinity before the
+  // first). A live run is never quiet for long: its haptic process publishes every step, and
+  // every 10 ms while it waits for its first model, whereas the visual process's frames may be
+  // seconds apart (a sanitized build on a busy host): frames alone cannot tell a slow run from
+  // an ended one.
+  double SecondsSinceLastMessage() const;
   const messages::MessageGate& gate() const { return gate_; }
 
  private:
@@ -42,8 +46,8 @@ class LiveRun {
   messages::MessageGate gate_;
   mutable std::mutex mutex_;
   std::optional<hapsim_lcm::run_info_t> info_;
-  std::unique_ptr<RunTimeline> timeline_;  // set once by the receive thread, under mutex_
-  std::atomic<std::int64_t> last_frame_ns_{0};
+  std::unique_ptr<RunTimeline> timeline_;         // set once by the receive thread, under mutex_
+  std::atomic<std::int64_t> last_message_ns_{0};  // MonotonicNs(); 0: none yet
 };
 
 }  // namespace hapsim::apps

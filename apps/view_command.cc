@@ -222,9 +222,13 @@ void ViewLive(const ViewOptions& options) {
   ViewWindow window("hapsim view: " + scene.name, scene, ParseWindowSize(options.size, "--size"),
                     options.painter, options.screenshot_path.empty());
   const std::int64_t period_ns = std::llround(1e9 / options.fps);
-  const double end_quiet_s = 2.0;  // no frame for this long after frames: the run has ended
+  // Frames have come, then neither process is heard for this long: the run has ended. A live
+  // haptic process is heard every millisecond, but a viewer starved of the CPU (a sanitized build
+  // on a loaded host) has gone over a second without taking a message in; 5 s keeps it from
+  // taking a slow run for an ended one, at the price of 5 s after a run's real end.
+  const double end_quiet_s = 5.0;
   const auto ended = [&] {
-    return timeline.has_frames() && live.SecondsSinceLastFrame() > end_quiet_s;
+    return timeline.has_frames() && live.SecondsSinceLastMessage() > end_quiet_s;
   };
   if (!options.screenshot_path.empty()) {
     // The picture at `at` by the log's rule: wait until the frame after it has come, so that
@@ -238,6 +242,11 @@ void ViewLive(const ViewOptions& options) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
     const ViewState state = timeline.StateAt(at_s);
+    if (timeline.last_frame_s() <= at_s + 1e-6 && !g_stop_requested.load())
+      std::fprintf(stderr,
+                   "hapsim view: warning: no frame after %.3f s came (the run went quiet at frame "
+                   "time %.3f s): the picture shows the newest state heard\n",
+                   at_s, timeline.last_frame_s());
     window.Show(state);
     window.SaveScreenshot(options.screenshot_path);
     std::printf("hapsim view: live at %.3f s (%s) -> %s\n", at_s, Describe(state, scene).c_str(),
