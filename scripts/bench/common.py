@@ -113,17 +113,80 @@ def pareto_front(points):
     return front
 
 
+# Where a point's label may go, in points from the point, tried in this order: beside it up and
+# right first, then the other corners, then further out.
+LABEL_OFFSETS = [(4, 3, "left", "bottom"), (4, -3, "left", "top"), (-4, 3, "right", "bottom"),
+                 (-4, -3, "right", "top"), (4, 11, "left", "bottom"), (4, -11, "left", "top"),
+                 (-4, 11, "right", "bottom"), (-4, -11, "right", "top"),
+                 (10, 0, "left", "center"), (-10, 0, "right", "center")]
+
+
+def place_labels(axis, labels, fontsize=7, avoid=()):
+    """Annotates each (x, y, text, color) beside its point, at the first of LABEL_OFFSETS where it
+    stays inside the axes and overlaps no label placed before it (in any panel of the figure), no
+    text already on the axis ("finest", a line's name), no marker of the points labelled (a
+    5-point square around each) and no (x, y, radius in points) of `avoid` (a ring drawn around
+    a point); where none is free, at the first offset. Call once every panel of the figure is
+    set up: placement is measured in the figure's pixels, and the first call fixes the layout.
+    Labels are placed in the order given, so put the ones that matter most first."""
+    fig = axis.figure
+    if not hasattr(fig, "_hapsim_label_boxes"):
+        # The final layout, once per figure: the labels are kept out of it (set_in_layout), so
+        # save_figure's tight_layout then moves nothing and the measured boxes stay true.
+        fig.tight_layout()
+        fig._hapsim_label_boxes = []
+    taken = fig._hapsim_label_boxes
+    renderer = fig.canvas.get_renderer()
+    taken += [tuple(text.get_window_extent(renderer).extents) for text in axis.texts]
+    inside = axis.get_window_extent(renderer).extents
+    to_pixels = axis.transData.transform
+    points_to_pixels = fig.dpi / 72.0
+
+    def square(x, y, radius_pt):
+        px, py = to_pixels((x, y))
+        r = radius_pt * points_to_pixels
+        return (px - r, py - r, px + r, py + r)
+
+    markers = [square(x, y, 5) for x, y, _, _ in labels] + [square(*a) for a in avoid]
+
+    def overlaps(a, b):
+        return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+    for i, (x, y, text, color) in enumerate(labels):
+        if not text:
+            continue
+        chosen = None
+        for dx, dy, ha, va in LABEL_OFFSETS:
+            note = axis.annotate(text, (x, y), textcoords="offset points", xytext=(dx, dy),
+                                 ha=ha, va=va, fontsize=fontsize, color=color)
+            note.set_in_layout(False)
+            box = tuple(note.get_window_extent(renderer).extents)
+            free = (inside[0] <= box[0] and box[2] <= inside[2] and inside[1] <= box[1]
+                    and box[3] <= inside[3]
+                    and not any(overlaps(box, other) for other in taken)
+                    and not any(overlaps(box, m) for j, m in enumerate(markers) if j != i))
+            if chosen is None or free:
+                if chosen is not None:
+                    chosen[0].remove()
+                chosen = (note, box)
+                if free:
+                    break
+            else:
+                note.remove()
+        taken.append(chosen[1])
+
+
 def draw_pareto(axis, points, labels, color="k", marker="o", name=None):
-    """Each point labelled, the front drawn as a step line through the undominated points."""
+    """Each point labelled (place_labels, once the caller has set the scales), the front drawn
+    as a step line through the undominated points. Returns the labels to place."""
     xs = [p[0] for p in points]
     ys = [p[1] for p in points]
     axis.scatter(xs, ys, color=color, marker=marker, zorder=3, label=name)
-    for x, y, label in zip(xs, ys, labels):
-        axis.annotate(label, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
     front = pareto_front(points)
     if len(front) > 1:
         axis.step([xs[i] for i in front], [ys[i] for i in front], where="post", color=color,
                   alpha=0.4, lw=1)
+    return [(x, y, label, color) for x, y, label in zip(xs, ys, labels)]
 
 
 def save_figure(fig, path):

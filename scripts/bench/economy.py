@@ -245,7 +245,7 @@ def short_value(spec, knob, value):
     if knob == "mesh":
         return mesh_label(spec, value)
     if knob == "visual_hz":
-        return f"{value:g} Hz"
+        return f"{value:.3g} Hz"
     return str(value)
 
 

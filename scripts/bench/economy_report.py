@@ -2,7 +2,7 @@
 sweep (error against the finest configuration over the visual compute per simulated second) with
 the chosen configuration ringed, and the tables of the choices and the sweeps.
 """
-from common import plt, save_figure
+from common import place_labels, plt, save_figure
 
 KNOB_NAMES = {"mesh": "mesh", "elasticity": "element law", "compliance": "compliance",
               "law": "contact law", "visual_hz": "visual rate", "combined": "combined"}
@@ -17,6 +17,7 @@ def chart(bench, scenes):
     for axis in axes.flat[len(names):]:
         axis.axis("off")
     legend = {}  # label → handle, over every scene's panel
+    placements = []  # (axis, labels): placed once every panel is set, as the layout then holds
     for axis, name in zip(axes.flat, names):
         result = scenes[name]
         points = [r for sweep in result["sweeps"].values() for r in sweep
@@ -25,6 +26,7 @@ def chart(bench, scenes):
                  if "failed" not in r and r["config"] != result["finest"]["config"]]
         positive = [r["rms_error_N"] for r in points + extra if r["rms_error_N"] > 0]
         floor = min(positive + [result["tolerance_N"]]) / 3.0
+        labels = {}  # knob → its points' labels, placed once the axes are set
         for knob in result["knobs"] + ["combined"]:
             mine = [r for r in points + extra if r["knob"] == knob]
             if not mine:
@@ -33,19 +35,8 @@ def chart(bench, scenes):
                          [max(r["rms_error_N"], floor) for r in mine], color=COLORS[knob],
                          marker="s" if knob == "combined" else "o", s=22, zorder=3,
                          label=KNOB_NAMES[knob])
-            # The combined runs' labels go below their squares: a combination that moved one
-            # knob only sits on that knob's point, whose label is above it. A knob's own labels
-            # alternate above and below along the cost axis, so that neighbours (20 and 25 Hz)
-            # do not print over each other.
-            # A point a combined square sits on keeps its label above.
-            for i, r in enumerate(sorted(mine, key=lambda r: r["cost_ms_per_s"])):
-                under_square = knob != "combined" and any(
-                    c["cost_ms_per_s"] == r["cost_ms_per_s"] for c in extra)
-                below = knob == "combined" or (i % 2 and not under_square)
-                offset = (4, -9) if below else (4, 3)
-                axis.annotate(r["label"], (r["cost_ms_per_s"], max(r["rms_error_N"], floor)),
-                              textcoords="offset points", xytext=offset, fontsize=6.5,
-                              color=COLORS[knob])
+            labels[knob] = [(r["cost_ms_per_s"], max(r["rms_error_N"], floor), r["label"],
+                             COLORS[knob]) for r in mine]
         chosen = result["chosen"]
         axis.scatter([chosen["cost_ms_per_s"]], [max(chosen["rms_error_N"], floor)], s=180,
                      facecolors="none", edgecolors="r", lw=2, zorder=4, label="chosen")
@@ -66,10 +57,16 @@ def chart(bench, scenes):
         # smaller figures keep them apart.
         axis.tick_params(which="both", labelsize=7)
         axis.grid(True, which="both", alpha=0.3)
+        # The combined runs first: their labels say what the squares are.
+        placements.append((axis, [label for knob in ["combined"] + result["knobs"]
+                                  for label in labels.get(knob, [])],
+                           [(chosen["cost_ms_per_s"], max(chosen["rms_error_N"], floor), 8)]))
         for handle, label in zip(*axis.get_legend_handles_labels()):
             legend.setdefault(label, handle)
     axes.flat[len(names)].legend(list(legend.values()), list(legend.keys()), loc="center",
                                  fontsize=9, title="moved from the finest configuration")
+    for axis, labels, ring in placements:
+        place_labels(axis, labels, fontsize=6.5, avoid=ring)
     save_figure(fig, bench.path("economy.png"))
     return {"file": "economy.png",
             "caption": "Per scene, the device-force error against the finest configuration over "

@@ -16,7 +16,7 @@ at ν = 0.3 (the closed form's E* follows ν).
 """
 import math
 
-from common import draw_pareto, plt, save_figure
+from common import draw_pareto, place_labels, plt, save_figure
 
 # name, scene, block top z, tool offset (sphere centre or punch centre above its contact point),
 # depth window for the fit (m), the law's exponent p (F = C d^p) and its C from the scene's values
@@ -116,13 +116,14 @@ def chart(bench, name, case, results):
     left.set(xlabel="depth below the undeformed top (mm)", ylabel="contact force (N)",
              title=f"{name}: force against depth (grey: fit window)")
     left.legend(fontsize=7)
-    draw_pareto(right, [(r["frame_ms"], 100 * r["relative_error"]) for r in results],
-                [f"m{r['cells']} r{r['ratio']:g}" for r in results])
+    labels = draw_pareto(right, [(r["frame_ms"], 100 * r["relative_error"]) for r in results],
+                         [f"m{r['cells']} r{r['ratio']:g}" for r in results])
     right.set(xscale="log", xlabel="median visual frame (ms)",
               ylabel="error of the fitted coefficient (%)",
               title=f"{name}: error against cost (line: Pareto front)")
     for axis in (left, right):
         axis.grid(True, alpha=0.3)
+    place_labels(right, labels)
     save_figure(fig, bench.path(f"{name}.png"))
     return {"file": f"{name}.png",
             "caption": f"{case['law']}: force against depth per mesh, and the fitted coefficient's "

@@ -10,7 +10,7 @@ needs, in ms/s) and the 1 kHz step's median.
 import os
 import sys
 
-from common import REPO, draw_pareto, median, plt, read_csv, save_figure
+from common import REPO, draw_pareto, median, place_labels, plt, read_csv, save_figure
 
 sys.path.insert(0, os.path.join(REPO, "scripts"))
 from compare_modes import errors, read_forces  # noqa: E402
@@ -88,13 +88,13 @@ def chart(bench, runs, reference, modes):
              ylabel="device force RMS error vs reference (N)",
              title="block_press: error against visual rate")
     left.legend(fontsize=8)
+    labels = []
     for mode in modes:
         points = [r for r in runs if r["mode"] == mode]
         right.scatter([r["visual_ms_per_s"] for r in points], [r["rms_error_N"] for r in points],
                       color=COLORS[mode], label=mode, zorder=3)
-        for r in points:
-            right.annotate(f"{r['visual_hz']:g}", (r["visual_ms_per_s"], r["rms_error_N"]),
-                           textcoords="offset points", xytext=(3, 3), fontsize=6)
+        labels += [(r["visual_ms_per_s"], r["rms_error_N"], f"{r['visual_hz']:g}", COLORS[mode])
+                   for r in points]
     draw_pareto(right, [(r["visual_ms_per_s"], r["rms_error_N"]) for r in runs], [""] * len(runs),
                 color="k", marker="")
     right.axvline(reference["visual_ms_per_s"], color="k", ls=":", lw=1)
@@ -112,6 +112,7 @@ def chart(bench, runs, reference, modes):
     right.legend(fontsize=7, loc="lower right", ncol=2)
     for axis in (left, right):
         axis.grid(True, which="both", alpha=0.3)
+    place_labels(right, labels, fontsize=6)
     save_figure(fig, bench.path("modes_vs_rate.png"))
     return {"file": "modes_vs_rate.png",
             "caption": "Device-force error of each haptic mode against the 1 kHz reference on "
