@@ -94,6 +94,11 @@ def read_csv(path):
         return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
 
 
+def rate_text(hz):
+    """A visual rate as charts and tables print it: 3 significant digits (33.3 Hz, not 33.3333)."""
+    return f"{hz:.3g} Hz"
+
+
 def median(values):
     values = sorted(values)
     n = len(values)

@@ -35,7 +35,7 @@ import time
 
 import yaml
 
-from common import REPO, BenchError
+from common import REPO, BenchError, rate_text
 from economy_report import chart, markdown
 
 sys.path.insert(0, os.path.join(REPO, "scripts"))
@@ -236,7 +236,7 @@ def describe(spec, config, changed_only=None):
     parts = {"mesh": mesh_label(spec, config["mesh"]) if spec["fem"] else "no FEM built",
              "elasticity": config.get("elasticity") if spec["fem"] else None,
              "compliance": config.get("compliance") if spec["fem"] else None,
-             "law": config["law"], "visual_hz": f"{config['visual_hz']:g} Hz"}
+             "law": config["law"], "visual_hz": rate_text(config["visual_hz"])}
     keys = changed_only if changed_only is not None else list(parts)
     return ", ".join(parts[k] for k in keys if parts.get(k))
 
@@ -245,7 +245,7 @@ def short_value(spec, knob, value):
     if knob == "mesh":
         return mesh_label(spec, value)
     if knob == "visual_hz":
-        return f"{value:.3g} Hz"
+        return rate_text(value)
     return str(value)
 
 

@@ -2,7 +2,7 @@
 sweep (error against the finest configuration over the visual compute per simulated second) with
 the chosen configuration ringed, and the tables of the choices and the sweeps.
 """
-from common import place_labels, plt, save_figure
+from common import place_labels, plt, rate_text, save_figure
 
 KNOB_NAMES = {"mesh": "mesh", "elasticity": "element law", "compliance": "compliance",
               "law": "contact law", "visual_hz": "visual rate", "combined": "combined"}
@@ -35,7 +35,9 @@ def chart(bench, scenes):
                          [max(r["rms_error_N"], floor) for r in mine], color=COLORS[knob],
                          marker="s" if knob == "combined" else "o", s=22, zorder=3,
                          label=KNOB_NAMES[knob])
-            labels[knob] = [(r["cost_ms_per_s"], max(r["rms_error_N"], floor), r["label"],
+            # Rates from the value: results.json files of earlier runs hold "33.3333 Hz".
+            labels[knob] = [(r["cost_ms_per_s"], max(r["rms_error_N"], floor),
+                             rate_text(r["value"]) if knob == "visual_hz" else r["label"],
                              COLORS[knob]) for r in mine]
         chosen = result["chosen"]
         axis.scatter([chosen["cost_ms_per_s"]], [max(chosen["rms_error_N"], floor)], s=180,
