@@ -58,9 +58,7 @@ void LiveRun::OnHapticState(const lcm::ReceiveBuffer* buffer, const std::string&
 
 void LiveRun::OnDeviceState(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
   hapsim_lcm::device_state_t msg;
-  if (!gate_.Admit(buffer, channel, &msg) || !timeline_) return;
-  timeline_->Add(msg);
-  last_message_ns_.store(MonotonicNs());
+  if (gate_.Admit(buffer, channel, &msg) && timeline_) timeline_->Add(msg);
 }
 
 std::optional<hapsim_lcm::run_info_t> LiveRun::WaitForRunInfo(double wait_s) const {

@@ -29,11 +29,12 @@ class LiveRun {
     std::lock_guard<std::mutex> lock(mutex_);
     return timeline_.get();
   }
-  // Seconds since the last message of the run arrived, from either process (infinity before the
-  // first). A live run is never quiet for long: its haptic process publishes every step, and
-  // every 10 ms while it waits for its first model, whereas the visual process's frames may be
-  // seconds apart (a sanitized build on a busy host): frames alone cannot tell a slow run from
-  // an ended one.
+  // Seconds since the run's visual or haptic process was last heard: its last SIM_FRAME or
+  // HAPTIC_STATE (infinity before the first). A live run is never quiet for long: its haptic
+  // process publishes every step, and every 10 ms while it waits for its first model, whereas the
+  // visual process's frames may be seconds apart (a sanitized build on a busy host): frames alone
+  // cannot tell a slow run from an ended one. DEVICE_STATE does not count: an external device's
+  // driver publishes it, and may go on after the run has ended.
   double SecondsSinceLastMessage() const;
   const messages::MessageGate& gate() const { return gate_; }
 

@@ -222,10 +222,10 @@ void ViewLive(const ViewOptions& options) {
   ViewWindow window("hapsim view: " + scene.name, scene, ParseWindowSize(options.size, "--size"),
                     options.painter, options.screenshot_path.empty());
   const std::int64_t period_ns = std::llround(1e9 / options.fps);
-  // Frames have come, then neither process is heard for this long: the run has ended. A live
-  // haptic process is heard every millisecond, but a viewer starved of the CPU (a sanitized build
-  // on a loaded host) has gone over a second without taking a message in; 5 s keeps it from
-  // taking a slow run for an ended one, at the price of 5 s after a run's real end.
+  // Frames have come, then neither of the run's processes is heard for this long: the run has
+  // ended. A live haptic process is heard every millisecond, but a viewer starved of the CPU (a
+  // sanitized build on a loaded host) has gone over a second without taking a message in; 5 s keeps
+  // it from taking a slow run for an ended one, at the price of 5 s after a run's real end.
   const double end_quiet_s = 5.0;
   const auto ended = [&] {
     return timeline.has_frames() && live.SecondsSinceLastMessage() > end_quiet_s;
@@ -308,8 +308,10 @@ void AddViewCommand(CLI::App* app) {
                    "Write the picture at --at to FILE.png and exit");
   view->add_option("--at", options->at_s, "Time of the screenshot, s (default: the last frame)")
       ->check(CLI::NonNegativeNumber);
-  view->add_option("--video", options->video_path,
-                   "Write the run as FILE.avi (MJPG) and exit (live: until the run ends)");
+  view->add_option(
+      "--video", options->video_path,
+      "Write the run as FILE.avi (MJPG) and exit (live: until the run ends, i.e. 5 s after "
+      "its processes go quiet, or --duration)");
   view->add_option("--fps", options->fps, "Frames per second of the window and the video")
       ->check(CLI::Range(1.0, 240.0))
       ->capture_default_str();

@@ -95,8 +95,9 @@ def read_csv(path):
 
 
 def rate_text(hz):
-    """A visual rate as charts and tables print it: 3 significant digits (33.3 Hz, not 33.3333)."""
-    return f"{hz:.3g} Hz"
+    """A rate as charts and tables print it: 3 significant digits (33.3 Hz, not 33.3333), in
+    plain notation (1000 Hz, not 1e+03)."""
+    return f"{float(f'{hz:.3g}'):g} Hz"
 
 
 def median(values):
@@ -128,12 +129,12 @@ LABEL_OFFSETS = [(4, 3, "left", "bottom"), (4, -3, "left", "top"), (-4, 3, "righ
 
 def place_labels(axis, labels, fontsize=7, avoid=()):
     """Annotates each (x, y, text, color) beside its point, at the first of LABEL_OFFSETS where it
-    stays inside the axes and overlaps no label placed before it (in any panel of the figure), no
-    text already on the axis ("finest", a line's name), no marker of the points labelled (a
-    5-point square around each) and no (x, y, radius in points) of `avoid` (a ring drawn around
-    a point); where none is free, at the first offset. Call once every panel of the figure is
-    set up: placement is measured in the figure's pixels, and the first call fixes the layout.
-    Labels are placed in the order given, so put the ones that matter most first."""
+    stays inside the axes and overlaps nothing placed before it: no label (in any panel of the
+    figure), no text on the axis ("finest", a line's name), not its legend, no marker of the
+    points labelled (a 5-point square around each) and no (x, y, radius in points) of `avoid` (a
+    ring drawn around a point). Where none is free, at the first offset. Call once every panel of
+    the figure is set up: placement is measured in the figure's pixels, and the first call fixes
+    the layout. Labels are placed in the order given, so put the ones that matter most first."""
     fig = axis.figure
     if not hasattr(fig, "_hapsim_label_boxes"):
         # The final layout, once per figure: the labels are kept out of it (set_in_layout), so
@@ -143,6 +144,8 @@ def place_labels(axis, labels, fontsize=7, avoid=()):
     taken = fig._hapsim_label_boxes
     renderer = fig.canvas.get_renderer()
     taken += [tuple(text.get_window_extent(renderer).extents) for text in axis.texts]
+    if axis.get_legend() is not None:
+        taken.append(tuple(axis.get_legend().get_window_extent(renderer).extents))
     inside = axis.get_window_extent(renderer).extents
     to_pixels = axis.transData.transform
     points_to_pixels = fig.dpi / 72.0
