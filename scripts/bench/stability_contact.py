@@ -186,7 +186,9 @@ def release_markdown(result):
 
 # 5. stiff body under a fast tool ---------------------------------------------------------------
 
-def fast_run(bench, mode, E, press_s, depth_m=0.005):
+def fast_run(bench, mode, E, press_s, depth_m=0.005, edits=None, tag=""):
+    """block_press with E and a press of depth_m in press_s under `mode`; `edits` (dotted keys,
+    as Bench.scene_variant) change the scene further, `tag` names such a variant's runs."""
     base = press_scene()
     z0 = base["tool"]["position_m"][2]
     top_plus_half = base["body"]["mesh"]["box"]["max_m"][2] + \
@@ -197,10 +199,11 @@ def fast_run(bench, mode, E, press_s, depth_m=0.005):
               {"t_s": 0.1, "position_m": [0.0, 0.0, z0]},
               {"t_s": 0.1 + press_s, "position_m": [0.0, 0.0, z0 - depth_m]},
               {"t_s": end, "position_m": [0.0, 0.0, z0 - depth_m]}]
-    label = f"stab_fast_{mode}_E{E:g}_T{press_s:g}"
+    label = f"stab_fast_{mode}_E{E:g}_T{press_s:g}{tag}"
     scene = bench.scene_variant(PRESS, {"body.material.youngs_modulus_Pa": E,
                                         "device.trajectory": script,
-                                        "time.num_steps": int(math.ceil(end / dt))}, label)
+                                        "time.num_steps": int(math.ceil(end / dt)),
+                                        **(edits or {})}, label)
     summary, frames, folder = bench.sim(scene, label, "--mode", mode)
     h = haptic(folder)
     visual_sink = max(0.0, max(top_plus_half - r["tool_z_m"] for r in frames))
