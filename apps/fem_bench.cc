@@ -30,6 +30,8 @@ constexpr SolverCase kSolverCases[] = {
      fem::PreconditionerKind::kLaggedCholesky},
     {"cg+lagged_cholesky_double", fem::SolverKind::kConjugateGradient,
      fem::PreconditionerKind::kLaggedCholesky, fem::FactorPrecision::kDouble},
+    {"cg+lagged_cholesky_half", fem::SolverKind::kConjugateGradient,
+     fem::PreconditionerKind::kLaggedCholesky, fem::FactorPrecision::kHalf},
     {"cg+block_jacobi", fem::SolverKind::kConjugateGradient, fem::PreconditionerKind::kBlockJacobi},
 };
 

@@ -163,7 +163,8 @@ fem::SolverOptions ReadSolver(const YamlMap& map) {
   solver.factor_precision = map.GetEnumOr<fem::FactorPrecision>(
       "factor_precision",
       {{ToString(fem::FactorPrecision::kSingle), fem::FactorPrecision::kSingle},
-       {ToString(fem::FactorPrecision::kDouble), fem::FactorPrecision::kDouble}},
+       {ToString(fem::FactorPrecision::kDouble), fem::FactorPrecision::kDouble},
+       {ToString(fem::FactorPrecision::kHalf), fem::FactorPrecision::kHalf}},
       solver.factor_precision);
   solver.relative_tolerance =
       map.GetDoubleOr("relative_tolerance", solver.relative_tolerance, OpenInterval(0.0, 1.0));

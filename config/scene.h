@@ -32,7 +32,8 @@
 //              max_iterations: 1000, refactor_budget_iterations: 50, factor_precision: single}
 //                                      # type cg | cholmod (default cg); preconditioner
 //                                      # lagged_cholesky | block_jacobi; tol in (0, 1); iters ≥ 1;
-//                                      # factor_precision single | double (lagged_cholesky's)
+//                                      # factor_precision single | double | half
+//                                      # (lagged_cholesky's; fem/fem_options.h says which when)
 //     fixed: {min_m: [..], max_m: [..]}   # optional: nodes inside this box are fixed
 //     loads:                           # optional: each total force spread evenly over the
 //                                      # nodes in its box

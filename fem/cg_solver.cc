@@ -57,8 +57,8 @@ void ConjugateGradientSolver::PreparePreconditioner(const Eigen::SparseMatrix<do
 
 void ConjugateGradientSolver::ApplyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd* z) {
   if (use_factor_) {
-    if (options_.factor_precision == FactorPrecision::kSingle)
-      factor_.SolveSinglePrecision(r, z);
+    if (options_.factor_precision != FactorPrecision::kDouble)
+      factor_.SolveWithCopy(r, z);
     else
       factor_.Solve(r, z);
     return;

@@ -13,7 +13,7 @@ namespace hapsim::fem {
 class ConjugateGradientSolver final : public LinearSolver {
  public:
   explicit ConjugateGradientSolver(const SolverOptions& options) : options_(options) {
-    if (options.factor_precision == FactorPrecision::kSingle) factor_.KeepSinglePrecisionCopy();
+    factor_.KeepCopy(options.factor_precision);
   }
   SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
                     Eigen::VectorXd* x) override;

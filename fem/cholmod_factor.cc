@@ -95,14 +95,17 @@ bool CholmodFactor::Factorize(const Eigen::SparseMatrix<double>& A) {
   cholmod_factorize(&A_view, factor_, &common_);
   if (common_.status == CHOLMOD_OUT_OF_MEMORY) throw std::runtime_error("CHOLMOD out of memory");
   factored_ = common_.status == CHOLMOD_OK;
-  if (factored_ && keep_single_) single_.Assign(*factor_);
+  if (factored_ && copy_precision_ == FactorPrecision::kSingle) single_.Assign(*factor_);
+  if (factored_ && copy_precision_ == FactorPrecision::kHalf) half_.Assign(*factor_);
   return factored_;
 }
 
-void CholmodFactor::SolveSinglePrecision(const Eigen::VectorXd& b, Eigen::VectorXd* x) const {
-  if (!factored_ || single_.empty())
-    throw std::logic_error("CholmodFactor::SolveSinglePrecision without a single-precision copy");
-  single_.Solve(b, x);
+void CholmodFactor::SolveWithCopy(const Eigen::VectorXd& b, Eigen::VectorXd* x) const {
+  if (factored_ && copy_precision_ == FactorPrecision::kSingle && !single_.empty())
+    return single_.Solve(b, x);
+  if (factored_ && copy_precision_ == FactorPrecision::kHalf && !half_.empty())
+    return half_.Solve(b, x);
+  throw std::logic_error("CholmodFactor::SolveWithCopy without a reduced-precision copy");
 }
 
 void CholmodFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {

@@ -9,6 +9,8 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include "fem/fem_options.h"
+#include "fem/half_precision_factor.h"
 #include "fem/single_precision_factor.h"
 
 namespace hapsim::fem {
@@ -35,10 +37,14 @@ class CholmodFactor {
   // x = A⁻¹ b with the last successful factor. Precondition: Factorize returned true.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
 
-  // Keep a single-precision copy of every factor from now on (SinglePrecisionFactor), for
-  // SolveSinglePrecision: x ≈ A⁻¹ b to float accuracy, about twice as fast on large factors.
-  void KeepSinglePrecisionCopy() { keep_single_ = true; }
-  void SolveSinglePrecision(const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
+  // Keep a reduced-precision copy of every factor from now on, for SolveWithCopy: kSingle a
+  // float one (SinglePrecisionFactor: x ≈ A⁻¹ b to float accuracy, about twice as fast as Solve
+  // on large factors), kHalf a binary16 one (HalfPrecisionFactor: half the bytes again, entries
+  // to 4.9e-4). kDouble keeps none.
+  void KeepCopy(FactorPrecision precision) { copy_precision_ = precision; }
+  void SolveWithCopy(const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
+  // The binary16 copy (empty unless kept and factored).
+  const HalfPrecisionFactor& half_precision_copy() const { return half_; }
 
   // X = A⁻¹ B for a dense B of several columns, in one supernodal solve (BLAS-3 across the
   // columns). Precondition: Factorize returned true.
@@ -59,8 +65,9 @@ class CholmodFactor {
   cholmod_factor* factor_ = nullptr;
   Eigen::Index analysed_nonzeros_ = -1;
   bool factored_ = false;
-  bool keep_single_ = false;
+  FactorPrecision copy_precision_ = FactorPrecision::kDouble;  // kDouble: no copy
   SinglePrecisionFactor single_;
+  HalfPrecisionFactor half_;
   cholmod_dense* solution_ = nullptr;  // reused by cholmod_solve2
   cholmod_dense* work_y_ = nullptr;
   cholmod_dense* work_e_ = nullptr;

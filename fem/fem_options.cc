@@ -17,7 +17,15 @@ const char* ToString(PreconditionerKind kind) {
 }
 
 const char* ToString(FactorPrecision precision) {
-  return precision == FactorPrecision::kSingle ? "single" : "double";
+  switch (precision) {
+    case FactorPrecision::kSingle:
+      return "single";
+    case FactorPrecision::kDouble:
+      return "double";
+    case FactorPrecision::kHalf:
+      return "half";
+  }
+  return "?";
 }
 
 }  // namespace hapsim::fem

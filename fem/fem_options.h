@@ -31,7 +31,17 @@ enum class PreconditionerKind { kLaggedCholesky, kBlockJacobi };
 // against 0.87 in a run 20 minutes before: the 3.6k means are noisy), and
 // block_press's frames are faster (docs/BENCHMARKS.md, issue 13). Answers agree to CG's
 // tolerance: device forces within 5e-8 N RMS, the same number of refactorisations.
-enum class FactorPrecision { kSingle, kDouble };
+//
+// kHalf applies a binary16 copy (fem/half_precision_factor.h): half the bytes of the float one,
+// one apply 2.2 against 4.0 ms at 28.8k tets (BM_FactorSolve, 2026-11-26 13:55, a slow hour of
+// this machine). Its entries carry 4.9e-4 relative rounding, so even a fresh factor leaves CG
+// ~3 iterations a step to 1e-6 instead of 1.4: on the settled block (`fem --bench`, same hour)
+// 14.3 against 13.0 ms at 28.8k and 1.04 against 0.86 ms at 3.6k. It pays where the factor is
+// stale anyway: on block_press_large every solve takes 3–6 iterations whatever the precision,
+// and the frame median fell from ~59 to ~42 ms (alternating runs, same hour; device forces
+// within 5e-8 N RMS). So kSingle stays the default and a scene that presses a large body
+// chooses kHalf (scenes/block_press_large.yaml).
+enum class FactorPrecision { kSingle, kDouble, kHalf };
 
 struct SolverOptions {
   SolverKind kind = SolverKind::kConjugateGradient;
@@ -60,6 +70,6 @@ const char* ToString(ElasticityKind kind);
 const char* ToString(IntegratorKind kind);
 const char* ToString(SolverKind kind);
 const char* ToString(PreconditionerKind kind);
-const char* ToString(FactorPrecision precision);  // "single" | "double"
+const char* ToString(FactorPrecision precision);  // "single" | "double" | "half"
 
 }  // namespace hapsim::fem

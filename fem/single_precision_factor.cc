@@ -41,71 +41,59 @@ void SolveSmallBackward(const float* L, int nsrow, int nscol, const int* rows_be
   }
 }
 
-std::vector<int> CopyInts(const void* data, size_t size) {
-  const int* begin = static_cast<const int*>(data);
-  return std::vector<int>(begin, begin + size);
-}
-
 }  // namespace
 
 void SinglePrecisionFactor::Assign(const cholmod_factor& L) {
-  if (!L.is_super || !L.is_ll || L.xtype != CHOLMOD_REAL || L.dtype != CHOLMOD_DOUBLE ||
-      L.itype != CHOLMOD_INT)
-    throw std::invalid_argument("SinglePrecisionFactor needs a real supernodal LLᵀ factor");
-  super_ = CopyInts(L.super, L.nsuper + 1);
-  pi_ = CopyInts(L.pi, L.nsuper + 1);
-  px_ = CopyInts(L.px, L.nsuper + 1);
-  s_ = CopyInts(L.s, L.ssize);
-  perm_ = CopyInts(L.Perm, L.n);
+  layout_.Assign(L);
   const double* x = static_cast<const double*>(L.x);
   values_.assign(x, x + L.xsize);  // rounds each entry to the nearest float
   y_.resize(static_cast<Eigen::Index>(L.n));
-  gathered_.resize(static_cast<Eigen::Index>(L.maxesize));
+  gathered_.resize(layout_.max_rows_below);
 }
 
 void SinglePrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) const {
-  const int n = static_cast<int>(perm_.size());
-  const int num_super = static_cast<int>(super_.size()) - 1;
-  for (int k = 0; k < n; ++k) y_[k] = static_cast<float>(b[perm_[k]]);  // y = P b
+  const SupernodalLayout& l = layout_;
+  const int n = l.size();
+  for (int k = 0; k < n; ++k) y_[k] = static_cast<float>(b[l.perm[k]]);  // y = P b
   // Forward, y ← L⁻¹ y, supernode by supernode: the diagonal block, then the rows below it.
-  for (int sn = 0; sn < num_super; ++sn) {
-    const int k1 = super_[sn], nscol = super_[sn + 1] - k1;
-    const int nsrow = pi_[sn + 1] - pi_[sn], below = nsrow - nscol;
+  for (int sn = 0; sn < l.num_supernodes(); ++sn) {
+    const int k1 = l.first_column(sn), nscol = l.num_columns(sn);
+    const int nsrow = l.num_rows(sn), below = nsrow - nscol;
     if (nscol <= kSmallSupernodeColumns) {
-      SolveSmallForward(values_.data() + px_[sn], nsrow, nscol, s_.data() + pi_[sn] + nscol,
-                        y_.data() + k1, y_.data());
+      SolveSmallForward(values_.data() + l.px[sn], nsrow, nscol, l.rows_below(sn), y_.data() + k1,
+                        y_.data());
       continue;
     }
-    const BlockMap block(values_.data() + px_[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
+    const BlockMap block(values_.data() + l.px[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
     auto y_cols = y_.segment(k1, nscol);
     block.topRows(nscol).triangularView<Eigen::Lower>().solveInPlace(y_cols);
     if (below == 0) continue;
     auto update = gathered_.head(below);
     update.noalias() = block.bottomRows(below) * y_cols;
-    const int* rows = s_.data() + pi_[sn] + nscol;
+    const int* rows = l.rows_below(sn);
     for (int i = 0; i < below; ++i) y_[rows[i]] -= update[i];
   }
   // Backward, y ← L⁻ᵀ y, in reverse: the rows below first, then the diagonal block.
-  for (int sn = num_super - 1; sn >= 0; --sn) {
-    const int k1 = super_[sn], nscol = super_[sn + 1] - k1;
-    const int nsrow = pi_[sn + 1] - pi_[sn], below = nsrow - nscol;
+  for (int sn = l.num_supernodes() - 1; sn >= 0; --sn) {
+    const int k1 = l.first_column(sn), nscol = l.num_columns(sn);
+    const int nsrow = l.num_rows(sn), below = nsrow - nscol;
     if (nscol <= kSmallSupernodeColumns) {
-      SolveSmallBackward(values_.data() + px_[sn], nsrow, nscol, s_.data() + pi_[sn] + nscol,
-                         y_.data() + k1, y_.data());
+      SolveSmallBackward(values_.data() + l.px[sn], nsrow, nscol, l.rows_below(sn), y_.data() + k1,
+                         y_.data());
       continue;
     }
-    const BlockMap block(values_.data() + px_[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
+    const BlockMap block(values_.data() + l.px[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
     auto y_cols = y_.segment(k1, nscol);
     if (below > 0) {
       auto known = gathered_.head(below);
-      const int* rows = s_.data() + pi_[sn] + nscol;
+      const int* rows = l.rows_below(sn);
       for (int i = 0; i < below; ++i) known[i] = y_[rows[i]];
       y_cols.noalias() -= block.bottomRows(below).transpose() * known;
     }
     block.topRows(nscol).triangularView<Eigen::Lower>().transpose().solveInPlace(y_cols);
   }
   x->resize(n);
-  for (int k = 0; k < n; ++k) (*x)[perm_[k]] = y_[k];  // x = Pᵀ y
+  for (int k = 0; k < n; ++k) (*x)[l.perm[k]] = y_[k];  // x = Pᵀ y
 }
 
 }  // namespace hapsim::fem

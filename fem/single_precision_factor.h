@@ -11,16 +11,13 @@
 // fresh factor's one iteration: about one step in six then takes a second (FemOptions,
 // FactorPrecision). CG itself, its residual and its stopping test stay in double, so the answer
 // is as accurate as before (tests/fem/time_stepper_test.cc, against CHOLMOD).
-//
-// Layout (CHOLMOD's supernodal factor, read as documented in cholmod_core.h): supernode s holds
-// columns super[s] .. super[s+1]−1 of L as a dense column-major block of nsrow = pi[s+1] − pi[s]
-// rows at x[px[s]]; its first nscol rows are the diagonal block (lower triangular), the rest are
-// the rows s[pi[s] + nscol ..], below it.
 
 #include <cholmod.h>
 
 #include <Eigen/Core>
 #include <vector>
+
+#include "fem/supernodal_layout.h"
 
 namespace hapsim::fem {
 
@@ -33,10 +30,10 @@ class SinglePrecisionFactor {
   // x = Pᵀ L⁻ᵀ L⁻¹ P b, in single precision (b and x in double). Allocates nothing once sized.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
 
-  bool empty() const { return super_.empty(); }
+  bool empty() const { return layout_.empty(); }
 
  private:
-  std::vector<int> super_, pi_, px_, s_, perm_;
+  SupernodalLayout layout_;
   std::vector<float> values_;
   mutable Eigen::VectorXf y_, gathered_;  // scratch: the permuted vector; a supernode's rows
 };

@@ -52,7 +52,14 @@ for run in before after; do
     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
     --benchmark_out="$out/$run/fem_step.json" --benchmark_out_format=json > /dev/null
   "$b/apps/hapsim" sim scenes/block_press.yaml --mode linear --out "$out/$run/block_press"
-  "$b/apps/hapsim" sim scenes/block_press_large.yaml --mode linear --out "$out/$run/block_press_large"
+  # The scene applies its factor in binary16, which the before build cannot read: it runs the
+  # scene with its own (float) factor, i.e. the line without that key.
+  large=scenes/block_press_large.yaml
+  if [ "$run" = before ]; then
+    large=$out/before/block_press_large.yaml
+    sed 's/, factor_precision: half}/}/' scenes/block_press_large.yaml > "$large"
+  fi
+  "$b/apps/hapsim" sim "$large" --mode linear --out "$out/$run/block_press_large"
   "$b/apps/hapsim" sim scenes/block_press_friction.yaml --mode lcp --out "$out/$run/block_press_friction"
   "$b/tests/haptic_friction_benchmark" --benchmark_filter='BM_HapticFrictionWarm/200/[125]$' \
     --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \

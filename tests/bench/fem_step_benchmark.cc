@@ -141,20 +141,23 @@ Eigen::SparseMatrix<double> MakeSettledSystemMatrix(const Fixture& f) {
 }
 
 // One preconditioner application A⁻¹ r with the factor of the settled block's system matrix:
-// arg 1 = 0 CHOLMOD's double-precision supernodal solve, 1 the single-precision copy.
+// arg 1 (bits) = 64 CHOLMOD's double-precision supernodal solve, 32 the float copy, 16 the
+// binary16 one.
 void BM_FactorSolve(benchmark::State& bench) {
   const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
   const Eigen::SparseMatrix<double> A = MakeSettledSystemMatrix(f);
   fem::CholmodFactor factor;
-  factor.KeepSinglePrecisionCopy();
+  factor.KeepCopy(bench.range(1) == 32   ? fem::FactorPrecision::kSingle
+                  : bench.range(1) == 16 ? fem::FactorPrecision::kHalf
+                                         : fem::FactorPrecision::kDouble);
   factor.Factorize(A);
   const Eigen::VectorXd r = Eigen::VectorXd::Random(A.rows());
   Eigen::VectorXd z;
   for (auto _ : bench) {
-    if (bench.range(1) == 0)
+    if (bench.range(1) == 64)
       factor.Solve(r, &z);
     else
-      factor.SolveSinglePrecision(r, &z);
+      factor.SolveWithCopy(r, &z);
     benchmark::DoNotOptimize(z.data());
   }
   SetCounters(bench, f);
@@ -183,8 +186,8 @@ BENCHMARK(BM_ImplicitStep)
     ->ArgNames({"block", "cholmod"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FactorSolve)
-    ->ArgsProduct({{1, 2}, {0, 1}})
-    ->ArgNames({"block", "single"})
+    ->ArgsProduct({{1, 2}, {64, 32, 16}})
+    ->ArgNames({"block", "bits"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Factorize)->DenseRange(1, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ContactCompliance)

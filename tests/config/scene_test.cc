@@ -260,8 +260,8 @@ const BadCase kBadCases[] = {
     {"UnknownIntegrator", "integrator: explicit", "integrator: rk4", 17, "body.integrator",
      "one of: implicit, explicit"},
     {"UnknownSolver", "type: cholmod", "type: lu", 18, "body.solver.type", "one of: cg, cholmod"},
-    {"UnknownFactorPrecision", "factor_precision: double", "factor_precision: half", 18,
-     "body.solver.factor_precision", "one of: single, double"},
+    {"UnknownFactorPrecision", "factor_precision: double", "factor_precision: quarter", 18,
+     "body.solver.factor_precision", "one of: single, double, half"},
     // Mesh sources.
     {"NoMeshSource", kBoxLine, "{}", 8, "body.mesh", "exactly one of box, ellipsoid, file; got 0"},
     {"TwoMeshSources", "cells: [12, 12, 5]}", "cells: [12, 12, 5]}\n    file: a.msh", 8,

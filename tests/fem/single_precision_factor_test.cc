@@ -1,6 +1,7 @@
-// The single-precision copy of a CHOLMOD factor (fem/single_precision_factor.h) against a dense
-// solve of the same system matrix (a second method): equal to float accuracy, i.e. far closer
-// than a preconditioner needs and far from exact, which shows it really is the float path.
+// The reduced-precision copies of a CHOLMOD factor against a dense solve of the same system matrix
+// (a second method): the float copy (fem/single_precision_factor.h) equal to float accuracy, the
+// binary16 one (fem/half_precision_factor.h) to binary16 accuracy, each far from exact, which
+// shows it really is that path. And the binary16 copy's scaling, kernels and allocations.
 #include <dirent.h>
 #include <gtest/gtest.h>
 
@@ -10,9 +11,11 @@
 #include <thread>
 
 #include "fem/cholmod_factor.h"
+#include "fem/half_precision_factor.h"
 #include "fem/lattice_mesher.h"
 #include "fem/model.h"
 #include "fem/time_stepper.h"
+#include "tests/allocation_counter.h"
 
 namespace hapsim::fem {
 namespace {
@@ -40,7 +43,7 @@ TEST(SinglePrecisionFactor, SolvesToFloatAccuracyAgainstADenseSolve) {
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A_dense, Eigen::EigenvaluesOnly).eigenvalues();
   const double condition = eigenvalues.maxCoeff() / eigenvalues.minCoeff();
   CholmodFactor factor;
-  factor.KeepSinglePrecisionCopy();
+  factor.KeepCopy(FactorPrecision::kSingle);
   ASSERT_TRUE(factor.Factorize(A));
   srand(3);
   double worst_single = 0.0, worst_double = 0.0;
@@ -48,7 +51,7 @@ TEST(SinglePrecisionFactor, SolvesToFloatAccuracyAgainstADenseSolve) {
     const Eigen::VectorXd b = Eigen::VectorXd::Random(A.rows());
     const Eigen::VectorXd x_reference = dense.solve(b);
     Eigen::VectorXd x_single, x_double;
-    factor.SolveSinglePrecision(b, &x_single);
+    factor.SolveWithCopy(b, &x_single);
     factor.Solve(b, &x_double);
     worst_single = std::max(worst_single, (x_single - x_reference).norm() / x_reference.norm());
     worst_double = std::max(worst_double, (x_double - x_reference).norm() / x_reference.norm());
@@ -65,11 +68,95 @@ TEST(SinglePrecisionFactor, SolvesToFloatAccuracyAgainstADenseSolve) {
   EXPECT_LE(worst_double, 1e-12 * condition);
 }
 
+// The worst relative error of factor.SolveWithCopy over five random right-hand sides, against a
+// dense LDLᵀ solve of A.
+double WorstCopyError(const Eigen::SparseMatrix<double>& A, const CholmodFactor& factor) {
+  const Eigen::LDLT<Eigen::MatrixXd> dense(
+      Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>())));
+  srand(5);
+  double worst = 0.0;
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::VectorXd b = Eigen::VectorXd::Random(A.rows());
+    const Eigen::VectorXd x_reference = dense.solve(b);
+    Eigen::VectorXd x;
+    factor.SolveWithCopy(b, &x);
+    worst = std::max(worst, (x - x_reference).norm() / x_reference.norm());
+  }
+  return worst;
+}
+
+TEST(HalfPrecisionFactor, SolvesToHalfAccuracyAgainstADenseSolve) {
+  const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
+  CholmodFactor half, single;
+  half.KeepCopy(FactorPrecision::kHalf);
+  single.KeepCopy(FactorPrecision::kSingle);
+  ASSERT_TRUE(half.Factorize(A));
+  ASSERT_TRUE(single.Factorize(A));
+  const double worst_half = WorstCopyError(A, half), worst_single = WorstCopyError(A, single);
+  std::printf("relative error: binary16 %.2e, float %.2e\n", worst_half, worst_single);
+  // Rounding L to binary16 perturbs it by 2⁻¹¹ = 4.9e-4 relative; the solve's error is of order
+  // that times a growth the float copy measures (its error over float's 6e-8). Measured 2.4e-4.
+  EXPECT_LE(worst_half, 4.9e-4 * std::max(1.0, worst_single / 6e-8));
+  EXPECT_GT(worst_half, 100.0 * worst_single);  // it is the binary16 path
+}
+
+// L is stored scaled by a power of two s (its largest entry near 2¹⁴). For A·2⁻⁴⁰, L is L·2⁻²⁰,
+// s grows by 2²⁰, so the stored entries are the same and A⁻¹ b must be exactly 2⁴⁰ times as large:
+// bit for bit. Unscaled, entries near 1e-6·2⁻²⁰ would be binary16 subnormals or zero.
+TEST(HalfPrecisionFactor, ScalingIsExactForAnyMagnitude) {
+  const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
+  const Eigen::SparseMatrix<double> A_tiny = A * std::ldexp(1.0, -40);
+  CholmodFactor factor, factor_tiny;
+  factor.KeepCopy(FactorPrecision::kHalf);
+  factor_tiny.KeepCopy(FactorPrecision::kHalf);
+  ASSERT_TRUE(factor.Factorize(A));
+  ASSERT_TRUE(factor_tiny.Factorize(A_tiny));
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(A.rows(), -1.0, 2.0);
+  Eigen::VectorXd x, x_tiny;
+  factor.SolveWithCopy(b, &x);
+  factor_tiny.SolveWithCopy(b, &x_tiny);
+  ASSERT_TRUE(x.allFinite());
+  EXPECT_EQ(x_tiny, std::ldexp(1.0, 40) * x);
+}
+
+// The AVX2 + F16C kernels and the portable ones add in the same order without fused
+// multiply-adds: the same bits on every CPU.
+TEST(HalfPrecisionFactor, VectorKernelsEqualPortableOnesBitForBit) {
+  if (!HalfPrecisionFactor::CpuHasVectorKernels()) GTEST_SKIP() << "this CPU lacks AVX2 or F16C";
+  const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
+  CholmodFactor factor;
+  factor.KeepCopy(FactorPrecision::kHalf);
+  ASSERT_TRUE(factor.Factorize(A));
+  const HalfPrecisionFactor& copy = factor.half_precision_copy();
+  srand(11);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Eigen::VectorXd b = Eigen::VectorXd::Random(A.rows());
+    Eigen::VectorXd x_vector, x_portable;
+    copy.Solve(b, &x_vector, HalfPrecisionFactor::Kernels::kFastest);
+    copy.Solve(b, &x_portable, HalfPrecisionFactor::Kernels::kPortable);
+    EXPECT_EQ(x_vector, x_portable) << "trial " << trial;
+  }
+}
+
+TEST(HalfPrecisionFactor, SolveAllocatesNothingOnceSized) {
+  if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations are not counted here";
+  const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
+  CholmodFactor factor;
+  factor.KeepCopy(FactorPrecision::kHalf);
+  ASSERT_TRUE(factor.Factorize(A));
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(A.rows());
+  Eigen::VectorXd x;
+  factor.SolveWithCopy(b, &x);
+  AllocationCounter counter;
+  factor.SolveWithCopy(b, &x);
+  EXPECT_EQ(counter.count(), 0);
+}
+
 TEST(SinglePrecisionFactor, RefusedWithoutACopy) {
   CholmodFactor factor;
   ASSERT_TRUE(factor.Factorize(MakeSystemMatrix()));
   Eigen::VectorXd x;
-  EXPECT_THROW(factor.SolveSinglePrecision(Eigen::VectorXd::Ones(3), &x), std::logic_error);
+  EXPECT_THROW(factor.SolveWithCopy(Eigen::VectorXd::Ones(3), &x), std::logic_error);
 }
 
 // Threads of this process, from /proc/self/task.

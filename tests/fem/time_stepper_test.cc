@@ -487,13 +487,14 @@ TEST(TimeStepper, ConjugateGradientAgreesWithCholmod) {
   }
   // The direct solver factorises the system of every step (the summaries once reported 0).
   EXPECT_EQ(direct.solver()->num_factorizations(), 10);
-  // The lagged factor in single and in double precision: CG stops on its double-precision
+  // The lagged factor in single, half and double precision: CG stops on its double-precision
   // residual either way, so the bound is the same.
   struct Case {
     PreconditionerKind preconditioner;
     FactorPrecision precision;
   };
   for (const Case& c : {Case{PreconditionerKind::kLaggedCholesky, FactorPrecision::kSingle},
+                        Case{PreconditionerKind::kLaggedCholesky, FactorPrecision::kHalf},
                         Case{PreconditionerKind::kLaggedCholesky, FactorPrecision::kDouble},
                         Case{PreconditionerKind::kBlockJacobi, FactorPrecision::kDouble}}) {
     const PreconditionerKind preconditioner = c.preconditioner;

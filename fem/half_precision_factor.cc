@@ -1,0 +1,89 @@
+#include "fem/half_precision_factor.h"
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+
+#include "fem/half_precision_sweeps.h"
+
+namespace hapsim::fem {
+namespace {
+
+using half_sweeps::HalfToFloat;
+
+// The kernels of fem/half_precision_sweeps.h in plain loops, in the order the AVX2 ones use.
+struct PortableKernels {
+  static void SubtractScaled(const std::uint16_t* a, float c, float* y, int n) {
+    for (int i = 0; i < n; ++i) y[i] = y[i] - HalfToFloat(a[i]) * c;
+  }
+
+  static float Dot(const std::uint16_t* a, const float* x, int n) {
+    float lanes[8] = {};
+    const int n8 = n - n % 8;
+    for (int i = 0; i < n8; i += 8)
+      for (int j = 0; j < 8; ++j) lanes[j] = lanes[j] + HalfToFloat(a[i + j]) * x[i + j];
+    float sum = lanes[0];
+    for (int j = 1; j < 8; ++j) sum += lanes[j];
+    for (int i = n8; i < n; ++i) sum += HalfToFloat(a[i]) * x[i];
+    return sum;
+  }
+};
+
+// Round to nearest binary16 (ties to even), as bits. |value| ≤ 2¹⁴ here, so never infinite.
+std::uint16_t FloatToHalf(float value) {
+  return Eigen::half_impl::raw_half_as_uint16(Eigen::half(value));
+}
+
+}  // namespace
+
+bool HalfPrecisionFactor::CpuHasVectorKernels() {
+#if defined(__x86_64__)
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+  return has;
+#else
+  return false;
+#endif
+}
+
+void HalfPrecisionFactor::Assign(const cholmod_factor& L) {
+  layout_.Assign(L);
+  const double* x = static_cast<const double*>(L.x);
+  double largest = 0.0;
+  for (size_t k = 0; k < L.xsize; ++k) largest = std::max(largest, std::abs(x[k]));
+  // s = 2^(14 − e) with largest < 2^e: the largest scaled entry lies in [2¹³, 2¹⁴).
+  int exponent = 0;
+  std::frexp(largest, &exponent);
+  scale_ = largest > 0.0 ? std::ldexp(1.0, 14 - exponent) : 1.0;
+  values_.resize(L.xsize);
+  for (size_t k = 0; k < L.xsize; ++k) values_[k] = FloatToHalf(static_cast<float>(scale_ * x[k]));
+  const int n = layout_.size();
+  diagonal_.resize(n);
+  for (int sn = 0; sn < layout_.num_supernodes(); ++sn)
+    for (int c = 0; c < layout_.num_columns(sn); ++c)
+      diagonal_[layout_.first_column(sn) + c] = static_cast<float>(
+          scale_ * x[layout_.px[sn] + static_cast<long>(c) * layout_.num_rows(sn) + c]);
+  y_.resize(n);
+  scratch_.resize(std::max(layout_.max_rows_below, 1));
+}
+
+void HalfPrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x,
+                                Kernels kernels) const {
+  const SupernodalLayout& l = layout_;
+  const int n = l.size();
+  for (int k = 0; k < n; ++k) y_[k] = static_cast<float>(b[l.perm[k]]);  // y = P b
+  const half_sweeps::SweepArgs args{l.num_supernodes(), l.super.data(), l.pi.data(),
+                                    l.px.data(),        l.s.data(),     values_.data(),
+                                    diagonal_.data(),   y_.data(),      scratch_.data()};
+  if (kernels == Kernels::kFastest && CpuHasVectorKernels()) {
+    half_sweeps::SolveWithAvx2(args);
+  } else {
+    half_sweeps::ForwardSweep<PortableKernels>(args);
+    half_sweeps::BackwardSweep<PortableKernels>(args);
+  }
+  // (sL)⁻ᵀ (sL)⁻¹ = L⁻ᵀ L⁻¹ / s²; s is a power of two, so this is exact.
+  const double unscale = scale_ * scale_;
+  x->resize(n);
+  for (int k = 0; k < n; ++k) (*x)[l.perm[k]] = unscale * y_[k];  // x = Pᵀ y
+}
+
+}  // namespace hapsim::fem

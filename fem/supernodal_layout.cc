@@ -1,0 +1,27 @@
+#include "fem/supernodal_layout.h"
+
+#include <stdexcept>
+
+namespace hapsim::fem {
+namespace {
+
+std::vector<int> CopyInts(const void* data, size_t size) {
+  const int* begin = static_cast<const int*>(data);
+  return std::vector<int>(begin, begin + size);
+}
+
+}  // namespace
+
+void SupernodalLayout::Assign(const cholmod_factor& L) {
+  if (!L.is_super || !L.is_ll || L.xtype != CHOLMOD_REAL || L.dtype != CHOLMOD_DOUBLE ||
+      L.itype != CHOLMOD_INT)
+    throw std::invalid_argument("a reduced-precision factor needs a real supernodal LLᵀ factor");
+  super = CopyInts(L.super, L.nsuper + 1);
+  pi = CopyInts(L.pi, L.nsuper + 1);
+  px = CopyInts(L.px, L.nsuper + 1);
+  s = CopyInts(L.s, L.ssize);
+  perm = CopyInts(L.Perm, L.n);
+  max_rows_below = static_cast<int>(L.maxesize);
+}
+
+}  // namespace hapsim::fem
