@@ -81,6 +81,14 @@ SolveReport ConjugateGradientSolver::Solve(const Eigen::SparseMatrix<double>& A,
     return report;
   }
   MultiplySymmetric(A, *x, &Ap_);
+  // The warm start scaled to the best multiple of itself in A's norm, α = xᵀb / xᵀAx: no worse
+  // than x (α = 1) or zero (α = 0), and A x is needed for the residual anyway.
+  const double x_A_x = x->dot(Ap_);
+  if (x_A_x > 0.0) {
+    const double alpha = x->dot(b) / x_A_x;
+    *x *= alpha;
+    Ap_ *= alpha;
+  }
   r_ = b - Ap_;
   ApplyPreconditioner(r_, &z_);
   p_ = z_;
