@@ -333,6 +333,9 @@ void RunTrain(TrainOptions options) {
         if (!reference_set && state.has_frame && state.frame.t_s >= options.settle_s) {
           window.SetDisplacementReference(state.frame);
           reference_set = true;
+          std::printf("hapsim train: t %.2f s: displacements coloured from the frame at %.2f s\n",
+                      scorer.elapsed_s(), state.frame.t_s);
+          std::fflush(stdout);
         }
         timeline->Forget(5.0);
       }

@@ -41,7 +41,11 @@ session() {
   read -r x2 y2 d2 <<< "$(target right_lobe)"
   [ -n "$x1" ] && [ -n "$x2" ] || fail "no target positions: $(cat "$work/train.out")"
   xdotool mousemove --sync "$x1" "$y1"
-  sleep 2.5             # the simulation settles (the colours start from its shape at 1 s)
+  # The simulation settles: the colours start from its shape at 1 s of simulated time, which a
+  # slow host reaches later (a fixed 2.5 s once gave a "before" picture still coloured from rest).
+  for _ in $(seq 300); do grep -q "displacements coloured from" "$work/train.out" && break; sleep 0.1; done
+  grep -q "displacements coloured from" "$work/train.out" || fail "no displacement reference: $(cat "$work/train.out")"
+  sleep 0.5
   shoot                 # 1: above the first target
   press "$d1"
   sleep 2.0
