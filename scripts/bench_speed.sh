@@ -4,7 +4,8 @@
 #   scripts/bench_speed.sh [BASE_REV]      (default 4eceff2: main before issue 13's speed work)
 #
 # Builds BASE_REV in a worktree (only the targets used; Release, -j2), then runs the same
-# commands with both builds, one after the other, on the same scene files (those checked out):
+# commands with both builds, the two of each pair one right after the other, on the same scene
+# files (those checked out):
 #   - `hapsim fem --bench` on the 3.6k- and 28.8k-tet blocks: 200 steps from rest, mean and
 #     median, and the probe trajectory's largest difference from CHOLMOD (relative);
 #   - fem_step_benchmark: the settled implicit step (CG + lagged Cholesky);
@@ -42,28 +43,46 @@ declare -A bin=([before]="$base_src/build" [after]=build)
 [ -f "$out/reference/haptic.csv" ] ||
   build/apps/hapsim sim scenes/block_press.yaml --mode reference --out "$out/reference"
 
-for run in before after; do
-  b=${bin[$run]}
-  echo "== $run ($b)"
+# One measurement with one build. The cases run in turn, each with the before build and then the
+# after one, so that the two of a pair share the same minutes of this shared machine (run one
+# build's set after the other's, a drift of the host between the halves once showed as a 1.5x
+# "slow-down" of block_press that alternating runs did not confirm).
+measure() {
+  local run=$1 what=$2 b=${bin[$1]}
   mkdir -p "$out/$run"
-  "$b/apps/hapsim" fem --bench scenes/block_small.yaml scenes/block_large.yaml --out "$out/$run/fem" \
-    > "$out/$run/fem.txt"
-  "$b/tests/fem_step_benchmark" --benchmark_filter='BM_ImplicitStep/block:[12]/cholmod:0' \
-    --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
-    --benchmark_out="$out/$run/fem_step.json" --benchmark_out_format=json > /dev/null
-  "$b/apps/hapsim" sim scenes/block_press.yaml --mode linear --out "$out/$run/block_press"
-  # The scene applies its factor in binary16, which the before build cannot read: it runs the
-  # scene with its own (float) factor, i.e. the line without that key.
-  large=scenes/block_press_large.yaml
-  if [ "$run" = before ]; then
-    large=$out/before/block_press_large.yaml
-    sed 's/, factor_precision: half}/}/' scenes/block_press_large.yaml > "$large"
-  fi
-  "$b/apps/hapsim" sim "$large" --mode linear --out "$out/$run/block_press_large"
-  "$b/apps/hapsim" sim scenes/block_press_friction.yaml --mode lcp --out "$out/$run/block_press_friction"
-  "$b/tests/haptic_friction_benchmark" --benchmark_filter='BM_HapticFrictionWarm/200/[125]$' \
-    --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
-    --benchmark_out="$out/$run/friction.json" --benchmark_out_format=json > /dev/null
+  case $what in
+    fem)
+      "$b/apps/hapsim" fem --bench scenes/block_small.yaml scenes/block_large.yaml \
+        --out "$out/$run/fem" > "$out/$run/fem.txt" ;;
+    fem_step)
+      "$b/tests/fem_step_benchmark" --benchmark_filter='BM_ImplicitStep/block:[12]/cholmod:0' \
+        --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+        --benchmark_out="$out/$run/fem_step.json" --benchmark_out_format=json > /dev/null ;;
+    block_press)
+      "$b/apps/hapsim" sim scenes/block_press.yaml --mode linear --out "$out/$run/block_press" ;;
+    block_press_large)
+      # The scene applies its factor in binary16, which the before build cannot read: it runs
+      # the scene with its own (float) factor, i.e. the line without that key.
+      local large=scenes/block_press_large.yaml
+      if [ "$run" = before ]; then
+        large=$out/before/block_press_large.yaml
+        sed 's/, factor_precision: half}/}/' scenes/block_press_large.yaml > "$large"
+      fi
+      "$b/apps/hapsim" sim "$large" --mode linear --out "$out/$run/block_press_large" ;;
+    block_press_friction)
+      "$b/apps/hapsim" sim scenes/block_press_friction.yaml --mode lcp \
+        --out "$out/$run/block_press_friction" ;;
+    friction)
+      "$b/tests/haptic_friction_benchmark" --benchmark_filter='BM_HapticFrictionWarm/200/[125]$' \
+        --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+        --benchmark_out="$out/$run/friction.json" --benchmark_out_format=json > /dev/null ;;
+  esac
+}
+for what in fem fem_step block_press block_press_large block_press_friction friction; do
+  for run in before after; do
+    echo "== $what, $run (${bin[$run]})"
+    measure "$run" "$what"
+  done
 done
 # Debian's interpreter (the one python3-matplotlib is installed for; no chart here, but the same).
 /usr/bin/python3 scripts/bench/speed_table.py "$out" "$base_rev" "$after_rev" | tee "$out/speed.md"
