@@ -131,6 +131,12 @@ Eigen::MatrixXd CholmodFactor::SolveColumns(const Eigen::MatrixXd& B) {
   return result;
 }
 
+Eigen::MatrixXd CholmodFactor::SolveColumnsWithCopy(const Eigen::MatrixXd& B) const {
+  if (!factored_ || copy_precision_ != FactorPrecision::kSingle || single_.empty())
+    throw std::logic_error("CholmodFactor::SolveColumnsWithCopy without a float copy");
+  return single_.SolveColumns(B);
+}
+
 Eigen::MatrixXd CholmodFactor::CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J) {
   if (!factored_) throw std::logic_error("CholmodFactor: no factor");
   // Sparse forward solves: a dense multi-column solve (BLAS-3 over the columns) was 1.3x faster

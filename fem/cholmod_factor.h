@@ -43,6 +43,9 @@ class CholmodFactor {
   // to 4.9e-4). kDouble keeps none.
   void KeepCopy(FactorPrecision precision) { copy_precision_ = precision; }
   void SolveWithCopy(const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
+  // X ≈ A⁻¹ B for several columns with the float copy (SinglePrecisionFactor::SolveColumns).
+  // Precondition: KeepCopy(kSingle), and Factorize returned true.
+  Eigen::MatrixXd SolveColumnsWithCopy(const Eigen::MatrixXd& B) const;
   // The binary16 copy (empty unless kept and factored).
   const HalfPrecisionFactor& half_precision_copy() const { return half_; }
 

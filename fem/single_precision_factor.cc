@@ -96,4 +96,43 @@ void SinglePrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) 
   for (int k = 0; k < n; ++k) (*x)[l.perm[k]] = y_[k];  // x = Pᵀ y
 }
 
+Eigen::MatrixXd SinglePrecisionFactor::SolveColumns(const Eigen::MatrixXd& B) const {
+  using RowMajorXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const SupernodalLayout& l = layout_;
+  const int n = l.size();
+  const Eigen::Index k = B.cols();
+  // Row-major: a row of L's update is one contiguous row of Y, gathered and scattered whole.
+  RowMajorXf Y(n, k), rows_below(l.max_rows_below, k);
+  for (int i = 0; i < n; ++i) Y.row(i) = B.row(l.perm[i]).cast<float>();  // Y = P B
+  for (int sn = 0; sn < l.num_supernodes(); ++sn) {
+    const int k1 = l.first_column(sn), nscol = l.num_columns(sn);
+    const int nsrow = l.num_rows(sn), below = nsrow - nscol;
+    auto Y_cols = Y.middleRows(k1, nscol);
+    if (Y_cols.isZero(0.0)) continue;  // L⁻¹ keeps zero what no earlier column reached
+    const BlockMap block(values_.data() + l.px[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
+    block.topRows(nscol).triangularView<Eigen::Lower>().solveInPlace(Y_cols);
+    if (below == 0) continue;
+    auto update = rows_below.topRows(below);
+    update.noalias() = block.bottomRows(below) * Y_cols;
+    const int* rows = l.rows_below(sn);
+    for (int i = 0; i < below; ++i) Y.row(rows[i]) -= update.row(i);
+  }
+  for (int sn = l.num_supernodes() - 1; sn >= 0; --sn) {
+    const int k1 = l.first_column(sn), nscol = l.num_columns(sn);
+    const int nsrow = l.num_rows(sn), below = nsrow - nscol;
+    const BlockMap block(values_.data() + l.px[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
+    auto Y_cols = Y.middleRows(k1, nscol);
+    if (below > 0) {
+      auto known = rows_below.topRows(below);
+      const int* rows = l.rows_below(sn);
+      for (int i = 0; i < below; ++i) known.row(i) = Y.row(rows[i]);
+      Y_cols.noalias() -= block.bottomRows(below).transpose() * known;
+    }
+    block.topRows(nscol).triangularView<Eigen::Lower>().transpose().solveInPlace(Y_cols);
+  }
+  Eigen::MatrixXd X(n, k);
+  for (int i = 0; i < n; ++i) X.row(l.perm[i]) = Y.row(i).cast<double>();  // X = Pᵀ Y
+  return X;
+}
+
 }  // namespace hapsim::fem

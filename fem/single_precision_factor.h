@@ -30,6 +30,12 @@ class SinglePrecisionFactor {
   // x = Pᵀ L⁻ᵀ L⁻¹ P b, in single precision (b and x in double). Allocates nothing once sized.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
 
+  // X = Pᵀ L⁻ᵀ L⁻¹ P B for several columns at once, each entry of L read once for all of them.
+  // The forward sweep skips the supernodes where every column is still zero: for a B with a few
+  // nonzero rows (a node's columns of the identity) only those on the elimination tree's paths
+  // from them to the root do any work. Allocates (for the visual frame, not the haptic step).
+  Eigen::MatrixXd SolveColumns(const Eigen::MatrixXd& B) const;
+
   bool empty() const { return layout_.empty(); }
 
  private:

@@ -7,9 +7,8 @@
 namespace hapsim::fem {
 
 WarpedCompliance::WarpedCompliance(const Model& model, const TimeStepper& stepper)
-    : model_(model),
-      node_tets_(model.num_nodes()),
-      slot_of_node_(model.num_nodes(), -1) {
+    : model_(model), node_tets_(model.num_nodes()), slot_of_node_(model.num_nodes(), -1) {
+  factor_.KeepCopy(FactorPrecision::kSingle);
   if (!factor_.Factorize(stepper.MakeRestSystemMatrix()))
     throw std::runtime_error("WarpedCompliance: the rest system matrix is not positive definite");
   for (int e = 0; e < model.num_tets(); ++e)
@@ -21,7 +20,7 @@ void WarpedCompliance::SolveForNewNodes(const std::vector<int>& nodes) {
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(model_.num_dofs(), 3 * nodes.size());
   for (size_t k = 0; k < nodes.size(); ++k)
     for (int d = 0; d < 3; ++d) E(3 * nodes[k] + d, 3 * k + d) = 1.0;
-  const Eigen::MatrixXd X = factor_.SolveColumns(E);
+  const Eigen::MatrixXd X = factor_.SolveColumnsWithCopy(E);
   for (size_t k = 0; k < nodes.size(); ++k) {
     slot_of_node_[nodes[k]] = static_cast<int>(node_of_slot_.size());
     node_of_slot_.push_back(nodes[k]);
@@ -70,7 +69,8 @@ Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
     for (Eigen::Index r = c; r < rows; ++r) {
       double sum = 0.0;
       for (const Entry& b : entries[c]) {
-        const Eigen::Matrix<double, Eigen::Dynamic, 3>& A0_inv_E_b = columns_[slot_of_node_[b.node]];
+        const Eigen::Matrix<double, Eigen::Dynamic, 3>& A0_inv_E_b =
+            columns_[slot_of_node_[b.node]];
         for (const Entry& a : entries[r])
           sum += a.g.dot(A0_inv_E_b.middleRows<3>(3 * a.node) * b.g);  // C₀_ab = E_aᵀ A₀⁻¹ E_b
       }

@@ -11,9 +11,11 @@
 //
 // with j_ra the 3 entries of row r of J_u at node a and E_a the node's 3 columns of the
 // identity. C₀ never changes, so each node's columns A₀⁻¹ E_a are solved once, the first time a
-// contact touches the node (a dense multi-column CHOLMOD solve over all new nodes of the frame),
-// and kept. A frame then costs O(rows² · 9) small products instead of a forward solve with the
-// current factor per row (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method).
+// contact touches the node, and kept: one multi-column solve over all new nodes of the frame with
+// a float copy of A₀'s factor (SinglePrecisionFactor::SolveColumns), whose forward sweep works
+// only on the new nodes' elimination-tree paths; the columns are then exact to ~2e-7 relative. A
+// frame then costs O(rows² · 9) small products instead of a forward solve with the current factor
+// per row (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method).
 //
 // Node rotation: the polar rotation of the sum of the incident elements' rotations (their
 // chordal mean). A node with a fixed dof keeps R = I (rotating would mix a fixed direction into

@@ -89,16 +89,24 @@ void BM_ImplicitStep(benchmark::State& bench) {
   bench.counters["iterations"] = benchmark::Counter(iterations, benchmark::Counter::kAvgIterations);
 }
 
-// Rows of 125 contacts on the top nodes nearest the centre, normal −z (a flat tool pressing down).
-Eigen::SparseMatrix<double> MakeTopContactRows(const fem::Model& model, int num_contacts) {
+// The top face's nodes, nearest the vertical axis first.
+std::vector<int> TopNodesFromTheCentre(const fem::Model& model) {
   const double top_m = model.mesh.rest_positions_m.row(2).maxCoeff();
   std::vector<std::pair<double, int>> top;
   for (int n = 0; n < model.num_nodes(); ++n)
     if (model.mesh.rest_positions_m(2, n) > top_m - 1e-9)
       top.emplace_back(model.mesh.rest_positions_m.col(n).head<2>().norm(), n);
   std::sort(top.begin(), top.end());
+  std::vector<int> nodes;
+  for (const auto& [distance_m, node] : top) nodes.push_back(node);
+  return nodes;
+}
+
+// Rows of 125 contacts on the top nodes nearest the centre, normal −z (a flat tool pressing down).
+Eigen::SparseMatrix<double> MakeTopContactRows(const fem::Model& model, int num_contacts) {
+  const std::vector<int> top = TopNodesFromTheCentre(model);
   std::vector<Eigen::Triplet<double>> entries;
-  for (int i = 0; i < num_contacts; ++i) entries.emplace_back(i, 3 * top[i].second + 2, -1.0);
+  for (int i = 0; i < num_contacts; ++i) entries.emplace_back(i, 3 * top[i] + 2, -1.0);
   Eigen::SparseMatrix<double> J(num_contacts, model.num_dofs());
   J.setFromTriplets(entries.begin(), entries.end());
   return J;
@@ -179,6 +187,28 @@ void BM_Factorize(benchmark::State& bench) {
                                                    benchmark::Counter::kIsIterationInvariantRate);
 }
 
+// New contact nodes' columns of A⁻¹ (the warped compliance's, fem/warped_compliance.h): arg 1
+// nodes of the top face's centre, 3 columns each; arg 2 (bits) = 64 CHOLMOD's dense multi-column
+// solve, 32 the float copy's (its forward sweep only on the nodes' elimination-tree paths).
+void BM_SolveColumns(benchmark::State& bench) {
+  const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
+  const Eigen::SparseMatrix<double> A = MakeSettledSystemMatrix(f);
+  fem::CholmodFactor factor;
+  factor.KeepCopy(fem::FactorPrecision::kSingle);
+  factor.Factorize(A);
+  const std::vector<int> top = TopNodesFromTheCentre(f.body.model);
+  const int num_nodes = static_cast<int>(bench.range(1));
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(A.rows(), 3 * num_nodes);
+  for (int k = 0; k < num_nodes; ++k)
+    for (int d = 0; d < 3; ++d) E(3 * top[k] + d, 3 * k + d) = 1.0;
+  for (auto _ : bench) {
+    const Eigen::MatrixXd X =
+        bench.range(2) == 64 ? factor.SolveColumns(E) : factor.SolveColumnsWithCopy(E);
+    benchmark::DoNotOptimize(X.data());
+  }
+  SetCounters(bench, f);
+}
+
 BENCHMARK(BM_Rotations)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ForcesAndStiffness)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ImplicitStep)
@@ -190,6 +220,10 @@ BENCHMARK(BM_FactorSolve)
     ->ArgNames({"block", "bits"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Factorize)->DenseRange(1, 2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SolveColumns)
+    ->ArgsProduct({{2}, {2, 8}, {64, 32}})
+    ->ArgNames({"block", "nodes", "bits"})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ContactCompliance)
     ->ArgsProduct({{1, 2}, {0, 1}})
     ->ArgNames({"block", "per_contact"})

@@ -106,7 +106,8 @@ Eigen::MatrixXd CalcDenseCompliance(TimeStepper* stepper, const State& state,
 }
 
 // At rest, and for a free body turned rigidly (A = R A₀ Rᵀ exactly, R the same at every node),
-// the warped compliance is exact.
+// the warped compliance is exact: to float accuracy, since the columns of A₀⁻¹ come from the float
+// copy of its factor (measured 1.8e-7 relative; CHOLMOD's double solve gave < 1e-10).
 TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
   const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {4, 4, 2});
   Material material;
@@ -117,7 +118,8 @@ TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
   const Eigen::SparseMatrix<double> J = MakeContactRows(model, 12, 5);
   State state = MakeRestState(model);
   const Eigen::MatrixXd at_rest = CalcDenseCompliance(&stepper, state, J);
-  EXPECT_LT((warped.Calc(J, stepper.rotations()) - at_rest).norm(), 1e-10 * at_rest.norm());
+  constexpr double kFloatColumns = 1e-6;
+  EXPECT_LT((warped.Calc(J, stepper.rotations()) - at_rest).norm(), kFloatColumns * at_rest.norm());
 
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
@@ -125,7 +127,7 @@ TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
     state.x_m.segment<3>(3 * n) = R * model.mesh.rest_positions_m.col(n);
   const Eigen::MatrixXd turned = CalcDenseCompliance(&stepper, state, J);
   EXPECT_GT((turned - at_rest).norm(), 0.1 * at_rest.norm());  // rotation matters
-  EXPECT_LT((warped.Calc(J, stepper.rotations()) - turned).norm(), 1e-10 * turned.norm());
+  EXPECT_LT((warped.Calc(J, stepper.rotations()) - turned).norm(), kFloatColumns * turned.norm());
   EXPECT_EQ(warped.num_cached_nodes(), [&] {  // each node solved once, on first use
     std::vector<int> nodes;
     for (int k = 0; k < J.outerSize(); ++k)

@@ -34,14 +34,23 @@ Eigen::SparseMatrix<double> MakeSystemMatrix() {
   return stepper.MakeRestSystemMatrix();
 }
 
+// The whole symmetric matrix of which A holds the lower triangle.
+Eigen::MatrixXd Dense(const Eigen::SparseMatrix<double>& A) {
+  return Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>()));
+}
+
+// κ(A) = λ_max / λ_min of a symmetric positive definite A.
+double ConditionNumber(const Eigen::MatrixXd& A) {
+  const Eigen::VectorXd eigenvalues =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A, Eigen::EigenvaluesOnly).eigenvalues();
+  return eigenvalues.maxCoeff() / eigenvalues.minCoeff();
+}
+
 TEST(SinglePrecisionFactor, SolvesToFloatAccuracyAgainstADenseSolve) {
   const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
-  const Eigen::MatrixXd A_dense =
-      Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>()));
+  const Eigen::MatrixXd A_dense = Dense(A);
   const Eigen::LDLT<Eigen::MatrixXd> dense(A_dense);
-  const Eigen::VectorXd eigenvalues =
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A_dense, Eigen::EigenvaluesOnly).eigenvalues();
-  const double condition = eigenvalues.maxCoeff() / eigenvalues.minCoeff();
+  const double condition = ConditionNumber(A_dense);
   CholmodFactor factor;
   factor.KeepCopy(FactorPrecision::kSingle);
   ASSERT_TRUE(factor.Factorize(A));
@@ -68,11 +77,34 @@ TEST(SinglePrecisionFactor, SolvesToFloatAccuracyAgainstADenseSolve) {
   EXPECT_LE(worst_double, 1e-12 * condition);
 }
 
+// Several columns at once with the float copy, against the dense solve: a node's three columns of
+// the identity (the forward sweep skips every supernode off their elimination-tree paths) and a
+// dense column (it skips none), each to float accuracy as SolveWithCopy is.
+TEST(SinglePrecisionFactor, SolvesSeveralColumnsAtOnce) {
+  const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
+  const Eigen::MatrixXd A_dense = Dense(A);
+  const double condition = ConditionNumber(A_dense);
+  CholmodFactor factor;
+  factor.KeepCopy(FactorPrecision::kSingle);
+  ASSERT_TRUE(factor.Factorize(A));
+  const int node = static_cast<int>(A.rows() / 3) / 2;
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(A.rows(), 4);
+  for (int d = 0; d < 3; ++d) B(3 * node + d, d) = 1.0;
+  srand(9);
+  B.col(3) = Eigen::VectorXd::Random(A.rows());
+  const Eigen::MatrixXd X = factor.SolveColumnsWithCopy(B);
+  const Eigen::MatrixXd X_reference = Eigen::LDLT<Eigen::MatrixXd>(A_dense).solve(B);
+  for (int c = 0; c < 4; ++c) {
+    const double error = (X.col(c) - X_reference.col(c)).norm() / X_reference.col(c).norm();
+    EXPECT_LE(error, 6e-8 * condition) << "column " << c;
+    EXPECT_GT(error, 0.0) << "column " << c << ": float, so not exact";
+  }
+}
+
 // The worst relative error of factor.SolveWithCopy over five random right-hand sides, against a
 // dense LDLᵀ solve of A.
 double WorstCopyError(const Eigen::SparseMatrix<double>& A, const CholmodFactor& factor) {
-  const Eigen::LDLT<Eigen::MatrixXd> dense(
-      Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>())));
+  const Eigen::LDLT<Eigen::MatrixXd> dense(Dense(A));
   srand(5);
   double worst = 0.0;
   for (int trial = 0; trial < 5; ++trial) {
