@@ -17,6 +17,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "bench"))
+from common import place_labels  # noqa: E402  (labels that do not sit on one another)
+
 
 def main(json_path, png_path):
     with open(json_path) as f:
@@ -25,14 +28,14 @@ def main(json_path, png_path):
     solvers = sorted({r["solver"] for r in rows})
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     floor = 1e-12  # where the reference (zero error) is drawn on the log axis
+    labels = []
     for solver in solvers:
         mine = sorted((r for r in rows if r["solver"] == solver), key=lambda r: r["num_tets"])
         left.plot([r["num_tets"] for r in mine], [r["mean_ms"] for r in mine], "o-", label=solver)
-        right.plot([max(r["relative_difference_from_cholmod"], floor) for r in mine],
-                   [r["mean_ms"] for r in mine], "o", label=solver)
-        for r in mine:
-            right.annotate(str(r["num_tets"]), (max(r["relative_difference_from_cholmod"], floor), r["mean_ms"]),
-                           fontsize=7, xytext=(3, 3), textcoords="offset points")
+        points = right.plot([max(r["relative_difference_from_cholmod"], floor) for r in mine],
+                            [r["mean_ms"] for r in mine], "o", label=solver)
+        labels += [(max(r["relative_difference_from_cholmod"], floor), r["mean_ms"],
+                    str(r["num_tets"]), points[0].get_color()) for r in mine]
     left.set(xscale="log", yscale="log", xlabel="tets", ylabel="mean time per step (ms)",
              title="Implicit step, reference blocks")
     right.set(xscale="log", yscale="log", xlabel="probe trajectory error vs CHOLMOD (relative)",
@@ -42,7 +45,7 @@ def main(json_path, png_path):
         axis.legend(fontsize=8)
     machine = bench.get("machine", {})
     fig.suptitle(f"{machine.get('cpu', '?')}, {machine.get('date', '?')}", fontsize=9)
-    fig.tight_layout()
+    place_labels(right, labels)  # lays the figure out (tight_layout) before measuring
     tmp = png_path + ".tmp.png"
     fig.savefig(tmp, dpi=120)
     os.replace(tmp, png_path)
