@@ -80,21 +80,26 @@ SolveReport ConjugateGradientSolver::Solve(const Eigen::SparseMatrix<double>& A,
     report.converged = true;
     return report;
   }
-  MultiplySymmetric(A, *x, &Ap_);
-  // The warm start scaled to the best multiple of itself in A's norm, α = xᵀb / xᵀAx: no worse
-  // than x (α = 1) or zero (α = 0), and A x is needed for the residual anyway.
-  const double x_A_x = x->dot(Ap_);
-  if (x_A_x > 0.0) {
-    const double alpha = x->dot(b) / x_A_x;
-    *x *= alpha;
-    Ap_ *= alpha;
-  }
-  r_ = b - Ap_;
-  ApplyPreconditioner(r_, &z_);
-  p_ = z_;
-  double rz = r_.dot(z_);
   const double target = options_.relative_tolerance * b_norm;
+  MultiplySymmetric(A, *x, &Ap_);
+  r_ = b - Ap_;
   double r_norm = r_.norm();
+  // A warm start that does not already meet the tolerance is scaled to the best multiple of itself
+  // in A's norm, α = xᵀb / xᵀAx: no worse there than x (α = 1) or zero (α = 0), and A x is at
+  // hand. (Not one that meets it: α is best in A's norm, the test is on the residual's 2-norm.)
+  const double x_A_x = x->dot(Ap_);
+  const double scale = x_A_x > 0.0 ? x->dot(b) / x_A_x : 1.0;
+  if (r_norm > target && std::isfinite(scale) && scale != 1.0) {
+    *x *= scale;
+    r_ = b - scale * Ap_;
+    r_norm = r_.norm();
+  }
+  double rz = 0.0;
+  if (r_norm > target) {  // else no iteration follows, and the apply would go unused
+    ApplyPreconditioner(r_, &z_);
+    p_ = z_;
+    rz = r_.dot(z_);
+  }
   while (r_norm > target && report.iterations < options_.max_iterations) {
     MultiplySymmetric(A, p_, &Ap_);
     const double alpha = rz / p_.dot(Ap_);

@@ -33,14 +33,15 @@ enum class PreconditionerKind { kLaggedCholesky, kBlockJacobi };
 // tolerance: device forces within 5e-8 N RMS, the same number of refactorisations.
 //
 // kHalf applies a binary16 copy (fem/half_precision_factor.h): half the bytes of the float one,
-// one apply 2.2 against 4.0 ms at 28.8k tets (BM_FactorSolve, 2026-11-26 13:55, a slow hour of
-// this machine). Its entries carry 4.9e-4 relative rounding, so even a fresh factor leaves CG
-// ~3 iterations a step to 1e-6 instead of 1.4: on the settled block (`fem --bench`, same hour)
-// 14.3 against 13.0 ms at 28.8k and 1.04 against 0.86 ms at 3.6k. It pays where the factor is
-// stale anyway: on block_press_large every solve takes 3–6 iterations whatever the precision,
-// and the frame median fell from ~59 to ~42 ms (alternating runs, same hour; device forces
-// within 5e-8 N RMS). So kSingle stays the default and a scene that presses a large body
-// chooses kHalf (scenes/block_press_large.yaml).
+// one apply 1.55 against 3.62 ms at 28.8k tets (BM_FactorSolve, bench_fem.sh of 2026-11-26
+// 14:14). Its entries carry 4.9e-4 relative rounding, so even a fresh factor leaves CG ~3
+// iterations a step to 1e-6 instead of 1.5: on the settled block (`fem --bench`, same run) 0.98
+// against 0.85 ms at 3.6k, and at 28.8k a lower mean (11.5 against 12.4 ms, one factorisation
+// instead of two) but a higher median (10.6 against 9.9 ms). It pays where the factor is stale
+// anyway: on block_press_large every solve takes 3–6 iterations whatever the precision, and the
+// frame median fell from 59–64 to 41–43 ms (alternating runs, 13:45; device forces within 5e-8 N
+// RMS). So kSingle stays the default and a scene that presses a large body chooses kHalf
+// (scenes/block_press_large.yaml).
 enum class FactorPrecision { kSingle, kDouble, kHalf };
 
 struct SolverOptions {

@@ -1,5 +1,9 @@
 #include "fem/half_precision_factor.h"
 
+#if defined(__x86_64__)
+#include <cpuid.h>
+#endif
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -29,7 +33,8 @@ struct PortableKernels {
   }
 };
 
-// Round to nearest binary16 (ties to even), as bits. |value| ≤ 2¹⁴ here, so never infinite.
+// Round to nearest binary16 (ties to even), as bits. |value| ≤ 2¹⁴ here, so never infinite. (The
+// entry was rounded to float first: a second rounding, at most 2⁻²⁴ relative, beside 2⁻¹¹.)
 std::uint16_t FloatToHalf(float value) {
   return Eigen::half_impl::raw_half_as_uint16(Eigen::half(value));
 }
@@ -38,7 +43,13 @@ std::uint16_t FloatToHalf(float value) {
 
 bool HalfPrecisionFactor::CpuHasVectorKernels() {
 #if defined(__x86_64__)
-  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+  // AVX2 through the compiler's check (which also asks the OS for the AVX state); F16C from
+  // CPUID leaf 1 (ECX bit 29) directly, since clang 14's __builtin_cpu_supports has no "f16c".
+  static const bool has = [] {
+    unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+    return __builtin_cpu_supports("avx2") && __get_cpuid(1, &eax, &ebx, &ecx, &edx) != 0 &&
+           (ecx & bit_F16C) != 0;
+  }();
   return has;
 #else
   return false;
@@ -74,9 +85,12 @@ void HalfPrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x,
   const half_sweeps::SweepArgs args{l.num_supernodes(), l.super.data(), l.pi.data(),
                                     l.px.data(),        l.s.data(),     values_.data(),
                                     diagonal_.data(),   y_.data(),      scratch_.data()};
+#if defined(__x86_64__)
   if (kernels == Kernels::kFastest && CpuHasVectorKernels()) {
     half_sweeps::SolveWithAvx2(args);
-  } else {
+  } else
+#endif
+  {
     half_sweeps::ForwardSweep<PortableKernels>(args);
     half_sweeps::BackwardSweep<PortableKernels>(args);
   }

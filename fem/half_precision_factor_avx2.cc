@@ -1,7 +1,8 @@
 // HalfPrecisionFactor's sweeps with AVX2 + F16C intrinsics (fem/half_precision_sweeps.h). This
 // file alone is built with -mavx2 -mf16c (fem/CMakeLists.txt) and is called only on a CPU that
-// has both (HalfPrecisionFactor::CpuHasVectorKernels). It includes nothing with external inline
-// functions (no Eigen, no standard containers), so no AVX2 code can replace another file's copy.
+// has both (HalfPrecisionFactor::CpuHasVectorKernels). It includes only <immintrin.h> and the
+// sweeps' header, and uses no inline function with external linkage (no Eigen, no standard
+// containers), so that no AVX2 copy of one is emitted to replace another file's. Keep it so.
 #if defined(__x86_64__)
 
 #include <immintrin.h>

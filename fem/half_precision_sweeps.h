@@ -2,8 +2,8 @@
 // The forward and backward sweeps of HalfPrecisionFactor::Solve (fem/half_precision_factor.h),
 // written once over raw pointers and instantiated twice: with portable kernels
 // (half_precision_factor.cc) and with AVX2 + F16C intrinsics in a file of their own, built with
-// those instruction sets (half_precision_factor_avx2.cc). Everything here has internal linkage,
-// so no function compiled for AVX2 can stand in for the portable copy of another file.
+// those instruction sets (half_precision_factor_avx2.cc). The sweeps and HalfToFloat have internal
+// linkage (static), so no copy compiled for AVX2 can stand in for another file's portable one.
 
 #include <cstdint>
 

@@ -62,7 +62,7 @@ measure() {
       "$b/apps/hapsim" sim scenes/block_press.yaml --mode linear --out "$out/$run/block_press" ;;
     block_press_large)
       # The scene applies its factor in binary16, which the before build cannot read: it runs
-      # the scene with its own (float) factor, i.e. the line without that key.
+      # the scene with its own default factor (double in 4eceff2), i.e. the line without that key.
       local large=scenes/block_press_large.yaml
       if [ "$run" = before ]; then
         large=$out/before/block_press_large.yaml
@@ -78,6 +78,13 @@ measure() {
         --benchmark_out="$out/$run/friction.json" --benchmark_out_format=json > /dev/null ;;
   esac
 }
+# The before build's copy of block_press_large must lose the key it cannot read; a reformatted
+# scene line would leave it in and stop the run halfway, so check before anything runs.
+if sed 's/, factor_precision: half}/}/' scenes/block_press_large.yaml | grep -q factor_precision; then
+  echo "bench_speed.sh: scenes/block_press_large.yaml's factor_precision is not where the before" \
+    "build's copy removes it (', factor_precision: half}' in the solver line)" >&2
+  exit 2
+fi
 for what in fem fem_step block_press block_press_large block_press_friction friction; do
   for run in before after; do
     echo "== $what, $run (${bin[$run]})"
