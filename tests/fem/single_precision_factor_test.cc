@@ -78,9 +78,10 @@ TEST(SinglePrecisionFactor, SolvesToFloatAccuracyAgainstADenseSolve) {
 }
 
 // Several columns at once with the float copy, against the dense solve, each to float accuracy as
-// SolveWithCopy is: a node's three columns of the identity alone (the forward sweep then skips
-// every supernode off their elimination-tree paths, where all three are still zero), and dense
-// columns (it skips none).
+// SolveWithCopy is: the columns of the identity of two free nodes far apart (the forward
+// sweep skips the supernodes where all six are still zero, and must not skip one where only some
+// are: the two nodes' elimination-tree paths differ until they meet), and dense columns (it
+// skips none).
 TEST(SinglePrecisionFactor, SolvesSeveralColumnsAtOnce) {
   const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
   const Eigen::MatrixXd A_dense = Dense(A);
@@ -88,9 +89,11 @@ TEST(SinglePrecisionFactor, SolvesSeveralColumnsAtOnce) {
   CholmodFactor factor;
   factor.KeepCopy(FactorPrecision::kSingle);
   ASSERT_TRUE(factor.Factorize(A));
-  const int node = static_cast<int>(A.rows() / 3) / 2;
-  Eigen::MatrixXd identity_columns = Eigen::MatrixXd::Zero(A.rows(), 3);
-  for (int d = 0; d < 3; ++d) identity_columns(3 * node + d, d) = 1.0;
+  const int num_nodes = static_cast<int>(A.rows() / 3);
+  Eigen::MatrixXd identity_columns = Eigen::MatrixXd::Zero(A.rows(), 6);
+  for (int k = 0; k < 2; ++k)
+    for (int d = 0; d < 3; ++d)
+      identity_columns(3 * (k == 0 ? num_nodes / 2 : num_nodes - 1) + d, 3 * k + d) = 1.0;
   srand(9);
   const Eigen::MatrixXd dense_columns = Eigen::MatrixXd::Random(A.rows(), 2);
   const Eigen::LDLT<Eigen::MatrixXd> dense(A_dense);
