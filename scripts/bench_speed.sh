@@ -61,13 +61,8 @@ measure() {
     block_press)
       "$b/apps/hapsim" sim scenes/block_press.yaml --mode linear --out "$out/$run/block_press" ;;
     block_press_large)
-      # The scene applies its factor in binary16, which the before build cannot read: it runs
-      # the scene with its own default factor (double in 4eceff2), i.e. the line without that key.
       local large=scenes/block_press_large.yaml
-      if [ "$run" = before ]; then
-        large=$out/before/block_press_large.yaml
-        sed 's/, factor_precision: half}/}/' scenes/block_press_large.yaml > "$large"
-      fi
+      if [ "$run" = before ]; then large=$before_large; fi
       "$b/apps/hapsim" sim "$large" --mode linear --out "$out/$run/block_press_large" ;;
     block_press_friction)
       "$b/apps/hapsim" sim scenes/block_press_friction.yaml --mode lcp \
@@ -78,9 +73,14 @@ measure() {
         --benchmark_out="$out/$run/friction.json" --benchmark_out_format=json > /dev/null ;;
   esac
 }
-# The before build's copy of block_press_large must lose the key it cannot read; a reformatted
-# scene line would leave it in and stop the run halfway, so check before anything runs.
-if sed 's/, factor_precision: half}/}/' scenes/block_press_large.yaml | grep -q factor_precision; then
+# block_press_large applies its factor in binary16, which the before build cannot read: that build
+# runs a copy without the key, i.e. with its own default factor (double in 4eceff2). Written and
+# checked before anything runs: a reformatted scene line would leave the key in and stop the run
+# halfway.
+before_large=$out/before/block_press_large.yaml
+mkdir -p "$out/before"
+sed 's/, factor_precision: half}/}/' scenes/block_press_large.yaml > "$before_large"
+if grep -q factor_precision "$before_large"; then
   echo "bench_speed.sh: scenes/block_press_large.yaml's factor_precision is not where the before" \
     "build's copy removes it (', factor_precision: half}' in the solver line)" >&2
   exit 2

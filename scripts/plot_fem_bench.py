@@ -32,8 +32,10 @@ def main(json_path, png_path):
     for solver in solvers:
         mine = sorted((r for r in rows if r["solver"] == solver), key=lambda r: r["num_tets"])
         left.plot([r["num_tets"] for r in mine], [r["mean_ms"] for r in mine], "o-", label=solver)
+        # CHOLMOD is the reference (error 0): say in the legend where it is drawn.
+        name = f"{solver} (reference, drawn at {floor:g})" if solver == "cholmod" else solver
         points = right.plot([max(r["relative_difference_from_cholmod"], floor) for r in mine],
-                            [r["mean_ms"] for r in mine], "o", label=solver)
+                            [r["mean_ms"] for r in mine], "o", label=name)
         labels += [(max(r["relative_difference_from_cholmod"], floor), r["mean_ms"],
                     str(r["num_tets"]), points[0].get_color()) for r in mine]
     left.set(xscale="log", yscale="log", xlabel="tets", ylabel="mean time per step (ms)",
