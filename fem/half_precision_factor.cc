@@ -17,19 +17,30 @@ using half_sweeps::HalfToFloat;
 
 // The kernels of fem/half_precision_sweeps.h in plain loops, in the order the AVX2 ones use.
 struct PortableKernels {
-  static void SubtractScaled(const std::uint16_t* a, float c, float* y, int n) {
-    for (int i = 0; i < n; ++i) y[i] = y[i] - HalfToFloat(a[i]) * c;
+  static float ToFloat(std::uint16_t h) { return HalfToFloat(h); }
+
+  template <int m>
+  static void SubtractColumns(const std::uint16_t* a, long lda, const float* c, float* z, int n) {
+    for (int i = 0; i < n; ++i) {
+      float value = z[i];
+      for (int k = 0; k < m; ++k) value = value - HalfToFloat(a[k * lda + i]) * c[k];
+      z[i] = value;
+    }
   }
 
-  static float Dot(const std::uint16_t* a, const float* x, int n) {
-    float lanes[8] = {};
+  template <int m>
+  static void DotColumns(const std::uint16_t* a, long lda, const float* x, int n, float* dots) {
     const int n8 = n - n % 8;
-    for (int i = 0; i < n8; i += 8)
-      for (int j = 0; j < 8; ++j) lanes[j] = lanes[j] + HalfToFloat(a[i + j]) * x[i + j];
-    float sum = lanes[0];
-    for (int j = 1; j < 8; ++j) sum += lanes[j];
-    for (int i = n8; i < n; ++i) sum += HalfToFloat(a[i]) * x[i];
-    return sum;
+    for (int k = 0; k < m; ++k) {
+      const std::uint16_t* column = a + k * lda;
+      float lanes[8] = {};
+      for (int i = 0; i < n8; i += 8)
+        for (int j = 0; j < 8; ++j) lanes[j] = lanes[j] + HalfToFloat(column[i + j]) * x[i + j];
+      float sum = lanes[0];
+      for (int j = 1; j < 8; ++j) sum += lanes[j];
+      for (int i = n8; i < n; ++i) sum += HalfToFloat(column[i]) * x[i];
+      dots[k] = sum;
+    }
   }
 };
 
@@ -68,13 +79,13 @@ void HalfPrecisionFactor::Assign(const cholmod_factor& L) {
   values_.resize(L.xsize);
   for (size_t k = 0; k < L.xsize; ++k) values_[k] = FloatToHalf(static_cast<float>(scale_ * x[k]));
   const int n = layout_.size();
-  diagonal_.resize(n);
+  inverse_diagonal_.resize(n);
   for (int sn = 0; sn < layout_.num_supernodes(); ++sn)
     for (int c = 0; c < layout_.num_columns(sn); ++c)
-      diagonal_[layout_.first_column(sn) + c] = static_cast<float>(
-          scale_ * x[layout_.px[sn] + static_cast<long>(c) * layout_.num_rows(sn) + c]);
+      inverse_diagonal_[layout_.first_column(sn) + c] = static_cast<float>(
+          1.0 / (scale_ * x[layout_.px[sn] + static_cast<long>(c) * layout_.num_rows(sn) + c]));
   y_.resize(n);
-  scratch_.resize(std::max(layout_.max_rows_below, 1));
+  scratch_.resize(std::max(layout_.max_rows, 1));
 }
 
 void HalfPrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x,
@@ -82,9 +93,9 @@ void HalfPrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x,
   const SupernodalLayout& l = layout_;
   const int n = l.size();
   for (int k = 0; k < n; ++k) y_[k] = static_cast<float>(b[l.perm[k]]);  // y = P b
-  const half_sweeps::SweepArgs args{l.num_supernodes(), l.super.data(), l.pi.data(),
-                                    l.px.data(),        l.s.data(),     values_.data(),
-                                    diagonal_.data(),   y_.data(),      scratch_.data()};
+  const half_sweeps::SweepArgs args{
+      l.num_supernodes(), l.super.data(),           l.pi.data(), l.px.data(),    l.s.data(),
+      values_.data(),     inverse_diagonal_.data(), y_.data(),   scratch_.data()};
 #if defined(__x86_64__)
   if (kernels == Kernels::kFastest && CpuHasVectorKernels()) {
     half_sweeps::SolveWithAvx2(args);

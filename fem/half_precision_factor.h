@@ -13,8 +13,8 @@
 //
 // Range. binary16 holds 6.1e-5 … 65504 (subnormals down to 6e-8). L is stored scaled by a power
 // of two s that puts its largest entry between 2¹³ and 2¹⁴, so the solve loses only entries below
-// ~2⁻³⁸ of the largest; x is multiplied by s² at the end (exact). The diagonal, which each
-// column divides by, is kept in float.
+// ~2⁻³⁸ of the largest; x is multiplied by s² at the end (exact). The diagonal, whose
+// reciprocal each column multiplies by, is kept in float.
 //
 // Kernels. On a CPU with AVX2 and F16C (x86-64 since 2013) the column loops convert eight
 // entries an instruction (fem/half_precision_factor_avx2.cc); elsewhere portable loops do the
@@ -51,9 +51,9 @@ class HalfPrecisionFactor {
  private:
   SupernodalLayout layout_;
   std::vector<std::uint16_t> values_;    // s·L in binary16, CHOLMOD's layout
-  std::vector<float> diagonal_;          // s·L(k, k), by permuted index k
+  std::vector<float> inverse_diagonal_;  // 1 / (s·L(k, k)), by permuted index k
   double scale_ = 1.0;                   // s, a power of two
-  mutable Eigen::VectorXf y_, scratch_;  // the permuted vector; a supernode's rows below
+  mutable Eigen::VectorXf y_, scratch_;  // the permuted vector; one supernode's rows
 };
 
 }  // namespace hapsim::fem

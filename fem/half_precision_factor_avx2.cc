@@ -19,26 +19,44 @@ inline __m256 LoadHalves(const std::uint16_t* a) {
 }
 
 struct Avx2Kernels {
-  static void SubtractScaled(const std::uint16_t* a, float c, float* y, int n) {
-    const __m256 c8 = _mm256_set1_ps(c);
+  static float ToFloat(std::uint16_t h) { return _cvtsh_ss(h); }
+
+  template <int m>
+  static void SubtractColumns(const std::uint16_t* a, long lda, const float* c, float* z, int n) {
+    __m256 c8[m];
+    for (int k = 0; k < m; ++k) c8[k] = _mm256_set1_ps(c[k]);
     int i = 0;
-    for (; i + 8 <= n; i += 8)
-      _mm256_storeu_ps(y + i,
-                       _mm256_sub_ps(_mm256_loadu_ps(y + i), _mm256_mul_ps(LoadHalves(a + i), c8)));
-    for (; i < n; ++i) y[i] = y[i] - _cvtsh_ss(a[i]) * c;
+    for (; i + 8 <= n; i += 8) {
+      __m256 value = _mm256_loadu_ps(z + i);
+      for (int k = 0; k < m; ++k)
+        value = _mm256_sub_ps(value, _mm256_mul_ps(LoadHalves(a + k * lda + i), c8[k]));
+      _mm256_storeu_ps(z + i, value);
+    }
+    for (; i < n; ++i) {
+      float value = z[i];
+      for (int k = 0; k < m; ++k) value = value - _cvtsh_ss(a[k * lda + i]) * c[k];
+      z[i] = value;
+    }
   }
 
-  static float Dot(const std::uint16_t* a, const float* x, int n) {
-    __m256 lanes8 = _mm256_setzero_ps();
+  template <int m>
+  static void DotColumns(const std::uint16_t* a, long lda, const float* x, int n, float* dots) {
+    __m256 lanes8[m];
+    for (int k = 0; k < m; ++k) lanes8[k] = _mm256_setzero_ps();
     const int n8 = n - n % 8;
-    for (int i = 0; i < n8; i += 8)
-      lanes8 = _mm256_add_ps(lanes8, _mm256_mul_ps(LoadHalves(a + i), _mm256_loadu_ps(x + i)));
-    alignas(32) float lanes[8];
-    _mm256_store_ps(lanes, lanes8);
-    float sum = lanes[0];
-    for (int j = 1; j < 8; ++j) sum += lanes[j];
-    for (int i = n8; i < n; ++i) sum += _cvtsh_ss(a[i]) * x[i];
-    return sum;
+    for (int i = 0; i < n8; i += 8) {
+      const __m256 x8 = _mm256_loadu_ps(x + i);
+      for (int k = 0; k < m; ++k)
+        lanes8[k] = _mm256_add_ps(lanes8[k], _mm256_mul_ps(LoadHalves(a + k * lda + i), x8));
+    }
+    for (int k = 0; k < m; ++k) {
+      alignas(32) float lanes[8];
+      _mm256_store_ps(lanes, lanes8[k]);
+      float sum = lanes[0];
+      for (int j = 1; j < 8; ++j) sum += lanes[j];
+      for (int i = n8; i < n; ++i) sum += _cvtsh_ss(a[k * lda + i]) * x[i];
+      dots[k] = sum;
+    }
   }
 };
 

@@ -1,5 +1,6 @@
 #include "fem/supernodal_layout.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace hapsim::fem {
@@ -22,6 +23,8 @@ void SupernodalLayout::Assign(const cholmod_factor& L) {
   s = CopyInts(L.s, L.ssize);
   perm = CopyInts(L.Perm, L.n);
   max_rows_below = static_cast<int>(L.maxesize);
+  max_rows = 0;
+  for (size_t sn = 0; sn + 1 < pi.size(); ++sn) max_rows = std::max(max_rows, pi[sn + 1] - pi[sn]);
 }
 
 }  // namespace hapsim::fem

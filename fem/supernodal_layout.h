@@ -16,6 +16,7 @@ namespace hapsim::fem {
 struct SupernodalLayout {
   std::vector<int> super, pi, px, s, perm;
   int max_rows_below = 0;  // the most rows below any diagonal block (CHOLMOD's maxesize)
+  int max_rows = 0;        // the most rows of any supernode, its diagonal block's and those below
 
   // Copies the structure of L (supernodal, LLᵀ, real, double, int indices). Throws
   // std::invalid_argument for any other kind of factor.
