@@ -137,6 +137,13 @@ Eigen::MatrixXd CholmodFactor::SolveColumnsWithCopy(const Eigen::MatrixXd& B) co
   return single_.SolveColumns(B);
 }
 
+Eigen::MatrixXd CholmodFactor::SolveColumnsWithCopyAt(const Eigen::MatrixXd& B,
+                                                      const std::vector<int>& wanted_rows) const {
+  if (!factored_ || copy_precision_ != FactorPrecision::kSingle || single_.empty())
+    throw std::logic_error("CholmodFactor::SolveColumnsWithCopyAt without a float copy");
+  return single_.SolveColumnsAt(B, wanted_rows);
+}
+
 Eigen::MatrixXd CholmodFactor::CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J) {
   if (!factored_) throw std::logic_error("CholmodFactor: no factor");
   // Sparse forward solves: a dense multi-column solve (BLAS-3 over the columns) was 1.3x faster

@@ -1,6 +1,7 @@
 #include "fem/single_precision_factor.h"
 
 #include <Eigen/Dense>
+#include <limits>
 #include <stdexcept>
 
 namespace hapsim::fem {
@@ -97,6 +98,22 @@ void SinglePrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) 
 }
 
 Eigen::MatrixXd SinglePrecisionFactor::SolveColumns(const Eigen::MatrixXd& B) const {
+  return SolveColumnsOn(B, nullptr);
+}
+
+Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsAt(const Eigen::MatrixXd& B,
+                                                      const std::vector<int>& wanted_rows) const {
+  const SupernodalLayout& l = layout_;
+  std::vector<char> needed(l.num_supernodes(), 0);
+  for (int row : wanted_rows)
+    for (int sn = l.supernode_of_column[l.permuted_index[row]]; sn != -1 && !needed[sn];
+         sn = l.parent[sn])
+      needed[sn] = 1;
+  return SolveColumnsOn(B, &needed);
+}
+
+Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsOn(const Eigen::MatrixXd& B,
+                                                      const std::vector<char>* needed) const {
   using RowMajorXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const SupernodalLayout& l = layout_;
   const int n = l.size();
@@ -117,11 +134,18 @@ Eigen::MatrixXd SinglePrecisionFactor::SolveColumns(const Eigen::MatrixXd& B) co
     const int* rows = l.rows_below(sn);
     for (int i = 0; i < below; ++i) Y.row(rows[i]) -= update.row(i);
   }
+  // A backward step reads only the rows below the supernode's diagonal block, which lie in its
+  // ancestors: a needed supernode's ancestors are needed too, so skipping the others changes no
+  // needed entry.
   for (int sn = l.num_supernodes() - 1; sn >= 0; --sn) {
     const int k1 = l.first_column(sn), nscol = l.num_columns(sn);
+    auto Y_cols = Y.middleRows(k1, nscol);
+    if (needed && !(*needed)[sn]) {
+      Y_cols.setConstant(std::numeric_limits<float>::quiet_NaN());
+      continue;
+    }
     const int nsrow = l.num_rows(sn), below = nsrow - nscol;
     const BlockMap block(values_.data() + l.px[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
-    auto Y_cols = Y.middleRows(k1, nscol);
     if (below > 0) {
       auto known = rows_below.topRows(below);
       const int* rows = l.rows_below(sn);

@@ -35,10 +35,21 @@ class SinglePrecisionFactor {
   // nonzero rows (a node's columns of the identity) only those on the elimination tree's paths
   // from them to the root do any work. Allocates (for the visual frame, not the haptic step).
   Eigen::MatrixXd SolveColumns(const Eigen::MatrixXd& B) const;
+  // The same, but X only at the given rows (original indices): the backward sweep works only on
+  // the supernodes that hold them and on their ancestors in the elimination tree, which is all a
+  // backward step reads. X at those supernodes' rows is SolveColumns' bit for bit; every other
+  // entry is NaN. For the warped compliance, which reads A₀⁻¹ only at contact nodes: on the
+  // 28.8k-tet block the top face's nodes and their ancestors hold a fraction of L
+  // (BM_SolveColumns).
+  Eigen::MatrixXd SolveColumnsAt(const Eigen::MatrixXd& B,
+                                 const std::vector<int>& wanted_rows) const;
 
   bool empty() const { return layout_.empty(); }
 
  private:
+  // needed: per supernode, whether its backward step runs (null: all).
+  Eigen::MatrixXd SolveColumnsOn(const Eigen::MatrixXd& B, const std::vector<char>* needed) const;
+
   SupernodalLayout layout_;
   std::vector<float> values_;
   mutable Eigen::VectorXf y_, gathered_;  // scratch: the permuted vector; a supernode's rows

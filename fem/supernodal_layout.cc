@@ -25,6 +25,15 @@ void SupernodalLayout::Assign(const cholmod_factor& L) {
   max_rows_below = static_cast<int>(L.maxesize);
   max_rows = 0;
   for (size_t sn = 0; sn + 1 < pi.size(); ++sn) max_rows = std::max(max_rows, pi[sn + 1] - pi[sn]);
+  supernode_of_column.resize(perm.size());
+  for (int sn = 0; sn < num_supernodes(); ++sn)
+    for (int k = super[sn]; k < super[sn + 1]; ++k) supernode_of_column[k] = sn;
+  // A supernode's parent holds the first row below its diagonal block (the rows are sorted).
+  parent.assign(num_supernodes(), -1);
+  for (int sn = 0; sn < num_supernodes(); ++sn)
+    if (num_rows(sn) > num_columns(sn)) parent[sn] = supernode_of_column[rows_below(sn)[0]];
+  permuted_index.resize(perm.size());
+  for (int k = 0; k < size(); ++k) permuted_index[perm[k]] = k;
 }
 
 }  // namespace hapsim::fem

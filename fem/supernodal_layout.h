@@ -15,6 +15,9 @@ namespace hapsim::fem {
 
 struct SupernodalLayout {
   std::vector<int> super, pi, px, s, perm;
+  std::vector<int> parent;               // the supernodal elimination tree: −1 at a root
+  std::vector<int> supernode_of_column;  // by permuted index
+  std::vector<int> permuted_index;       // of each original index: perm[permuted_index[i]] = i
   int max_rows_below = 0;  // the most rows below any diagonal block (CHOLMOD's maxesize)
   int max_rows = 0;        // the most rows of any supernode, its diagonal block's and those below
 

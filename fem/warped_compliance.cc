@@ -20,12 +20,26 @@ void WarpedCompliance::SolveForNewNodes(const std::vector<int>& nodes) {
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(model_.num_dofs(), 3 * nodes.size());
   for (size_t k = 0; k < nodes.size(); ++k)
     for (int d = 0; d < 3; ++d) E(3 * nodes[k] + d, 3 * k + d) = 1.0;
-  const Eigen::MatrixXd X = factor_.SolveColumnsWithCopy(E);
+  // Only the rows of the nodes held so far and of the new ones: C₀_ab is read from the column of
+  // whichever of a and b was solved later (CalcNodeBlock), at the rows of the other.
+  std::vector<int> wanted_rows;
+  wanted_rows.reserve(3 * (node_of_slot_.size() + nodes.size()));
+  for (int node : node_of_slot_)
+    for (int d = 0; d < 3; ++d) wanted_rows.push_back(3 * node + d);
+  for (int node : nodes)
+    for (int d = 0; d < 3; ++d) wanted_rows.push_back(3 * node + d);
+  const Eigen::MatrixXd X = factor_.SolveColumnsWithCopyAt(E, wanted_rows);
   for (size_t k = 0; k < nodes.size(); ++k) {
     slot_of_node_[nodes[k]] = static_cast<int>(node_of_slot_.size());
     node_of_slot_.push_back(nodes[k]);
     columns_.emplace_back(X.middleCols<3>(3 * k));
   }
+}
+
+Eigen::Matrix3d WarpedCompliance::CalcNodeBlock(int a, int b) const {
+  const int slot_a = slot_of_node_[a], slot_b = slot_of_node_[b];
+  if (slot_b >= slot_a) return columns_[slot_b].middleRows<3>(3 * a);
+  return columns_[slot_a].middleRows<3>(3 * b).transpose();  // C₀_ab = C₀_baᵀ (A₀ symmetric)
 }
 
 Eigen::Matrix3d WarpedCompliance::CalcNodeRotation(
@@ -68,12 +82,8 @@ Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
   for (Eigen::Index c = 0; c < rows; ++c)
     for (Eigen::Index r = c; r < rows; ++r) {
       double sum = 0.0;
-      for (const Entry& b : entries[c]) {
-        const Eigen::Matrix<double, Eigen::Dynamic, 3>& A0_inv_E_b =
-            columns_[slot_of_node_[b.node]];
-        for (const Entry& a : entries[r])
-          sum += a.g.dot(A0_inv_E_b.middleRows<3>(3 * a.node) * b.g);  // C₀_ab = E_aᵀ A₀⁻¹ E_b
-      }
+      for (const Entry& b : entries[c])
+        for (const Entry& a : entries[r]) sum += a.g.dot(CalcNodeBlock(a.node, b.node) * b.g);
       W(r, c) = W(c, r) = sum;
     }
   return W;

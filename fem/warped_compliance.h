@@ -12,10 +12,11 @@
 // with j_ra the 3 entries of row r of J_u at node a and E_a the node's 3 columns of the
 // identity. C₀ never changes, so each node's columns A₀⁻¹ E_a are solved once, the first time a
 // contact touches the node, and kept: one multi-column solve over all new nodes of the frame with
-// a float copy of A₀'s factor (SinglePrecisionFactor::SolveColumns), whose forward sweep works
-// only on the new nodes' elimination-tree paths; the columns are then exact to ~2e-7 relative. A
-// frame then costs O(rows² · 9) small products instead of a forward solve with the current factor
-// per row (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method).
+// a float copy of A₀'s factor (SinglePrecisionFactor::SolveColumnsAt), whose forward sweep works
+// only on the new nodes' elimination-tree paths and whose backward sweep only on those of the
+// nodes held so far (C₀ is read only between contact nodes); the columns are then exact to ~2e-7
+// relative. A frame then costs O(rows² · 9) small products instead of a forward solve with the
+// current factor per row (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method).
 //
 // Node rotation: the polar rotation of the sum of the incident elements' rotations (their
 // chordal mean). A node with a fixed dof keeps R = I (rotating would mix a fixed direction into
@@ -43,11 +44,13 @@ class WarpedCompliance {
   Eigen::MatrixXd Calc(const Eigen::SparseMatrix<double>& J_u,
                        const std::vector<Eigen::Matrix3d>& element_rotations);
 
-  // Nodes whose columns of A₀⁻¹ are held (each 3 · num_dofs doubles).
+  // Nodes whose columns of A₀⁻¹ are held (each 3 · num_dofs doubles, exact at the held nodes).
   int num_cached_nodes() const { return static_cast<int>(node_of_slot_.size()); }
 
  private:
   void SolveForNewNodes(const std::vector<int>& nodes);
+  // C₀_ab = E_aᵀ A₀⁻¹ E_b of two held nodes.
+  Eigen::Matrix3d CalcNodeBlock(int a, int b) const;
   Eigen::Matrix3d CalcNodeRotation(int node,
                                    const std::vector<Eigen::Matrix3d>& element_rotations) const;
 
@@ -56,7 +59,9 @@ class WarpedCompliance {
   std::vector<std::vector<int>> node_tets_;  // incident tets of each node
   std::vector<int> slot_of_node_;            // -1: not solved yet
   std::vector<int> node_of_slot_;
-  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 3>> columns_;  // A₀⁻¹ E_n per slot
+  // A₀⁻¹ E_n per slot, exact only at the rows of the nodes held when it was solved (slots up to
+  // its own) and NaN at most others (SinglePrecisionFactor::SolveColumnsAt).
+  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 3>> columns_;
 };
 
 }  // namespace hapsim::fem

@@ -189,7 +189,9 @@ void BM_Factorize(benchmark::State& bench) {
 
 // New contact nodes' columns of A⁻¹ (the warped compliance's, fem/warped_compliance.h): arg 1
 // nodes of the top face's centre, 3 columns each; arg 2 (bits) = 64 CHOLMOD's dense multi-column
-// solve, 32 the float copy's (its forward sweep only on the nodes' elimination-tree paths).
+// solve, 32 the float copy's (its forward sweep only on the nodes' elimination-tree paths); arg 3
+// (at) = 0 every row, else the rows of only that many top nodes nearest the centre (the backward
+// sweep only on their paths; block_press_large touches ~450, fem/warped_compliance.h).
 void BM_SolveColumns(benchmark::State& bench) {
   const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
   const Eigen::SparseMatrix<double> A = MakeSettledSystemMatrix(f);
@@ -201,9 +203,13 @@ void BM_SolveColumns(benchmark::State& bench) {
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(A.rows(), 3 * num_nodes);
   for (int k = 0; k < num_nodes; ++k)
     for (int d = 0; d < 3; ++d) E(3 * top[k] + d, 3 * k + d) = 1.0;
+  std::vector<int> wanted_rows;
+  for (int k = 0; k < bench.range(3); ++k)
+    for (int d = 0; d < 3; ++d) wanted_rows.push_back(3 * top[k] + d);
   for (auto _ : bench) {
-    const Eigen::MatrixXd X =
-        bench.range(2) == 64 ? factor.SolveColumns(E) : factor.SolveColumnsWithCopy(E);
+    const Eigen::MatrixXd X = bench.range(2) == 64  ? factor.SolveColumns(E)
+                              : wanted_rows.empty() ? factor.SolveColumnsWithCopy(E)
+                                                    : factor.SolveColumnsWithCopyAt(E, wanted_rows);
     benchmark::DoNotOptimize(X.data());
   }
   SetCounters(bench, f);
@@ -221,8 +227,9 @@ BENCHMARK(BM_FactorSolve)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Factorize)->DenseRange(1, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SolveColumns)
-    ->ArgsProduct({{2}, {2, 8}, {64, 32}})
-    ->ArgNames({"block", "nodes", "bits"})
+    ->ArgsProduct({{2}, {2, 8}, {64, 32}, {0}})
+    ->ArgsProduct({{2}, {2, 8}, {32}, {150, 450}})
+    ->ArgNames({"block", "nodes", "bits", "at"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ContactCompliance)
     ->ArgsProduct({{1, 2}, {0, 1}})

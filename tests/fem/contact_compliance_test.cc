@@ -138,6 +138,38 @@ TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
   }());
 }
 
+// Nodes met in a later frame: their columns of A₀⁻¹ are solved only at the rows of the nodes held
+// by then (SinglePrecisionFactor::SolveColumnsAt), so W must read each pair from the later of the
+// two columns. At rest the warped compliance is exact (to the float columns), frame after frame.
+TEST(WarpedCompliance, ExactWhenContactsMeetNewNodesFrameByFrame) {
+  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {8, 8, 4});
+  Material material;
+  material.youngs_modulus_Pa = 5e4;
+  const Model model = MakeModel(mesh, material, {});
+  TimeStepper stepper(model, FemOptions{}, 1.0 / 60.0, Eigen::VectorXd::Zero(model.num_dofs()));
+  WarpedCompliance warped(model, stepper);
+  const State rest = MakeRestState(model);
+  constexpr double kFloatColumns = 1e-6;
+  int held = 0;
+  for (unsigned frame = 0; frame < 3; ++frame) {
+    // Rows of every frame so far (the nodes held), and six new ones.
+    std::vector<Eigen::Triplet<double>> entries;
+    for (unsigned f = 0; f <= frame; ++f) {
+      const Eigen::SparseMatrix<double> rows = MakeContactRows(model, 6, 20 + f);
+      for (int k = 0; k < rows.outerSize(); ++k)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(rows, k); it; ++it)
+          entries.emplace_back(6 * f + it.row(), it.col(), it.value());
+    }
+    Eigen::SparseMatrix<double> J(6 * (frame + 1), model.num_dofs());
+    J.setFromTriplets(entries.begin(), entries.end());
+    const Eigen::MatrixXd exact = CalcDenseCompliance(&stepper, rest, J);
+    const Eigen::MatrixXd W = warped.Calc(J, stepper.rotations());
+    EXPECT_LT((W - exact).norm(), kFloatColumns * exact.norm()) << "frame " << frame;
+    EXPECT_GT(warped.num_cached_nodes(), held) << "frame " << frame << " met no new node";
+    held = warped.num_cached_nodes();
+  }
+}
+
 // On the bent block of the test above (rotations varying up to 6° across it, bottom fixed) the
 // warping is an approximation: bounded here, and measured on block_press in docs/CONTACT.md.
 TEST(WarpedCompliance, ApproximatesTheComplianceOfABentBlock) {
