@@ -46,7 +46,7 @@ class CholmodFactor {
   // X ≈ A⁻¹ B for several columns with the float copy (SinglePrecisionFactor::SolveColumns).
   // Precondition: KeepCopy(kSingle), and Factorize returned true.
   Eigen::MatrixXd SolveColumnsWithCopy(const Eigen::MatrixXd& B) const;
-  // The same at the given rows only, NaN elsewhere (SinglePrecisionFactor::SolveColumnsAt).
+  // Its rows wanted_rows only (SinglePrecisionFactor::SolveColumnsAt).
   Eigen::MatrixXd SolveColumnsWithCopyAt(const Eigen::MatrixXd& B,
                                          const std::vector<int>& wanted_rows) const;
   // The binary16 copy (empty unless kept and factored).

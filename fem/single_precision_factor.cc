@@ -1,7 +1,6 @@
 #include "fem/single_precision_factor.h"
 
 #include <Eigen/Dense>
-#include <limits>
 #include <stdexcept>
 
 namespace hapsim::fem {
@@ -98,7 +97,10 @@ void SinglePrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) 
 }
 
 Eigen::MatrixXd SinglePrecisionFactor::SolveColumns(const Eigen::MatrixXd& B) const {
-  return SolveColumnsOn(B, nullptr);
+  const RowMajorXf Y = SolvePermutedColumns(B, nullptr);
+  Eigen::MatrixXd X(Y.rows(), Y.cols());
+  for (Eigen::Index k = 0; k < Y.rows(); ++k) X.row(layout_.perm[k]) = Y.row(k).cast<double>();
+  return X;  // X = Pᵀ Y
 }
 
 Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsAt(const Eigen::MatrixXd& B,
@@ -109,12 +111,15 @@ Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsAt(const Eigen::MatrixXd& B,
     for (int sn = l.supernode_of_column[l.permuted_index[row]]; sn != -1 && !needed[sn];
          sn = l.parent[sn])
       needed[sn] = 1;
-  return SolveColumnsOn(B, &needed);
+  const RowMajorXf Y = SolvePermutedColumns(B, &needed);
+  Eigen::MatrixXd X(wanted_rows.size(), Y.cols());
+  for (size_t i = 0; i < wanted_rows.size(); ++i)
+    X.row(i) = Y.row(l.permuted_index[wanted_rows[i]]).cast<double>();
+  return X;
 }
 
-Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsOn(const Eigen::MatrixXd& B,
-                                                      const std::vector<char>* needed) const {
-  using RowMajorXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+SinglePrecisionFactor::RowMajorXf SinglePrecisionFactor::SolvePermutedColumns(
+    const Eigen::MatrixXd& B, const std::vector<char>* needed) const {
   const SupernodalLayout& l = layout_;
   const int n = l.size();
   const Eigen::Index k = B.cols();
@@ -139,11 +144,8 @@ Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsOn(const Eigen::MatrixXd& B,
   // needed entry.
   for (int sn = l.num_supernodes() - 1; sn >= 0; --sn) {
     const int k1 = l.first_column(sn), nscol = l.num_columns(sn);
+    if (needed && !(*needed)[sn]) continue;
     auto Y_cols = Y.middleRows(k1, nscol);
-    if (needed && !(*needed)[sn]) {
-      Y_cols.setConstant(std::numeric_limits<float>::quiet_NaN());
-      continue;
-    }
     const int nsrow = l.num_rows(sn), below = nsrow - nscol;
     const BlockMap block(values_.data() + l.px[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
     if (below > 0) {
@@ -154,9 +156,7 @@ Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsOn(const Eigen::MatrixXd& B,
     }
     block.topRows(nscol).triangularView<Eigen::Lower>().transpose().solveInPlace(Y_cols);
   }
-  Eigen::MatrixXd X(n, k);
-  for (int i = 0; i < n; ++i) X.row(l.perm[i]) = Y.row(i).cast<double>();  // X = Pᵀ Y
-  return X;
+  return Y;
 }
 
 }  // namespace hapsim::fem

@@ -47,8 +47,10 @@ class SinglePrecisionFactor {
   bool empty() const { return layout_.empty(); }
 
  private:
-  // needed: per supernode, whether its backward step runs (null: all).
-  Eigen::MatrixXd SolveColumnsOn(const Eigen::MatrixXd& B, const std::vector<char>* needed) const;
+  using RowMajorXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  // Y = L⁻ᵀ L⁻¹ P B, permuted; needed: per supernode, whether its backward step runs (null: all;
+  // the rows of those skipped are left as the forward sweep left them).
+  RowMajorXf SolvePermutedColumns(const Eigen::MatrixXd& B, const std::vector<char>* needed) const;
 
   SupernodalLayout layout_;
   std::vector<float> values_;

@@ -20,8 +20,8 @@ void WarpedCompliance::SolveForNewNodes(const std::vector<int>& nodes) {
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(model_.num_dofs(), 3 * nodes.size());
   for (size_t k = 0; k < nodes.size(); ++k)
     for (int d = 0; d < 3; ++d) E(3 * nodes[k] + d, 3 * k + d) = 1.0;
-  // Only the rows of the nodes held so far and of the new ones: C₀_ab is read from the column of
-  // whichever of a and b was solved later (CalcNodeBlock), at the rows of the other.
+  // Only the rows of the nodes held so far and of the new ones, in slot order: C₀_ab is read from
+  // the column of whichever of a and b was solved later (CalcNodeBlock), at the rows of the other.
   std::vector<int> wanted_rows;
   wanted_rows.reserve(3 * (node_of_slot_.size() + nodes.size()));
   for (int node : node_of_slot_)
@@ -30,16 +30,17 @@ void WarpedCompliance::SolveForNewNodes(const std::vector<int>& nodes) {
     for (int d = 0; d < 3; ++d) wanted_rows.push_back(3 * node + d);
   const Eigen::MatrixXd X = factor_.SolveColumnsWithCopyAt(E, wanted_rows);
   for (size_t k = 0; k < nodes.size(); ++k) {
-    slot_of_node_[nodes[k]] = static_cast<int>(node_of_slot_.size());
+    const int slot = static_cast<int>(node_of_slot_.size());
+    slot_of_node_[nodes[k]] = slot;
     node_of_slot_.push_back(nodes[k]);
-    columns_.emplace_back(X.middleCols<3>(3 * k));
+    columns_.emplace_back(X.block(0, 3 * k, 3 * (slot + 1), 3));  // rows of slots 0 .. slot
   }
 }
 
 Eigen::Matrix3d WarpedCompliance::CalcNodeBlock(int a, int b) const {
   const int slot_a = slot_of_node_[a], slot_b = slot_of_node_[b];
-  if (slot_b >= slot_a) return columns_[slot_b].middleRows<3>(3 * a);
-  return columns_[slot_a].middleRows<3>(3 * b).transpose();  // C₀_ab = C₀_baᵀ (A₀ symmetric)
+  if (slot_b >= slot_a) return columns_[slot_b].middleRows<3>(3 * slot_a);
+  return columns_[slot_a].middleRows<3>(3 * slot_b).transpose();  // C₀_ab = C₀_baᵀ (A₀ symmetric)
 }
 
 Eigen::Matrix3d WarpedCompliance::CalcNodeRotation(

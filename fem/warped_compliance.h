@@ -44,7 +44,7 @@ class WarpedCompliance {
   Eigen::MatrixXd Calc(const Eigen::SparseMatrix<double>& J_u,
                        const std::vector<Eigen::Matrix3d>& element_rotations);
 
-  // Nodes whose columns of A₀⁻¹ are held (each 3 · num_dofs doubles, exact at the held nodes).
+  // Nodes whose columns of A₀⁻¹ are held (at the rows of the nodes held before them).
   int num_cached_nodes() const { return static_cast<int>(node_of_slot_.size()); }
 
  private:
@@ -59,8 +59,8 @@ class WarpedCompliance {
   std::vector<std::vector<int>> node_tets_;  // incident tets of each node
   std::vector<int> slot_of_node_;            // -1: not solved yet
   std::vector<int> node_of_slot_;
-  // A₀⁻¹ E_n per slot, exact only at the rows of the nodes held when it was solved (slots up to
-  // its own) and NaN at most others (SinglePrecisionFactor::SolveColumnsAt).
+  // Per slot s, A₀⁻¹ E_n (n = node_of_slot_[s]) at the rows of the nodes of slots 0 .. s only:
+  // 3 (s + 1) rows, slot by slot (SinglePrecisionFactor::SolveColumnsAt).
   std::vector<Eigen::Matrix<double, Eigen::Dynamic, 3>> columns_;
 };
 
