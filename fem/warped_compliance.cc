@@ -1,5 +1,6 @@
 #include "fem/warped_compliance.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "fem/polar_decomposition.h"
@@ -29,18 +30,29 @@ void WarpedCompliance::SolveForNewNodes(const std::vector<int>& nodes) {
   for (int node : nodes)
     for (int d = 0; d < 3; ++d) wanted_rows.push_back(3 * node + d);
   const Eigen::MatrixXd X = factor_.SolveColumnsWithCopyAt(E, wanted_rows);
+  ReserveHeld(static_cast<int>(node_of_slot_.size() + nodes.size()));
   for (size_t k = 0; k < nodes.size(); ++k) {
     const int slot = static_cast<int>(node_of_slot_.size());
     slot_of_node_[nodes[k]] = slot;
     node_of_slot_.push_back(nodes[k]);
-    columns_.emplace_back(X.block(0, 3 * k, 3 * (slot + 1), 3));  // rows of slots 0 .. slot
+    // The column at the rows of slots 0 .. slot, and its transpose in the block row.
+    const auto column = X.block(0, 3 * k, 3 * (slot + 1), 3);
+    held_compliance_.block(0, 3 * slot, 3 * (slot + 1), 3) = column;
+    held_compliance_.block(3 * slot, 0, 3, 3 * slot) = column.topRows(3 * slot).transpose();
   }
 }
 
-Eigen::Matrix3d WarpedCompliance::CalcNodeBlock(int a, int b) const {
-  const int slot_a = slot_of_node_[a], slot_b = slot_of_node_[b];
-  if (slot_b >= slot_a) return columns_[slot_b].middleRows<3>(3 * slot_a);
-  return columns_[slot_a].middleRows<3>(3 * slot_b).transpose();  // C₀_ab = C₀_baᵀ (A₀ symmetric)
+void WarpedCompliance::ReserveHeld(int num_nodes) {
+  const int capacity = static_cast<int>(held_compliance_.rows() / 3);
+  if (num_nodes <= capacity) return;
+  // Doubling: a frame meeting new nodes copies the held blocks only when the capacity runs out.
+  int grown = std::max(capacity, 64);
+  while (grown < num_nodes) grown *= 2;
+  grown = std::min(grown, model_.num_nodes());
+  Eigen::MatrixXd bigger(3 * grown, 3 * grown);
+  const int used = 3 * static_cast<int>(node_of_slot_.size());
+  bigger.topLeftCorner(used, used) = held_compliance_.topLeftCorner(used, used);
+  held_compliance_.swap(bigger);
 }
 
 Eigen::Matrix3d WarpedCompliance::CalcNodeRotation(
@@ -59,6 +71,7 @@ Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
   struct Entry {
     int node;
     Eigen::Vector3d g;  // j, then R_nᵀ j: the entries in the node's rotated frame
+    int block = 0;      // 3 · the node's slot: its rows and columns in held_compliance_
   };
   const Eigen::Index rows = J_u.rows();
   const Eigen::SparseMatrix<double> Jt = J_u.transpose();
@@ -77,14 +90,17 @@ Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
     }
   SolveForNewNodes(new_nodes);
   for (auto& row : entries)
-    for (Entry& entry : row)
+    for (Entry& entry : row) {
       entry.g = CalcNodeRotation(entry.node, element_rotations).transpose() * entry.g;
+      entry.block = 3 * slot_of_node_[entry.node];
+    }
   Eigen::MatrixXd W(rows, rows);
   for (Eigen::Index c = 0; c < rows; ++c)
     for (Eigen::Index r = c; r < rows; ++r) {
       double sum = 0.0;
       for (const Entry& b : entries[c])
-        for (const Entry& a : entries[r]) sum += a.g.dot(CalcNodeBlock(a.node, b.node) * b.g);
+        for (const Entry& a : entries[r])
+          sum += a.g.dot(held_compliance_.block<3, 3>(a.block, b.block) * b.g);  // C₀_ab
       W(r, c) = W(c, r) = sum;
     }
   return W;

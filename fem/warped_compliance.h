@@ -11,12 +11,14 @@
 //
 // with j_ra the 3 entries of row r of J_u at node a and E_a the node's 3 columns of the
 // identity. C₀ never changes, so each node's columns A₀⁻¹ E_a are solved once, the first time a
-// contact touches the node, and kept: one multi-column solve over all new nodes of the frame with
-// a float copy of A₀'s factor (SinglePrecisionFactor::SolveColumnsAt), whose forward sweep works
-// only on the new nodes' elimination-tree paths and whose backward sweep only on those of the
-// nodes held so far (C₀ is read only between contact nodes); the columns are then exact to ~2e-7
-// relative. A frame then costs O(rows² · 9) small products instead of a forward solve with the
-// current factor per row (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method).
+// contact touches the node, and kept at the rows of the nodes touched so far (C₀ is read only
+// between contact nodes): one multi-column solve over all new nodes of the frame with a float
+// copy of A₀'s factor (SinglePrecisionFactor::SolveColumnsAt), whose forward sweep works only on
+// the new nodes' elimination-tree paths and whose backward sweep only on those of the nodes held;
+// the columns are then exact to ~2e-7 relative. They fill a dense C₀ between the held nodes
+// (9 H² doubles for H nodes). A frame then costs O(rows² · 9) small products instead of a forward
+// solve with the current factor per row (fem/cholmod_factor.h CalcInverseQuadraticForm, the
+// exact method).
 //
 // Node rotation: the polar rotation of the sum of the incident elements' rotations (their
 // chordal mean). A node with a fixed dof keeps R = I (rotating would mix a fixed direction into
@@ -49,8 +51,8 @@ class WarpedCompliance {
 
  private:
   void SolveForNewNodes(const std::vector<int>& nodes);
-  // C₀_ab = E_aᵀ A₀⁻¹ E_b of two held nodes.
-  Eigen::Matrix3d CalcNodeBlock(int a, int b) const;
+  // Makes room in held_compliance_ for num_nodes held nodes.
+  void ReserveHeld(int num_nodes);
   Eigen::Matrix3d CalcNodeRotation(int node,
                                    const std::vector<Eigen::Matrix3d>& element_rotations) const;
 
@@ -59,9 +61,11 @@ class WarpedCompliance {
   std::vector<std::vector<int>> node_tets_;  // incident tets of each node
   std::vector<int> slot_of_node_;            // -1: not solved yet
   std::vector<int> node_of_slot_;
-  // Per slot s, A₀⁻¹ E_n (n = node_of_slot_[s]) at the rows of the nodes of slots 0 .. s only:
-  // 3 (s + 1) rows, slot by slot (SinglePrecisionFactor::SolveColumnsAt).
-  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 3>> columns_;
+  // C₀ between the held nodes, slot by slot: block (s, t) = C₀_ab of the nodes of slots s and t,
+  // taken from the column of the later of the two (SinglePrecisionFactor::SolveColumnsAt solves a
+  // new node's column at the rows of the nodes held by then). Its size is a capacity: only the
+  // first 3 · num_cached_nodes() rows and columns are set.
+  Eigen::MatrixXd held_compliance_;
 };
 
 }  // namespace hapsim::fem
