@@ -77,7 +77,7 @@ void HalfPrecisionFactor::Assign(const cholmod_factor& L) {
   std::frexp(largest, &exponent);
   scale_ = largest > 0.0 ? std::ldexp(1.0, 14 - exponent) : 1.0;
   values_.resize(L.xsize);
-  for (size_t k = 0; k < L.xsize; ++k) values_[k] = FloatToHalf(static_cast<float>(scale_ * x[k]));
+  ConvertToHalf(x, scale_, static_cast<long>(L.xsize), values_.data());
   const int n = layout_.size();
   inverse_diagonal_.resize(n);
   for (int sn = 0; sn < layout_.num_supernodes(); ++sn)
@@ -86,6 +86,15 @@ void HalfPrecisionFactor::Assign(const cholmod_factor& L) {
           1.0 / (scale_ * x[layout_.px[sn] + static_cast<long>(c) * layout_.num_rows(sn) + c]));
   y_.resize(n);
   scratch_.resize(std::max(layout_.max_rows, 1));
+}
+
+void HalfPrecisionFactor::ConvertToHalf(const double* x, double scale, long n, std::uint16_t* out,
+                                        Kernels kernels) {
+#if defined(__x86_64__)
+  if (kernels == Kernels::kFastest && CpuHasVectorKernels())
+    return half_sweeps::ConvertToHalfWithAvx2(x, scale, n, out);
+#endif
+  for (long k = 0; k < n; ++k) out[k] = FloatToHalf(static_cast<float>(scale * x[k]));
 }
 
 void HalfPrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x,

@@ -41,6 +41,11 @@ class HalfPrecisionFactor {
   enum class Kernels { kFastest, kPortable };
   static bool CpuHasVectorKernels();
 
+  // out[k] = float(scale · x[k]) rounded to binary16 (to nearest, ties to even), as Assign stores
+  // L: eight entries an instruction with F16C (a refactorisation at 28.8k tets converts 4.1 M).
+  static void ConvertToHalf(const double* x, double scale, long n, std::uint16_t* out,
+                            Kernels kernels = Kernels::kFastest);
+
   // x = Pᵀ L⁻ᵀ L⁻¹ P b, the sums in single precision (b and x in double). Allocates nothing
   // once sized.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x,

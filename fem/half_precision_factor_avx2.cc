@@ -67,6 +67,19 @@ void SolveWithAvx2(const SweepArgs& args) {
   BackwardSweep<Avx2Kernels>(args);
 }
 
+void ConvertToHalfWithAvx2(const double* x, double scale, long n, std::uint16_t* out) {
+  const __m256d scale4 = _mm256_set1_pd(scale);
+  long k = 0;
+  for (; k + 8 <= n; k += 8) {
+    const __m128 low = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_loadu_pd(x + k), scale4));
+    const __m128 high = _mm256_cvtpd_ps(_mm256_mul_pd(_mm256_loadu_pd(x + k + 4), scale4));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + k),
+                     _mm256_cvtps_ph(_mm256_set_m128(high, low), _MM_FROUND_TO_NEAREST_INT));
+  }
+  for (; k < n; ++k)
+    out[k] = _cvtss_sh(static_cast<float>(scale * x[k]), _MM_FROUND_TO_NEAREST_INT);
+}
+
 }  // namespace hapsim::fem::half_sweeps
 
 #endif  // defined(__x86_64__)

@@ -184,4 +184,6 @@ namespace hapsim::fem::half_sweeps {
 // Both sweeps with the AVX2 + F16C kernels (half_precision_factor_avx2.cc; x86-64 only, and only
 // on a CPU with both).
 void SolveWithAvx2(const SweepArgs& args);
+// out[k] = binary16 of float(scale · x[k]), each rounding to nearest (ties to even), with F16C.
+void ConvertToHalfWithAvx2(const double* x, double scale, long n, std::uint16_t* out);
 }  // namespace hapsim::fem::half_sweeps

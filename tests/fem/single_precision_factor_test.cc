@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <stdexcept>
 #include <thread>
 
@@ -198,6 +199,38 @@ TEST(HalfPrecisionFactor, VectorKernelsEqualPortableOnesBitForBit) {
     copy.Solve(b, &x_portable, HalfPrecisionFactor::Kernels::kPortable);
     EXPECT_EQ(x_vector, x_portable) << "trial " << trial;
   }
+}
+
+// Assign's conversion to binary16, against IEEE values worked by hand (ties go to the even
+// neighbour, the smallest subnormal, the largest finite), and the F16C path against the portable
+// one bit for bit over many magnitudes, with a tail that is not a multiple of eight.
+TEST(HalfPrecisionFactor, ConvertsToHalfByRoundingToNearestEven) {
+  const std::vector<std::pair<double, std::uint16_t>> known = {
+      {1.0, 0x3c00},                         // 1
+      {1.0 + std::ldexp(1.0, -11), 0x3c00},  // halfway between 1 and 1 + 2⁻¹⁰: to the even 1
+      {1.0 + 3 * std::ldexp(1.0, -11), 0x3c02},  // halfway, to the even 1 + 2⁻⁹
+      {-2.5, 0xc100},
+      {std::ldexp(1.0, -24), 0x0001},  // the smallest subnormal
+      {65504.0, 0x7bff}};              // the largest finite
+  for (const auto kernels :
+       {HalfPrecisionFactor::Kernels::kPortable, HalfPrecisionFactor::Kernels::kFastest})
+    for (const auto& [value, bits] : known) {
+      std::uint16_t out = 0;
+      HalfPrecisionFactor::ConvertToHalf(&value, 1.0, 1, &out, kernels);
+      EXPECT_EQ(out, bits) << value;
+    }
+  if (!HalfPrecisionFactor::CpuHasVectorKernels()) GTEST_SKIP() << "this CPU lacks AVX2 or F16C";
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-30, 14);
+  std::vector<double> x(1003);
+  for (double& value : x) value = std::ldexp(mantissa(rng), exponent(rng));
+  std::vector<std::uint16_t> vector(x.size()), portable(x.size());
+  HalfPrecisionFactor::ConvertToHalf(x.data(), 0.5, static_cast<long>(x.size()), vector.data(),
+                                     HalfPrecisionFactor::Kernels::kFastest);
+  HalfPrecisionFactor::ConvertToHalf(x.data(), 0.5, static_cast<long>(x.size()), portable.data(),
+                                     HalfPrecisionFactor::Kernels::kPortable);
+  EXPECT_EQ(vector, portable);
 }
 
 TEST(HalfPrecisionFactor, SolveAllocatesNothingOnceSized) {
