@@ -49,8 +49,9 @@ class CholmodFactor {
   // Its rows wanted_rows only (SinglePrecisionFactor::SolveColumnsAt).
   Eigen::MatrixXd SolveColumnsWithCopyAt(const Eigen::MatrixXd& B,
                                          const std::vector<int>& wanted_rows) const;
-  // The binary16 copy (empty unless kept and factored).
+  // The binary16 and float copies (empty unless kept and factored).
   const HalfPrecisionFactor& half_precision_copy() const { return half_; }
+  const SinglePrecisionFactor& single_precision_copy() const { return single_; }
 
   // X = A⁻¹ B for a dense B of several columns, in one supernodal solve (BLAS-3 across the
   // columns). Precondition: Factorize returned true.

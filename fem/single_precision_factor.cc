@@ -1,7 +1,10 @@
 #include "fem/single_precision_factor.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <stdexcept>
+
+#include "fem/float_column_sweeps.h"
 
 namespace hapsim::fem {
 namespace {
@@ -40,6 +43,29 @@ void SolveSmallBackward(const float* L, int nsrow, int nscol, const int* rows_be
     y_cols[c] = sum / column[c];
   }
 }
+
+// The kernels of fem/float_column_sweeps.h in plain loops, in the order the AVX2 ones use.
+struct PortableKernels {
+  static void SubtractProduct(const float* L, long lda, int rows, int cols, const float* X,
+                              float* out, int width) {
+    for (int i = 0; i < rows; ++i)
+      for (int c = 0; c < cols; ++c)
+        for (int j = 0; j < width; ++j)
+          out[static_cast<long>(i) * width + j] =
+              out[static_cast<long>(i) * width + j] -
+              L[c * lda + i] * X[static_cast<long>(c) * width + j];
+  }
+
+  static void SubtractTransposedProduct(const float* L, long lda, int rows, int cols,
+                                        const float* known, float* Z, int width) {
+    for (int c = 0; c < cols; ++c)
+      for (int i = 0; i < rows; ++i)
+        for (int j = 0; j < width; ++j)
+          Z[static_cast<long>(c) * width + j] =
+              Z[static_cast<long>(c) * width + j] -
+              L[c * lda + i] * known[static_cast<long>(i) * width + j];
+  }
+};
 
 }  // namespace
 
@@ -96,66 +122,67 @@ void SinglePrecisionFactor::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) 
   for (int k = 0; k < n; ++k) (*x)[l.perm[k]] = y_[k];  // x = Pᵀ y
 }
 
-Eigen::MatrixXd SinglePrecisionFactor::SolveColumns(const Eigen::MatrixXd& B) const {
-  const RowMajorXf Y = SolvePermutedColumns(B, nullptr);
-  Eigen::MatrixXd X(Y.rows(), Y.cols());
-  for (Eigen::Index k = 0; k < Y.rows(); ++k) X.row(layout_.perm[k]) = Y.row(k).cast<double>();
-  return X;  // X = Pᵀ Y
+bool SinglePrecisionFactor::CpuHasVectorKernels() {
+#if defined(__x86_64__)
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+#else
+  return false;
+#endif
+}
+
+Eigen::MatrixXd SinglePrecisionFactor::SolveColumns(const Eigen::MatrixXd& B,
+                                                    Kernels kernels) const {
+  int width = 0;
+  const std::vector<float> Y = SolvePermutedColumns(B, nullptr, kernels, &width);
+  Eigen::MatrixXd X(B.rows(), B.cols());
+  for (int k = 0; k < layout_.size(); ++k)  // X = Pᵀ Y
+    for (Eigen::Index j = 0; j < B.cols(); ++j)
+      X(layout_.perm[k], j) = Y[static_cast<size_t>(k) * width + j];
+  return X;
 }
 
 Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsAt(const Eigen::MatrixXd& B,
-                                                      const std::vector<int>& wanted_rows) const {
+                                                      const std::vector<int>& wanted_rows,
+                                                      Kernels kernels) const {
   const SupernodalLayout& l = layout_;
   std::vector<char> needed(l.num_supernodes(), 0);
   for (int row : wanted_rows)
     for (int sn = l.supernode_of_column[l.permuted_index[row]]; sn != -1 && !needed[sn];
          sn = l.parent[sn])
       needed[sn] = 1;
-  const RowMajorXf Y = SolvePermutedColumns(B, &needed);
-  Eigen::MatrixXd X(wanted_rows.size(), Y.cols());
+  int width = 0;
+  const std::vector<float> Y = SolvePermutedColumns(B, &needed, kernels, &width);
+  Eigen::MatrixXd X(wanted_rows.size(), B.cols());
   for (size_t i = 0; i < wanted_rows.size(); ++i)
-    X.row(i) = Y.row(l.permuted_index[wanted_rows[i]]).cast<double>();
+    for (Eigen::Index j = 0; j < B.cols(); ++j)
+      X(i, j) = Y[static_cast<size_t>(l.permuted_index[wanted_rows[i]]) * width + j];
   return X;
 }
 
-SinglePrecisionFactor::RowMajorXf SinglePrecisionFactor::SolvePermutedColumns(
-    const Eigen::MatrixXd& B, const std::vector<char>* needed) const {
+std::vector<float> SinglePrecisionFactor::SolvePermutedColumns(const Eigen::MatrixXd& B,
+                                                               const std::vector<char>* needed,
+                                                               Kernels kernels, int* width) const {
   const SupernodalLayout& l = layout_;
   const int n = l.size();
-  const Eigen::Index k = B.cols();
-  // Row-major: a row of L's update is one contiguous row of Y, gathered and scattered whole.
-  RowMajorXf Y(n, k), rows_below(l.max_rows_below, k);
-  for (int i = 0; i < n; ++i) Y.row(i) = B.row(l.perm[i]).cast<float>();  // Y = P B
-  for (int sn = 0; sn < l.num_supernodes(); ++sn) {
-    const int k1 = l.first_column(sn), nscol = l.num_columns(sn);
-    const int nsrow = l.num_rows(sn), below = nsrow - nscol;
-    auto Y_cols = Y.middleRows(k1, nscol);
-    if (Y_cols.isZero(0.0)) continue;  // L⁻¹ keeps zero what no earlier column reached
-    const BlockMap block(values_.data() + l.px[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
-    block.topRows(nscol).triangularView<Eigen::Lower>().solveInPlace(Y_cols);
-    if (below == 0) continue;
-    auto update = rows_below.topRows(below);
-    update.noalias() = block.bottomRows(below) * Y_cols;
-    const int* rows = l.rows_below(sn);
-    for (int i = 0; i < below; ++i) Y.row(rows[i]) -= update.row(i);
+  *width = static_cast<int>((B.cols() + 7) / 8 * 8);
+  std::vector<float> Y(static_cast<size_t>(n) * *width, 0.0f);  // Y = P B, rows padded with zeros
+  for (int k = 0; k < n; ++k)
+    for (Eigen::Index j = 0; j < B.cols(); ++j)
+      Y[static_cast<size_t>(k) * *width + j] = static_cast<float>(B(l.perm[k], j));
+  std::vector<float> scratch(static_cast<size_t>(std::max(l.max_rows_below, 1)) * *width);
+  const float_columns::SweepArgs args{l.num_supernodes(), l.super.data(),
+                                      l.pi.data(),        l.px.data(),
+                                      l.s.data(),         values_.data(),
+                                      Y.data(),           *width,
+                                      scratch.data(),     needed ? needed->data() : nullptr};
+#if defined(__x86_64__)
+  if (kernels == Kernels::kFastest && CpuHasVectorKernels()) {
+    float_columns::SolveColumnsWithAvx2(args);
+    return Y;
   }
-  // A backward step reads only the rows below the supernode's diagonal block, which lie in its
-  // ancestors: a needed supernode's ancestors are needed too, so skipping the others changes no
-  // needed entry.
-  for (int sn = l.num_supernodes() - 1; sn >= 0; --sn) {
-    const int k1 = l.first_column(sn), nscol = l.num_columns(sn);
-    if (needed && !(*needed)[sn]) continue;
-    auto Y_cols = Y.middleRows(k1, nscol);
-    const int nsrow = l.num_rows(sn), below = nsrow - nscol;
-    const BlockMap block(values_.data() + l.px[sn], nsrow, nscol, Eigen::OuterStride<>(nsrow));
-    if (below > 0) {
-      auto known = rows_below.topRows(below);
-      const int* rows = l.rows_below(sn);
-      for (int i = 0; i < below; ++i) known.row(i) = Y.row(rows[i]);
-      Y_cols.noalias() -= block.bottomRows(below).transpose() * known;
-    }
-    block.topRows(nscol).triangularView<Eigen::Lower>().transpose().solveInPlace(Y_cols);
-  }
+#endif
+  float_columns::SolveColumns<PortableKernels>(args);
   return Y;
 }
 

@@ -30,27 +30,33 @@ class SinglePrecisionFactor {
   // x = Pᵀ L⁻ᵀ L⁻¹ P b, in single precision (b and x in double). Allocates nothing once sized.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) const;
 
-  // X = Pᵀ L⁻ᵀ L⁻¹ P B for several columns at once, each entry of L read once for all of them.
-  // The forward sweep skips the supernodes where every column is still zero: for a B with a few
-  // nonzero rows (a node's columns of the identity) only those on the elimination tree's paths
-  // from them to the root do any work. Allocates (for the visual frame, not the haptic step).
-  Eigen::MatrixXd SolveColumns(const Eigen::MatrixXd& B) const;
-  // The same, but X only at the given rows (original indices): the backward sweep works only on
-  // the supernodes that hold them and on their ancestors in the elimination tree, which is all a
-  // backward step reads. X at those supernodes' rows is SolveColumns' bit for bit; every other
-  // entry is NaN. For the warped compliance, which reads A₀⁻¹ only at contact nodes: on the
-  // 28.8k-tet block the top face's nodes and their ancestors hold a fraction of L
-  // (BM_SolveColumns).
-  Eigen::MatrixXd SolveColumnsAt(const Eigen::MatrixXd& B,
-                                 const std::vector<int>& wanted_rows) const;
+  // kFastest: the AVX2 kernels of SolveColumns where the CPU has them, else the portable ones
+  // (the same bits either way; tests compare them).
+  enum class Kernels { kFastest, kPortable };
+  static bool CpuHasVectorKernels();
+
+  // X = Pᵀ L⁻ᵀ L⁻¹ P B for several columns at once, each entry of L read once for all of them
+  // (fem/float_column_sweeps.h). The forward sweep skips the supernodes where every column is
+  // still zero: for a B with a few nonzero rows (a node's columns of the identity) only those on
+  // the elimination tree's paths from them to the root do any work. Allocates (for the visual
+  // frame, not the haptic step).
+  Eigen::MatrixXd SolveColumns(const Eigen::MatrixXd& B, Kernels kernels = Kernels::kFastest) const;
+  // The rows wanted_rows (original indices, in that order) of the same X, bit for bit: the
+  // backward sweep works only on the supernodes that hold them and on their ancestors in the
+  // elimination tree, which is all a backward step reads. For the warped compliance, which reads
+  // A₀⁻¹ only at contact nodes: with the ~450 top nodes block_press_large touches, about two
+  // thirds of the time of all rows at 28.8k tets (BM_SolveColumns).
+  Eigen::MatrixXd SolveColumnsAt(const Eigen::MatrixXd& B, const std::vector<int>& wanted_rows,
+                                 Kernels kernels = Kernels::kFastest) const;
 
   bool empty() const { return layout_.empty(); }
 
  private:
-  using RowMajorXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  // Y = L⁻ᵀ L⁻¹ P B, permuted; needed: per supernode, whether its backward step runs (null: all;
-  // the rows of those skipped are left as the forward sweep left them).
-  RowMajorXf SolvePermutedColumns(const Eigen::MatrixXd& B, const std::vector<char>* needed) const;
+  // Y = L⁻ᵀ L⁻¹ P B row by row, *width floats a row (B's columns padded to a multiple of 8);
+  // needed: per supernode, whether its backward step runs (null: all; the rows of those skipped
+  // are left as the forward sweep left them).
+  std::vector<float> SolvePermutedColumns(const Eigen::MatrixXd& B, const std::vector<char>* needed,
+                                          Kernels kernels, int* width) const;
 
   SupernodalLayout layout_;
   std::vector<float> values_;

@@ -130,6 +130,28 @@ TEST(SinglePrecisionFactor, SolvesColumnsAtWantedRowsOnly) {
     EXPECT_EQ(X.row(i), X_all.row(wanted_rows[i])) << "row " << wanted_rows[i];
 }
 
+// The multi-column sweeps' AVX2 kernels and the portable ones subtract in the same order without
+// fused multiply-adds: the same bits, for 6 columns (padded to 8) and for 40 (chunks of 24 and 16).
+TEST(SinglePrecisionFactor, ColumnKernelsEqualPortableOnesBitForBit) {
+  if (!SinglePrecisionFactor::CpuHasVectorKernels()) GTEST_SKIP() << "this CPU lacks AVX2";
+  const Eigen::SparseMatrix<double> A = MakeSystemMatrix();
+  CholmodFactor factor;
+  factor.KeepCopy(FactorPrecision::kSingle);
+  ASSERT_TRUE(factor.Factorize(A));
+  const SinglePrecisionFactor& copy = factor.single_precision_copy();
+  srand(13);
+  const std::vector<int> wanted_rows = {0, 7, static_cast<int>(A.rows()) - 1};
+  for (const int columns : {6, 40}) {
+    const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), columns);
+    EXPECT_EQ(copy.SolveColumns(B, SinglePrecisionFactor::Kernels::kFastest),
+              copy.SolveColumns(B, SinglePrecisionFactor::Kernels::kPortable))
+        << columns << " columns";
+    EXPECT_EQ(copy.SolveColumnsAt(B, wanted_rows, SinglePrecisionFactor::Kernels::kFastest),
+              copy.SolveColumnsAt(B, wanted_rows, SinglePrecisionFactor::Kernels::kPortable))
+        << columns << " columns";
+  }
+}
+
 // The worst relative error of factor.SolveWithCopy over five random right-hand sides, against a
 // dense LDLᵀ solve of A.
 double WorstCopyError(const Eigen::SparseMatrix<double>& A, const CholmodFactor& factor) {
