@@ -4,12 +4,13 @@
 // memory traffic of the float copy (fem/single_precision_factor.h).
 //
 // Why. Each CG iteration with a lagged factor is one forward and one backward solve with L, and
-// on the 28.8k-tet block they stream L (4.1 M nonzeros) from memory: 16 MB in float, against a
-// 32 MB L3 shared with everything else. With a stale factor a visual frame of block_press_large
-// makes ~9 of them, more than half its time (issue 13). In binary16 L is 8 MB. The entries keep
-// 11 significant bits (relative rounding 2⁻¹¹ ≈ 4.9e-4): a preconditioner need only be near A⁻¹,
-// and a factor several frames old is further from it than that. CG, its residual and its
-// stopping test stay in double, so answers are as accurate as before.
+// on the 28.8k-tet block they stream L (4.1 M nonzeros): 16 MB in float, against the 32 MB L3,
+// shared with everything else, of the AMD VM this was first measured on. With a stale factor a
+// visual frame of block_press_large makes ~9 of them, more than half its time (issue 13). In
+// binary16 L is 8 MB. The entries keep 11 significant bits (relative rounding 2⁻¹¹ ≈ 4.9e-4): a
+// preconditioner need only be near A⁻¹, and a factor several frames old is further from it than
+// that. CG, its residual and its stopping test stay in double, so answers are as accurate as
+// before.
 //
 // Range. binary16 holds 6.1e-5 … 65504 (subnormals down to 6e-8). L is stored scaled by a power
 // of two s that puts its largest entry between 2¹³ and 2¹⁴, so the solve loses only entries below
