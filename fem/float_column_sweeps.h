@@ -3,7 +3,8 @@
 // (fem/single_precision_factor.h) for several right-hand sides at once, written once over raw
 // pointers and instantiated twice: with portable kernels (single_precision_factor.cc) and with AVX2
 // intrinsics in a file of their own, built for that instruction set (float_column_sweeps_avx2.cc).
-// As with the binary16 sweeps (fem/half_precision_sweeps.h), everything here has internal linkage.
+// As with the binary16 sweeps (fem/half_precision_sweeps.h), every function here has internal
+// linkage (static), so no copy compiled for AVX2 can stand in for another file's portable one.
 //
 // Why not Eigen's products, as before: the portable build gives Eigen SSE only (4 floats), and
 // its matrix products pack both operands for every supernode; a new contact node's columns are a

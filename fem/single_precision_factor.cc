@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 
 #include "fem/float_column_sweeps.h"
 
@@ -146,6 +147,13 @@ Eigen::MatrixXd SinglePrecisionFactor::SolveColumnsAt(const Eigen::MatrixXd& B,
                                                       const std::vector<int>& wanted_rows,
                                                       Kernels kernels) const {
   const SupernodalLayout& l = layout_;
+  if (B.rows() != l.size())
+    throw std::invalid_argument("SolveColumnsAt: B has " + std::to_string(B.rows()) +
+                                " rows, the factor " + std::to_string(l.size()));
+  for (int row : wanted_rows)
+    if (row < 0 || row >= l.size())
+      throw std::invalid_argument("SolveColumnsAt: wanted row " + std::to_string(row) +
+                                  " is outside 0.." + std::to_string(l.size() - 1));
   std::vector<char> needed(l.num_supernodes(), 0);
   for (int row : wanted_rows)
     for (int sn = l.supernode_of_column[l.permuted_index[row]]; sn != -1 && !needed[sn];

@@ -35,8 +35,8 @@ class SinglePrecisionFactor {
   enum class Kernels { kFastest, kPortable };
   static bool CpuHasVectorKernels();
 
-  // X = Pᵀ L⁻ᵀ L⁻¹ P B for several columns at once, each entry of L read once for all of them
-  // (fem/float_column_sweeps.h). The forward sweep skips the supernodes where every column is
+  // X = Pᵀ L⁻ᵀ L⁻¹ P B for several columns at once, each entry of L read once for up to 24 of
+  // them (fem/float_column_sweeps.h). The forward sweep skips the supernodes where every column is
   // still zero: for a B with a few nonzero rows (a node's columns of the identity) only those on
   // the elimination tree's paths from them to the root do any work. Allocates (for the visual
   // frame, not the haptic step).
@@ -45,7 +45,8 @@ class SinglePrecisionFactor {
   // backward sweep works only on the supernodes that hold them and on their ancestors in the
   // elimination tree, which is all a backward step reads. For the warped compliance, which reads
   // A₀⁻¹ only at contact nodes: with the ~450 top nodes block_press_large touches, about two
-  // thirds of the time of all rows at 28.8k tets (BM_SolveColumns).
+  // thirds of the time of all rows at 28.8k tets (BM_SolveColumns). Throws
+  // std::invalid_argument if B's rows or a wanted row do not fit the factor.
   Eigen::MatrixXd SolveColumnsAt(const Eigen::MatrixXd& B, const std::vector<int>& wanted_rows,
                                  Kernels kernels = Kernels::kFastest) const;
 

@@ -21,8 +21,8 @@ void WarpedCompliance::SolveForNewNodes(const std::vector<int>& nodes) {
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(model_.num_dofs(), 3 * nodes.size());
   for (size_t k = 0; k < nodes.size(); ++k)
     for (int d = 0; d < 3; ++d) E(3 * nodes[k] + d, 3 * k + d) = 1.0;
-  // Only the rows of the nodes held so far and of the new ones, in slot order: C₀_ab is read from
-  // the column of whichever of a and b was solved later (CalcNodeBlock), at the rows of the other.
+  // Only the rows of the nodes held so far and of the new ones, in slot order: C₀_ab is taken from
+  // the column of whichever of a and b was solved later, at the rows of the other.
   std::vector<int> wanted_rows;
   wanted_rows.reserve(3 * (node_of_slot_.size() + nodes.size()));
   for (int node : node_of_slot_)
@@ -88,7 +88,12 @@ Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
         new_nodes.push_back(node);
       }
     }
-  SolveForNewNodes(new_nodes);
+  try {
+    SolveForNewNodes(new_nodes);
+  } catch (...) {
+    for (int node : new_nodes) slot_of_node_[node] = -1;  // not held: solved again next time
+    throw;
+  }
   for (auto& row : entries)
     for (Entry& entry : row) {
       entry.g = CalcNodeRotation(entry.node, element_rotations).transpose() * entry.g;

@@ -140,7 +140,8 @@ TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
 
 // Nodes met in a later frame: their columns of A₀⁻¹ are solved only at the rows of the nodes held
 // by then (SinglePrecisionFactor::SolveColumnsAt), so W must read each pair from the later of the
-// two columns. At rest the warped compliance is exact (to the float columns), frame after frame.
+// two columns. At rest the warped compliance is exact (to the float columns), frame after frame,
+// and stays so as the held blocks outgrow their first capacity (64 nodes) and are copied.
 TEST(WarpedCompliance, ExactWhenContactsMeetNewNodesFrameByFrame) {
   const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {8, 8, 4});
   Material material;
@@ -152,15 +153,16 @@ TEST(WarpedCompliance, ExactWhenContactsMeetNewNodesFrameByFrame) {
   constexpr double kFloatColumns = 1e-6;
   int held = 0;
   for (unsigned frame = 0; frame < 3; ++frame) {
-    // Rows of every frame so far (the nodes held), and six new ones.
+    // Rows of every frame so far (the nodes held), and 30 new ones.
+    constexpr int kRowsPerFrame = 30;
     std::vector<Eigen::Triplet<double>> entries;
     for (unsigned f = 0; f <= frame; ++f) {
-      const Eigen::SparseMatrix<double> rows = MakeContactRows(model, 6, 20 + f);
+      const Eigen::SparseMatrix<double> rows = MakeContactRows(model, kRowsPerFrame, 20 + f);
       for (int k = 0; k < rows.outerSize(); ++k)
         for (Eigen::SparseMatrix<double>::InnerIterator it(rows, k); it; ++it)
-          entries.emplace_back(6 * f + it.row(), it.col(), it.value());
+          entries.emplace_back(kRowsPerFrame * f + it.row(), it.col(), it.value());
     }
-    Eigen::SparseMatrix<double> J(6 * (frame + 1), model.num_dofs());
+    Eigen::SparseMatrix<double> J(kRowsPerFrame * (frame + 1), model.num_dofs());
     J.setFromTriplets(entries.begin(), entries.end());
     const Eigen::MatrixXd exact = CalcDenseCompliance(&stepper, rest, J);
     const Eigen::MatrixXd W = warped.Calc(J, stepper.rotations());
@@ -168,6 +170,7 @@ TEST(WarpedCompliance, ExactWhenContactsMeetNewNodesFrameByFrame) {
     EXPECT_GT(warped.num_cached_nodes(), held) << "frame " << frame << " met no new node";
     held = warped.num_cached_nodes();
   }
+  EXPECT_GT(held, 128) << "the held blocks never grew twice";
 }
 
 // On the bent block of the test above (rotations varying up to 6° across it, bottom fixed) the
