@@ -38,20 +38,17 @@ constexpr int kBlockColumns = 4;
 //     lanes 0..7 added in order, then the rest in order.
 // No fused multiply-add, so every CPU rounds alike.
 
-// K::SubtractColumns<m> or K::DotColumns<m> for a run-time m in 1 .. kBlockColumns.
-template <class K, int m = kBlockColumns>
-static inline void SubtractColumns(int count, const std::uint16_t* a, long lda, const float* c,
-                                   float* z, int n) {
+// f(Columns<m>()) for a run-time count m in 1 .. kBlockColumns: the kernels and the block
+// triangles take m at compile time, so that their loops over a block's columns unroll.
+template <int m>
+struct Columns {
+  static constexpr int value = m;
+};
+template <int m = kBlockColumns, class F>
+static inline void WithBlockColumns(int count, F&& f) {
   if constexpr (m > 1)
-    if (count < m) return SubtractColumns<K, m - 1>(count, a, lda, c, z, n);
-  K::template SubtractColumns<m>(a, lda, c, z, n);
-}
-template <class K, int m = kBlockColumns>
-static inline void DotColumns(int count, const std::uint16_t* a, long lda, const float* x, int n,
-                              float* dots) {
-  if constexpr (m > 1)
-    if (count < m) return DotColumns<K, m - 1>(count, a, lda, x, n, dots);
-  K::template DotColumns<m>(a, lda, x, n, dots);
+    if (count < m) return WithBlockColumns<m - 1>(count, f);
+  f(Columns<m>());
 }
 
 // Supernode sn's rows gathered into z: its columns' y (z[0 .. nscol)) then the rows below. Column
@@ -97,23 +94,6 @@ static inline void SolveBlockBackward(const std::uint16_t* diagonal_block, long 
   }
   for (int k = 0; k < m; ++k) z[k] = t[k];
 }
-template <class K, int m = kBlockColumns>
-static inline void SolveBlockForward(int count, const std::uint16_t* diagonal_block, long lda,
-                                     const float* inverse_diagonal, float* z) {
-  if constexpr (m > 1)
-    if (count < m)
-      return SolveBlockForward<K, m - 1>(count, diagonal_block, lda, inverse_diagonal, z);
-  SolveBlockForward<K, m>(diagonal_block, lda, inverse_diagonal, z);
-}
-template <class K, int m = kBlockColumns>
-static inline void SolveBlockBackward(int count, const std::uint16_t* diagonal_block, long lda,
-                                      const float* inverse_diagonal, const float* dots, float* z) {
-  if constexpr (m > 1)
-    if (count < m)
-      return SolveBlockBackward<K, m - 1>(count, diagonal_block, lda, inverse_diagonal, dots, z);
-  SolveBlockBackward<K, m>(diagonal_block, lda, inverse_diagonal, dots, z);
-}
-
 // y ← (sL)⁻¹ y, supernode by supernode. Within one, a block of columns at a time: its own
 // triangle, then every row below the block at once. Each z[r] still receives the columns c < r in
 // order, as a column-at-a-time sweep would. The rows below the diagonal block are added back into
@@ -128,10 +108,13 @@ static inline void ForwardSweep(const SweepArgs& a) {
     for (int c0 = 0; c0 < n.num_columns; c0 += kBlockColumns) {
       const int end = c0 + kBlockColumns < n.num_columns ? c0 + kBlockColumns : n.num_columns;
       const std::uint16_t* block_columns = n.block + static_cast<long>(c0) * n.num_rows;
-      SolveBlockForward<K>(end - c0, block_columns + c0, n.num_rows,
-                           a.inverse_diagonal + n.first_column + c0, z + c0);
-      SubtractColumns<K>(end - c0, block_columns + end, n.num_rows, z + c0, z + end,
-                         n.num_rows - end);
+      WithBlockColumns(end - c0, [&](auto columns) {
+        constexpr int m = decltype(columns)::value;
+        SolveBlockForward<K, m>(block_columns + c0, n.num_rows,
+                                a.inverse_diagonal + n.first_column + c0, z + c0);
+        K::template SubtractColumns<m>(block_columns + end, n.num_rows, z + c0, z + end,
+                                       n.num_rows - end);
+      });
     }
     for (int r = 0; r < n.num_columns; ++r) a.y[n.first_column + r] = z[r];
     for (int r = n.num_columns; r < n.num_rows; ++r) a.y[n.rows_below[r - n.num_columns]] += z[r];
@@ -152,9 +135,12 @@ static inline void BackwardSweep(const SweepArgs& a) {
     for (int c0 = last_block; c0 >= 0; c0 -= kBlockColumns) {
       const int end = c0 + kBlockColumns < n.num_columns ? c0 + kBlockColumns : n.num_columns;
       const std::uint16_t* block_columns = n.block + static_cast<long>(c0) * n.num_rows;
-      DotColumns<K>(end - c0, block_columns + end, n.num_rows, z + end, n.num_rows - end, dots);
-      SolveBlockBackward<K>(end - c0, block_columns + c0, n.num_rows,
-                            a.inverse_diagonal + n.first_column + c0, dots, z + c0);
+      WithBlockColumns(end - c0, [&](auto columns) {
+        constexpr int m = decltype(columns)::value;
+        K::template DotColumns<m>(block_columns + end, n.num_rows, z + end, n.num_rows - end, dots);
+        SolveBlockBackward<K, m>(block_columns + c0, n.num_rows,
+                                 a.inverse_diagonal + n.first_column + c0, dots, z + c0);
+      });
     }
     for (int r = 0; r < n.num_columns; ++r) a.y[n.first_column + r] = z[r];
   }
