@@ -297,7 +297,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   device::ModelMailbox mailbox;
-  if (mode == device::HapticMode::kLcp)
+  if (device::UsesContactRows(mode))
     for (device::ContactModelUpdate& slot : mailbox.slots_for_setup())
       device::EnsureLcpSolver(loop_options, &slot);
   messages::MessageGate gate("hapsim haptic", run_id);
@@ -441,8 +441,9 @@ void AddHapticCommand(CLI::App* app) {
       ->required();
   haptic->add_option("--lcm-url", options->lcm_url, "LCM provider URL")->capture_default_str();
   haptic->add_option("--mode", options->mode,
-                     "linear, lcp, coupling, penalty, material, impact or godobject (default: the\n"
-                     "scene's haptic.mode); the visual process must run the same mode");
+                     "hybrid, linear, lcp, coupling, penalty, material, impact or godobject\n"
+                     "(default: the scene's haptic.mode, else hybrid); the visual process must\n"
+                     "run the same mode");
   haptic
       ->add_option("--device", options->device,
                    "scripted (the scene's trajectory), hand (a simulated hand pulled along it,\n"

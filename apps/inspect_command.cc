@@ -25,6 +25,7 @@
 #include "core/scripted_trajectory.h"
 #include "core/statistics.h"
 #include "core/stopwatch.h"
+#include "device/multirate_simulator.h"
 #include "fem/time_stepper.h"
 
 namespace hapsim::apps {
@@ -136,6 +137,9 @@ nlohmann::json MeasureFrames(const config::Scene& scene, const std::optional<con
     contact::VisualFrameOptions options = config::MakeVisualFrameOptions(scene);
     options.dt_s = scene.dt_s;
     options.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
+    options.export_contact_rows = device::UsesContactRows(scene.haptic.mode);
+    options.model_compliance_step = device::ResolveModelComplianceStep(
+        options.model_compliance_step, scene.haptic.mode, options.dt_s);
     contact::VisualFrame frame = config::MakeVisualFrame(scene, body, options);
     fem::State state = body ? fem::MakeRestState(body->model) : fem::State{};
     ToolState tool = scene.tool->initial_state;

@@ -217,7 +217,9 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
   contact::VisualFrameOptions visual = config::MakeVisualFrameOptions(scene);
   visual.dt_s = scene.dt_s;
   visual.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
-  visual.export_contact_rows = mode == device::HapticMode::kLcp;
+  visual.export_contact_rows = device::UsesContactRows(mode);
+  visual.model_compliance_step =
+      device::ResolveModelComplianceStep(visual.model_compliance_step, mode, visual.dt_s);
   // coupling: there is no haptic tool; the model is linearised at the visual tool (and unused).
   // godobject: the visual tool is coupled to the device, to press the body (as in `hapsim sim`).
   const bool haptic_tool =
@@ -363,10 +365,12 @@ void AddRunCommand(CLI::App* app) {
       ->required();
   run->add_option("--lcm-url", options->lcm_url, "LCM provider URL")->capture_default_str();
   run->add_option("--mode", options->mode,
-                  "linear (the paper), lcp (1 kHz unilateral solve on the frame's rows),\n"
-                  "coupling (standard multirate), or the source papers' 1 kHz methods on the\n"
-                  "frame's world: penalty, material, impact, godobject (a point tool; see\n"
-                  "docs/HAPTIC_MODES.md); default: the scene's haptic.mode");
+                  "hybrid (the paper's linear model, and the frame's other candidate rows\n"
+                  "switched on at 1 kHz so a fast tool cannot pass), linear (the paper's model\n"
+                  "alone), lcp (1 kHz unilateral solve on the frame's rows), coupling (standard\n"
+                  "multirate), or the source papers' 1 kHz methods on the frame's world:\n"
+                  "penalty, material, impact, godobject (a point tool; see\n"
+                  "docs/HAPTIC_MODES.md); default: the scene's haptic.mode, else hybrid");
   run->add_option("--device", options->device,
                   "The haptic process's device: scripted, hand or external (docs/DEVICE.md)")
       ->check(CLI::IsMember({"scripted", "hand", "external"}))

@@ -133,7 +133,11 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
           {"num_frames", record.frames.size()},
           {"contact_law", contact::ToString(scene.contact.law)},
           {"compliance", contact::ToString(compliance)},
-          {"model_compliance_step", contact::ToString(scene.contact.model_compliance_step)},
+          {"model_compliance_step",
+           contact::ToString(device::ResolveModelComplianceStep(
+               scene.contact.model_compliance_step,
+               config::ParseHapticMode(mode).value_or(device::kDefaultHapticMode),
+               steps_per_frame / scene.haptic.rate_hz))},
           {"frame_stage_median_ms", medians},
           {"max_contacts", max_contacts},
           {"peak_force_N", peak_N},
@@ -242,12 +246,13 @@ void AddSimCommand(CLI::App* app) {
       ->required();
   sim->add_option(
       "--mode", options->mode,
-      "linear (the paper's model), lcp (a unilateral solve on the frame's contact rows each\n"
-      "haptic step), coupling (standard multirate), reference (all at the haptic rate, exact\n"
+      "hybrid (the paper's model with the frame's other candidate rows switched on at 1 kHz),\n"
+      "linear (the paper's model alone), lcp (a unilateral solve on the frame's contact rows\n"
+      "each haptic step), coupling (standard multirate), reference (all at the haptic rate, exact\n"
       "compliance); the source papers' other systems on the haptic tool at 1 kHz: penalty\n"
       "(k (eps + d), paper 000), material (Hooke + viscous + stick-slip, paper 003), impact\n"
       "(impulses with restitution, paper 001), godobject (a point tool's proxy, paper 004);\n"
-      "default: the scene's haptic.mode");
+      "default: the scene's haptic.mode, else hybrid");
   sim->add_option(
       "--compliance", options->compliance,
       "Body contact compliance: warped (precomputed at rest, warped by node rotations)\n"

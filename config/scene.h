@@ -97,15 +97,19 @@
 //     margin_m: 0.001                  # ≥ 0: contacts are detected up to this gap
 //     compliance: warped               # warped | exact: the body's contact compliance
 //                                      # (contact/visual_frame.h ComplianceMethod)
-//     model_compliance_step: visual    # visual | haptic: the step the linear contact model's
-//                                      # body compliance is for (ModelComplianceStep)
+//     model_compliance_step: auto      # visual | haptic | auto: the step the linear contact
+//                                      # model's body compliance is for (ModelComplianceStep);
+//                                      # auto: the haptic step's in the hybrid mode below
+//                                      # 100 Hz, else the visual step's (the paper's)
 //   haptic:                            # optional (with a tool), defaults as shown
 //     rate_hz: 1000                    # > 0; rate_hz · dt_s must be an integer ≥ 1 (to 1e-9):
 //                                      # the number of haptic steps per visual frame
-//     mode: linear                     # linear | lcp | coupling | reference | penalty |
-//                                      # material | impact | godobject (device/haptic_mode.h;
-//                                      # godobject: a point tool only; lcp: not with
-//                                      # the friction law; its 1 kHz rows are normal only;
+//     mode: hybrid                     # hybrid | linear | lcp | coupling | reference |
+//                                      # penalty | material | impact | godobject
+//                                      # (device/haptic_mode.h; hybrid: the paper's linear
+//                                      # model with the frame's other candidate rows switched
+//                                      # on at 1 kHz, so a fast tool cannot tunnel; linear: the
+//                                      # paper's model alone; godobject: a point tool only;
 //                                      # reference: `hapsim sim` only)
 //     penalty:                         # optional, penalty mode (contact/penalty_contact.h)
 //       {stiffness_N_m: 600, predictive_margin: true, max_force_change_N: 0.5,
@@ -266,7 +270,7 @@ struct ContactScene {
   double restitution = 0.0;           // e in [0, 1]
   double margin_m = 1e-3;             // detection margin, m
   contact::ComplianceMethod compliance = contact::ComplianceMethod::kWarped;
-  contact::ModelComplianceStep model_compliance_step = contact::ModelComplianceStep::kVisual;
+  contact::ModelComplianceStep model_compliance_step = contact::ModelComplianceStep::kAuto;
 };
 
 // What the haptic side renders: see device/haptic_mode.h.
@@ -274,7 +278,7 @@ using HapticMode = device::HapticMode;
 
 struct HapticScene {
   double rate_hz = 1000.0;
-  HapticMode mode = HapticMode::kLinear;
+  HapticMode mode = device::kDefaultHapticMode;
   int lcp_max_rows = 512;
   int lcp_friction_sweeps = 5;   // contact.law friction: Gauss–Seidel sweeps per lcp step
   double lcp_reach_m_s = 0.005;  // lcp rows coupled: active and those this approach engages

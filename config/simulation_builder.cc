@@ -45,8 +45,8 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
     if (!parsed)
       throw InputError("", 0, option,
                        "unknown mode '" + option_value +
-                           "' (linear, lcp, coupling, reference, penalty, material, impact, "
-                           "godobject)");
+                           "' (hybrid, linear, lcp, coupling, reference, penalty, material, "
+                           "impact, godobject)");
     mode = *parsed;
   }
   if (mode == device::HapticMode::kGodObject && !(scene.tool && scene.tool->point))

@@ -28,12 +28,14 @@ namespace fs = std::filesystem;
 constexpr contact::ComplianceMethod kComplianceMethods[] = {contact::ComplianceMethod::kWarped,
                                                             contact::ComplianceMethod::kExact};
 constexpr contact::ModelComplianceStep kModelComplianceSteps[] = {
-    contact::ModelComplianceStep::kVisual, contact::ModelComplianceStep::kHaptic};
+    contact::ModelComplianceStep::kVisual, contact::ModelComplianceStep::kHaptic,
+    contact::ModelComplianceStep::kAuto};
 constexpr ContactLaw kContactLaws[] = {ContactLaw::kEquality, ContactLaw::kUnilateral,
                                        ContactLaw::kFriction};
 constexpr HapticMode kHapticModes[] = {
-    HapticMode::kLinear,  HapticMode::kLcp,      HapticMode::kCoupling, HapticMode::kReference,
-    HapticMode::kPenalty, HapticMode::kMaterial, HapticMode::kImpact,   HapticMode::kGodObject};
+    HapticMode::kHybrid,   HapticMode::kLinear,    HapticMode::kLcp,
+    HapticMode::kCoupling, HapticMode::kReference, HapticMode::kPenalty,
+    HapticMode::kMaterial, HapticMode::kImpact,    HapticMode::kGodObject};
 
 // (name, value) pairs for YamlMap::GetEnumOr, in declaration order.
 template <typename Enum, std::size_t N>

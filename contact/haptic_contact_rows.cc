@@ -156,7 +156,9 @@ bool HasConsistentShape(const ContactRows& rows) {
   const Eigen::Index n = rows.num_rows();
   if (rows.J_w.rows() != n || rows.W_body.rows() != n || rows.W_body.cols() != n ||
       rows.body_rhs.size() != n ||
-      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n))
+      (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n) ||
+      (rows.gap_m.size() != 0 && rows.gap_m.size() != n) ||
+      rows.body_velocity_m_s.size() != rows.gap_m.size())
     return false;
   if (rows.num_uncoupled_rows < 0 || rows.num_uncoupled_rows > n ||
       rows.num_uncoupled_rows % std::max(rows.rows_per_contact, 1) != 0)

@@ -99,11 +99,13 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
         P(kMaxBorder, kMaxBorder),
         q(kMaxBorder),
         active(max_rows_in, 0),
+        held(max_rows_in, 0),
         r(max_rows_in),
         x(max_rows_in),
         z(max_rows_in),
         w(max_rows_in),
         column(max_rows_in),
+        target(max_rows_in),
         C(kMaxBorder, kMaxBorder),
         rho(kMaxBorder),
         xi(kMaxBorder),
@@ -121,6 +123,9 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   double W_bar(int i, int j) const { return W_lower(i, j) + U_bar.row(i).dot(U.row(j)); }
 
   bool Rebase();
+  void GuessActiveSet(const ContactRows& rows, const Eigen::VectorXd& push, bool hold);
+  void StartFromGuess();
+  void RefreshTargets();
   void ForwardSolveInPlace(int first, Eigen::Ref<Eigen::VectorXd> v) const;
   void BackSolveInPlace(Eigen::Ref<Eigen::VectorXd> v) const;
   void AddEnteredRow(int j);
@@ -167,7 +172,12 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   int num_factorizations = 0;
   // Active set and iterates (rows).
   std::vector<std::uint8_t> active;  // (max)
+  // (max) rows held as equalities (HapticLcpSolver's hold_frame_contacts: the frame's active
+  // rows): always in the active set, their λ of either sign, never a complementarity test.
+  std::vector<std::uint8_t> held;
+  int num_held = 0;
   Eigen::VectorXd r, x, z, w, column;
+  Eigen::VectorXd target;  // (max) this step's body_rhs (rows.body_rhs, or Solve's targets)
   // Border system of one solve.
   BorderMatrix C;
   BorderVector rho, xi, coef;
@@ -211,7 +221,7 @@ bool HapticLcpSolver::Workspace::Rebase() {
   for (int a = 0; a < k0; ++a) {
     U_B.row(a) = U.row(base_rows[a]);
     U_bar_B.row(a) = U_bar.row(base_rows[a]);
-    h[a] = body_rhs[base_rows[a]];
+    h[a] = target[base_rows[a]];
   }
   if (k0 > 0) {
     auto K = L.topLeftCorner(k0, k0);
@@ -238,6 +248,41 @@ bool HapticLcpSolver::Workspace::Rebase() {
   P.topLeftCorner<6, 6>().noalias() = Y.topLeftCorner(k0, 6).transpose() * Y.topLeftCorner(k0, 6);
   q.head<6>().noalias() = Y.topLeftCorner(k0, 6).transpose() * h.head(k0);
   return true;
+}
+
+// New contacts (their indices say nothing about the old active set): guess the frame's active
+// set, or else the rows that ask for a push, push_i > 0 (r_i = b_i − c_free,i). With `hold`, the
+// frame's active rows are held as equalities from now on (the linear contact model's rows).
+void HapticLcpSolver::Workspace::GuessActiveSet(const ContactRows& rows,
+                                                const Eigen::VectorXd& push, bool hold) {
+  const bool frame_set = rows.lambda_frame_N.size() == n;
+  num_held = 0;
+  for (int i = 0; i < n; ++i) {
+    held[i] = hold && frame_set && rows.lambda_frame_N[i] > 0.0;
+    num_held += held[i];
+    active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : push[i] > 0.0;
+  }
+  rebase_pending = true;
+}
+
+// Factorises the guessed set. A dependent guess leaves an empty base (Rebase): a cold start, from
+// the held rows alone if there are any (they must stay in; if they are dependent themselves, the
+// next SolveOnActiveSet fails and the caller falls back to the linear model).
+void HapticLcpSolver::Workspace::StartFromGuess() {
+  if (Rebase() || num_held == 0) return;
+  for (int i = 0; i < n; ++i) active[i] = held[i];
+  rebase_pending = true;
+}
+
+// New targets on the same rows and base (the hybrid mode's free rows move every step): h = L⁻¹
+// target_B and q = Yᵀh, one forward substitution and one product, O(k0² + k0 m); P and the
+// factor do not depend on the targets. (A left row's column of Y is zero above its base
+// position, so the whole dot product is the one AddLeftRow formed.)
+void HapticLcpSolver::Workspace::RefreshTargets() {
+  for (int a = 0; a < k0; ++a) h[a] = target[base_rows[a]];
+  ForwardSolveInPlace(0, h.head(k0));
+  const int m = 6 + num_items;
+  q.head(m).noalias() = Y.topLeftCorner(k0, m).transpose() * h.head(k0);
 }
 
 // Border item for row j ∉ B entering A: column V = W̄_Bj.
@@ -378,11 +423,11 @@ bool HapticLcpSolver::Workspace::RunActiveSet(double tolerance, int* iterations)
     ++*iterations;
     if (!SolveOnActiveSet()) return false;
     int num_leaving = 0;
-    for (int i = 0; i < n; ++i) num_leaving += active[i] && !(z[i] > 0.0);
+    for (int i = 0; i < n; ++i) num_leaving += active[i] && !held[i] && !(z[i] > 0.0);
     if (num_leaving == 0) break;
     if (RebaseIsCheaper(num_leaving)) rebase_pending = true;
     for (int i = 0; i < n; ++i)
-      if (active[i] && !(z[i] > 0.0)) Deactivate(i);
+      if (active[i] && !held[i] && !(z[i] > 0.0)) Deactivate(i);
   }
   x.head(n) = z.head(n);
 
@@ -406,7 +451,7 @@ bool HapticLcpSolver::Workspace::RunActiveSet(double tolerance, int* iterations)
       double step = 1.0;
       int blocking = -1;
       for (int i = 0; i < n; ++i) {
-        if (!active[i] || z[i] > 0.0) continue;
+        if (!active[i] || held[i] || z[i] > 0.0) continue;
         const double decrease = x[i] - z[i];
         const double ratio = decrease > 0.0 ? x[i] / decrease : 0.0;
         if (ratio < step) step = ratio, blocking = i;
@@ -415,9 +460,9 @@ bool HapticLcpSolver::Workspace::RunActiveSet(double tolerance, int* iterations)
         if (active[i]) x[i] += step * (z[i] - x[i]);
       if (blocking < 0) break;
       x[blocking] = 0.0;
-      bool any_active = false;
+      bool any_active = num_held > 0;  // held rows stay: solve on them again
       for (int i = 0; i < n; ++i) {
-        if (!active[i]) continue;
+        if (!active[i] || held[i]) continue;
         if (x[i] > 0.0) {
           any_active = true;
         } else {
@@ -436,15 +481,17 @@ bool HapticLcpSolver::Workspace::RunActiveSet(double tolerance, int* iterations)
 double HapticLcpSolver::Workspace::CalcResidual(double dt_s) const {
   double residual = 0.0;
   for (int i = 0; i < n; ++i) {
-    if (x[i] == 0.0 && w[i] >= 0.0) continue;
+    if (x[i] == 0.0 && w[i] >= 0.0 && !held[i]) continue;
     const double W_ii = W(i, i) + U.row(i).dot(S * U.row(i).transpose());
-    residual = std::max(residual, std::abs(std::min(x[i] / dt_s, w[i] / (dt_s * W_ii))));
+    const double slack = w[i] / (dt_s * W_ii);  // a held row's only condition: c_i = 0
+    residual = std::max(residual, std::abs(held[i] ? slack : std::min(x[i] / dt_s, slack)));
   }
   const double scale = x.head(n).lpNorm<Eigen::Infinity>() / dt_s;
   return scale > 0.0 ? residual / scale : residual;
 }
 
-HapticLcpSolver::HapticLcpSolver(int max_rows, int friction_sweeps) {
+HapticLcpSolver::HapticLcpSolver(int max_rows, int friction_sweeps, bool hold_frame_contacts)
+    : hold_frame_contacts_(hold_frame_contacts) {
   if (max_rows < 0) throw std::invalid_argument("HapticLcpSolver: max_rows must be ≥ 0");
   if (friction_sweeps < 0)
     throw std::invalid_argument("HapticLcpSolver: friction_sweeps must be ≥ 0");
@@ -479,17 +526,17 @@ bool HapticLcpSolver::Prepare(const ContactRows& rows, const ToolStepSystem& too
     ws.n = -1;
     return false;
   }
-  const bool frame_set = rows.lambda_frame_N.size() == n;
-  for (int i = 0; i < n; ++i)
-    ws.active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : rows.body_rhs[i] > 0.0;
+  ws.target.head(n) = rows.body_rhs;
+  ws.GuessActiveSet(rows, rows.body_rhs, hold_frame_contacts_);
   ws.num_factorizations = 0;
-  ws.Rebase();
+  ws.StartFromGuess();
   return true;
 }
 
 bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
                             const Eigen::Vector3d& F_hat_N, const Eigen::Vector3d& T_hat_N_m,
-                            Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m) {
+                            Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m,
+                            const Eigen::VectorXd* targets) {
   Workspace& ws = *ws_;
   F_c_N->setZero();
   T_c_N_m->setZero();
@@ -520,19 +567,22 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
     last_solved_ = true;
     return true;
   }
+  if (targets != nullptr && (targets->size() < n || !targets->head(n).allFinite())) return false;
   const bool new_rows = !ws.Holds(rows);
   if (new_rows && !ws.Take(rows)) return false;
-  ws.r.head(n) = ws.body_rhs.head(n);
+  // Without targets the cached body_rhs (rows stamped as cached are, by contract, the cache's).
+  const Eigen::VectorXd& source = targets != nullptr ? *targets : ws.body_rhs;
+  const auto step_rhs = source.head(n);
+  const bool targets_changed = new_rows || ws.target.head(n) != step_rhs;
+  ws.target.head(n) = step_rhs;
+  ws.r.head(n) = step_rhs;
   ws.r.head(n).noalias() -= ws.U.topRows(n) * ws.s_free;
-  if (new_rows) {
-    // New contacts (their indices say nothing about the old active set): guess the frame's
-    // active set, or else the rows that ask for a push, r_i = b_i − c_free,i > 0.
-    const bool frame_set = rows.lambda_frame_N.size() == n;
-    for (int i = 0; i < n; ++i)
-      ws.active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : ws.r[i] > 0.0;
-    ws.rebase_pending = true;
+  if (new_rows) ws.GuessActiveSet(rows, ws.r, hold_frame_contacts_);
+  if (ws.rebase_pending) {
+    ws.StartFromGuess();
+  } else if (targets_changed) {
+    ws.RefreshTargets();
   }
-  if (ws.rebase_pending) ws.Rebase();  // a dependent guess leaves an empty base: cold start
   const double tolerance =
       kEnteringTolerance * std::max(1.0, ws.r.head(n).lpNorm<Eigen::Infinity>());
   // One retry from a fresh factorisation should round-off in the border have spoilt the
@@ -552,7 +602,7 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
     return false;
   }
   ws.x.head(n) /= dt_s;  // λ = x/Δt
-  last_num_active_ = static_cast<int>((ws.x.head(n).array() > 0.0).count());
+  last_num_active_ = static_cast<int>((ws.x.head(n).array() != 0.0).count());
   *F_c_N = ws.U.topLeftCorner(n, 3).transpose() * ws.x.head(n);
   *T_c_N_m = ws.U.topRightCorner(n, 3).transpose() * ws.x.head(n);
   last_solved_ = true;

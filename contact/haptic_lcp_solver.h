@@ -69,15 +69,29 @@ namespace hapsim::contact {
 // rows with over 300 active (the base block is factorised by matrix–vector products: Eigen's
 // blocked Cholesky took its GEMM scratch from the heap from ~400 active rows on).
 //
+// Held rows (the `hybrid` haptic mode, issue 25). Built with hold_frame_contacts, the solver
+// holds the frame's active rows (ContactRows::lambda_frame_N > 0) as equalities, as the paper's
+// linear contact model does (its λ of either sign, c_i = 0), and switches the frame's other rows
+// on and off unilaterally: the mixed LCP
+//   c_H = 0 (λ_H free),   c_F ≥ 0, λ_F ≥ 0, c_Fᵀλ_F = 0,   c = Δt W λ − rhs,
+// which, while no other row engages, is exactly the linear contact model's equality solve on the
+// same rows (with this step's tool system in place of the frame's), and stops a tool that reaches
+// a row the frame did not find active (the linear model alone lets it through). The same
+// active-set iteration solves it: held rows are never dropped and never tested for sign (a convex
+// QP in which they are unconstrained; W's symmetric part positive definite keeps it unique). If
+// the held rows are dependent (W_HH singular) the solve fails and the caller falls back to the
+// linear model, which factorises such a W by a complete orthogonal decomposition.
+//
 // Friction rows (ContactRows::rows_per_contact 3, the friction law) go to a HapticFrictionSolver
 // the solver owns when built with friction_sweeps > 0 (its sweep budget per step); the counters
 // below then describe that solve (iterations are sweeps, no factorisations).
 class HapticLcpSolver {
  public:
   // Preallocates everything for up to max_rows rows (memory ≈ 16 max_rows² bytes, and 8 max_rows²
-  // more with friction_sweeps > 0). Throws std::invalid_argument if max_rows < 0 or
-  // friction_sweeps < 0.
-  explicit HapticLcpSolver(int max_rows, int friction_sweeps = 0);
+  // more with friction_sweeps > 0). hold_frame_contacts: the frame's active rows are held as
+  // equalities (above; normal rows only, friction rows are solved as without it). Throws
+  // std::invalid_argument if max_rows < 0 or friction_sweeps < 0.
+  explicit HapticLcpSolver(int max_rows, int friction_sweeps = 0, bool hold_frame_contacts = false);
   ~HapticLcpSolver();
   HapticLcpSolver(HapticLcpSolver&&) noexcept;
   HapticLcpSolver& operator=(HapticLcpSolver&&) noexcept;
@@ -89,8 +103,15 @@ class HapticLcpSolver {
   // solve, are inconsistent in size (HasConsistentShape), not finite or
   // W_body not symmetric, or the active-set iteration failed (singular W, or no convergence
   // within 3n + 10 entering rows); never allocates, never throws.
+  //
+  // targets, if given (≥ num_rows entries, the first num_rows read): this step's b − body
+  // velocity per row in place of rows.body_rhs, for a caller whose targets move between frames
+  // (the hybrid mode's free rows follow the tool, device/haptic_step.h). A step whose targets
+  // differ from the last one's costs one more forward substitution, O(k0²), and no factorisation.
+  // Non-finite targets fail the solve. Normal rows only (friction rows ignore them).
   bool Solve(const ContactRows& rows, const ToolStepSystem& tool, const Eigen::Vector3d& F_hat_N,
-             const Eigen::Vector3d& T_hat_N_m, Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m);
+             const Eigen::Vector3d& T_hat_N_m, Eigen::Vector3d* F_c_N, Eigen::Vector3d* T_c_N_m,
+             const Eigen::VectorXd* targets = nullptr);
 
   // Does the work of the first Solve on new rows ahead of time, off the 1 kHz loop (the visual
   // frame, or the haptic process's receive thread): copies and checks the rows, guesses the
@@ -104,12 +125,13 @@ class HapticLcpSolver {
   int max_rows() const;
   // The friction solve's sweep budget per step; 0: friction rows are refused.
   int friction_sweeps() const;
+  bool hold_frame_contacts() const { return hold_frame_contacts_; }
   // Equality solves on an active set in the last Solve (1 when the warm start was right).
   int last_iterations() const { return last_iterations_; }
   // max_i |min(λ_i, c_i/(Δt W_ii))| / max_i λ_i (absolute when λ = 0), the measure of
   // ContactSolveReport::residual; ≲ 1e-12 when converged.
   double last_residual() const { return last_residual_; }
-  // Rows with λ > 0 after the last Solve.
+  // Rows with λ ≠ 0 after the last Solve (a held row may pull: λ < 0).
   int last_num_active() const { return last_num_active_; }
   // Dense Cholesky factorisations of a base block in the last Solve: 0 at a warm step with the
   // same rows, ≥ 1 when the rows changed or the border of changes grew past its capacity.
@@ -121,6 +143,7 @@ class HapticLcpSolver {
   struct Workspace;
   std::unique_ptr<Workspace> ws_;
   std::unique_ptr<HapticFrictionSolver> friction_;  // null without friction sweeps
+  bool hold_frame_contacts_ = false;
   bool last_was_friction_ = false;
   bool last_solved_ = false;
   int last_iterations_ = 0;

@@ -23,7 +23,15 @@ const char* ToString(ComplianceMethod method) {
 }
 
 const char* ToString(ModelComplianceStep step) {
-  return step == ModelComplianceStep::kHaptic ? "haptic" : "visual";
+  switch (step) {
+    case ModelComplianceStep::kVisual:
+      return "visual";
+    case ModelComplianceStep::kHaptic:
+      return "haptic";
+    case ModelComplianceStep::kAuto:
+      return "auto";
+  }
+  return "?";
 }
 
 VisualFrame::VisualFrame(const fem::Model& body, const fem::FemOptions& fem_options,

@@ -54,8 +54,11 @@ const char* ToString(ComplianceMethod method);
 //   kHaptic  the haptic step's, J_u A_u(Δt_h)⁻¹ J_uᵀ with A_u(Δt) = M + Δt D + Δt² K: how far the
 //            body yields within one haptic step under a force held over it. Warped from a rest
 //            factor at Δt_h (fem/warped_compliance.h), whatever `compliance` the frame uses.
+//   kAuto    chosen by the haptic mode and the visual rate (device::ResolveModelComplianceStep,
+//            which every caller that knows the mode applies; the frame takes an unresolved one
+//            as kVisual)
 // scripts/bench.sh measures both against the reference (docs/RESULTS.md).
-enum class ModelComplianceStep { kVisual, kHaptic };
+enum class ModelComplianceStep { kVisual, kHaptic, kAuto };
 const char* ToString(ModelComplianceStep step);
 
 struct VisualFrameOptions {

@@ -15,14 +15,16 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
                        const std::vector<contact::RigidObject>& objects)
     : options_(options),
       step_(tool, coupling, gravity_m_s2, options.dt_s, initial_tool,
-            options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0,
-            options.mode == HapticMode::kLcp ? options.lcp_friction_sweeps : 0),
+            UsesContactRows(options.mode) ? options.lcp_max_rows : 0,
+            UsesContactRows(options.mode) ? options.lcp_friction_sweeps : 0,
+            HoldsFrameContacts(options.mode)),
       visual_tool_(initial_tool),
       proxy_tool_(initial_tool),
       world_nodes_(body != nullptr ? body->num_nodes() : 0),
       world_objects_(static_cast<int>(objects.size())),
       safety_(options.safety, options.dt_s),
-      passivity_(options.passivity_threshold_J) {
+      passivity_(options.passivity_threshold_J),
+      observed_tool_x_W_m_(initial_tool.x_W_m) {
   if (options.mode == HapticMode::kReference)
     throw std::invalid_argument("the reference mode runs in the in-process simulator only");
   if (IsGeometricMode(options.mode)) {
@@ -37,16 +39,18 @@ HapticLoop::HapticLoop(const ToolModel& tool, const CouplingParams& coupling,
 }
 
 void EnsureLcpSolver(const HapticLoopOptions& options, ContactModelUpdate* update) {
+  const bool hold = HoldsFrameContacts(options.mode);
   if (!update->lcp_solver || update->lcp_solver->max_rows() != options.lcp_max_rows ||
-      update->lcp_solver->friction_sweeps() != options.lcp_friction_sweeps)
-    update->lcp_solver = std::make_unique<contact::HapticLcpSolver>(options.lcp_max_rows,
-                                                                    options.lcp_friction_sweeps);
+      update->lcp_solver->friction_sweeps() != options.lcp_friction_sweeps ||
+      update->lcp_solver->hold_frame_contacts() != hold)
+    update->lcp_solver = std::make_unique<contact::HapticLcpSolver>(
+        options.lcp_max_rows, options.lcp_friction_sweeps, hold);
 }
 
 bool PrepareLcpUpdate(const ToolModel& tool, const CouplingParams& coupling,
                       const Eigen::Vector3d& gravity_m_s2, const HapticLoopOptions& options,
                       ContactModelUpdate* update) {
-  if (options.mode != HapticMode::kLcp || update->rows.num_rows() == 0) return true;
+  if (!UsesContactRows(options.mode) || update->rows.num_rows() == 0) return true;
   EnsureLcpSolver(options, update);
   return update->lcp_solver->Prepare(
       update->rows,
@@ -59,9 +63,9 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
   // 1. The newest model: from this step on (age 0 at the step it arrives).
   if (new_model != nullptr) {
     step_.SetContactModel(new_model->model);
-    if (options_.mode == HapticMode::kLcp)
+    if (UsesContactRows(options_.mode))
       step_.SetContactRows(new_model->rows.num_rows() > 0 ? &new_model->rows : nullptr,
-                           new_model->lcp_solver.get());
+                           new_model->lcp_solver.get(), &new_model->linearised_tool);
     visual_tool_ = new_model->visual_tool;
     // The world to render from this step on (a refit of the body's tree: once a frame). One of
     // another size than the loop's (the receiver checks it against the scene) is not applied:
@@ -106,9 +110,17 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
       safety_.Filter(out.rendered.device_force_W_N, out.rendered.device_torque_W_N_m, inputs);
   // 4. Passivity of what was sent.
   const bool was_active = passivity_.active();
-  if (device_finite)
+  if (device_finite) {
+    const Eigen::Vector3d& tool_x_W_m = tool_state().x_W_m;
+    const double gravity_work_J =
+        options_.mode == HapticMode::kGodObject
+            ? 0.0
+            : CalcGravityWork(step_.tool_model().mass_kg, step_.gravity_m_s2(),
+                              observed_tool_x_W_m_, tool_x_W_m);
+    observed_tool_x_W_m_ = tool_x_W_m;
     passivity_.Update(out.sent.force_W_N, out.sent.torque_W_N_m, device.v_W_m_s, device.w_W_rad_s,
-                      options_.dt_s);
+                      options_.dt_s, gravity_work_J);
+  }
   out.passivity_energy_J = passivity_.energy_in_J();
   out.passivity_alarm = passivity_.active() && !was_active;
   out.lcp_fell_back = out.rendered.lcp_fell_back;

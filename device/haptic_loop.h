@@ -9,7 +9,8 @@
 //     in the geometric modes and godobject the step renders the world the model carried
 //     (device/geometric_haptic_contact.h, device/god_object_world.h), put in place first
 //   3 the safety layer (device/haptic_safety.h): NaN/stale → zero, blend, rate limit, clamp
-//   4 the passivity observer on what was actually sent (device/passivity_observer.h)
+//   4 the passivity observer on what was actually sent (device/passivity_observer.h), with
+//     gravity's work on the rendered tool as a second port (its weight is not generated energy)
 // Deterministic: the output depends only on the sequence of (device state, device age, model)
 // given to Step. Allocates nothing after construction (the lcp solver is sized by
 // lcp_max_rows).
@@ -31,7 +32,7 @@
 namespace hapsim::device {
 
 struct HapticLoopOptions {
-  HapticMode mode = HapticMode::kLinear;  // any but reference
+  HapticMode mode = kDefaultHapticMode;  // any but reference
   double dt_s = 1e-3;
   int lcp_max_rows = 512;
   int lcp_friction_sweeps = 0;  // > 0: the lcp solver takes friction rows (the friction law)
@@ -91,6 +92,9 @@ class HapticLoop {
   int world_objects_ = 0;  // its rigid objects); a model's world of another size is not applied
   HapticSafety safety_;
   PassivityObserver passivity_;
+  // Where the rendered tool stood at the observer's last sample: gravity's work on it since then
+  // is counted as energy flowed in (device/passivity_observer.h). godobject's proxy has no weight.
+  Eigen::Vector3d observed_tool_x_W_m_ = Eigen::Vector3d::Zero();
   std::int64_t model_sequence_ = -1;
   double model_age_s_ = std::numeric_limits<double>::infinity();
   long num_steps_ = 0;

@@ -1,6 +1,8 @@
 #include "device/haptic_step.h"
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <algorithm>
 
 #include "core/tool_integrator.h"
 
@@ -8,14 +10,59 @@ namespace hapsim::device {
 
 HapticStep::HapticStep(ToolModel tool, const CouplingParams& coupling,
                        const Eigen::Vector3d& gravity_m_s2, double dt_s,
-                       const ToolState& initial_tool, int lcp_max_rows,
-                       int lcp_friction_sweeps)
+                       const ToolState& initial_tool, int lcp_max_rows, int lcp_friction_sweeps,
+                       bool hold_frame_contacts)
     : tool_(std::move(tool)),
       coupling_(coupling),
       gravity_m_s2_(gravity_m_s2),
       dt_s_(dt_s),
       tool_state_(initial_tool),
-      lcp_(lcp_max_rows, lcp_friction_sweeps) {}
+      lcp_(lcp_max_rows, lcp_friction_sweeps, hold_frame_contacts),
+      targets_(hold_frame_contacts ? std::max(lcp_max_rows, 0) : 0) {}
+
+void HapticStep::SetContactRows(const contact::ContactRows* rows,
+                                contact::HapticLcpSolver* prepared, const ToolState* linearised) {
+  rows_ = rows;
+  solver_ = prepared != nullptr ? prepared : &lcp_;
+  rows_linearised_at_ = linearised != nullptr ? *linearised : tool_state_;
+  steps_on_rows_ = 0;
+}
+
+// The hybrid mode, normal rows that carry their gaps, within the step's capacity.
+bool HapticStep::TracksFreeRows() const {
+  const Eigen::Index n = rows_->num_rows();
+  return solver_->hold_frame_contacts() && rows_->rows_per_contact == 1 &&
+         rows_->gap_m.size() == n && rows_->body_velocity_m_s.size() == n &&
+         rows_->lambda_frame_N.size() == n && n <= targets_.size();
+}
+
+// The frame's free rows (not active at the frame) follow the haptic tool between frames. A row's
+// gap now, to first order in the tool's motion since the rows' linearisation (Δx, and θ the
+// rotation vector of q q₀⁻¹) and the body's frozen velocity over the time τ since they came,
+//   φ_i(t) = φ_i + J_v,i Δx + J_ω,i θ + body_velocity_i τ        (c_i = dφ_i/dt),
+// gives the target that lets this step close at most that gap, b_i = −max(φ_i(t), 0)/Δt: the
+// speculative contact of the 1 kHz reference, which engages a row when the tool reaches it (the
+// frame's own target, −φ_i/Δt_visual, would engage it as soon as the approach could close the
+// gap within a visual frame: early, and so a drag on a sliding tool). A row the tool has passed
+// holds (b = 0) until the next frame pushes it out. The held rows keep the frame's target, as
+// the linear contact model does (the solver holds the same rows: λ_frame > 0).
+void HapticStep::CalcFreeRowTargets() {
+  const contact::ContactRows& rows = *rows_;
+  const Eigen::Vector3d dx_W_m = tool_state_.x_W_m - rows_linearised_at_.x_W_m;
+  const Eigen::AngleAxisd turn(tool_state_.q_WT * rows_linearised_at_.q_WT.conjugate());
+  const Eigen::Vector3d theta_W_rad = turn.angle() * turn.axis();
+  const double tau_s = steps_on_rows_ * dt_s_;
+  for (Eigen::Index i = 0; i < rows.num_rows(); ++i) {
+    if (rows.lambda_frame_N[i] > 0.0) {
+      targets_[i] = rows.body_rhs[i];
+      continue;
+    }
+    const double body_m_s = rows.body_velocity_m_s[i];
+    const double gap_m = rows.gap_m[i] + rows.J_v.row(i).dot(dx_W_m) +
+                         rows.J_w.row(i).dot(theta_W_rad) + body_m_s * tau_s;
+    targets_[i] = -std::max(gap_m, 0.0) / dt_s_ - body_m_s;
+  }
+}
 
 HapticOutput HapticStep::Step(const DeviceState& device) {
   const CouplingWrench wrench =
@@ -28,8 +75,11 @@ HapticOutput HapticStep::Step(const DeviceState& device) {
   if (geometric_ != nullptr) {
     geometric_->Calc(system, tool_state_, &out.contact_force_W_N, &out.contact_torque_W_N_m);
   } else if (rows_ != nullptr) {
+    const bool track = TracksFreeRows();
+    if (track) CalcFreeRowTargets();
     out.lcp_fell_back = !solver_->Solve(*rows_, system, F_hat_N, T_hat_N_m, &out.contact_force_W_N,
-                                        &out.contact_torque_W_N_m);
+                                        &out.contact_torque_W_N_m, track ? &targets_ : nullptr);
+    ++steps_on_rows_;
   }
   if (geometric_ == nullptr && (rows_ == nullptr || out.lcp_fell_back)) {
     contact::EvaluateLinearContactModel(model_, F_hat_N, T_hat_N_m, &out.contact_force_W_N,

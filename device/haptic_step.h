@@ -7,7 +7,10 @@
 //       linear: from the linear contact model, F_c = F_c0 + ∂F_c/∂F̂ F̂ + ∂F_c/∂T̂ T̂ (and T_c), or
 //       lcp:    from the unilateral solve on the frame's contact rows (HapticLcpSolver), which
 //               lets contacts separate and re-engage between visual frames; with the friction
-//               law, Coulomb friction on them too (HapticFrictionSolver)
+//               law, Coulomb friction on them too (HapticFrictionSolver), or
+//       hybrid: from the same solve with the frame's active rows held as equalities (as the
+//               linear model holds them) and its other rows unilateral, each of those with the
+//               gap it has now that the haptic tool has moved (CalcFreeRowTargets)
 //   5 post-contact state: A_v Δv = Δt (F̃ + F_c), A_L ΔL = Δt (T̃ + T_c), advance
 //   6 output: the coupling's reaction −F, −T to the device.
 // The linear step is fixed-size and allocates nothing; the lcp step allocates nothing after
@@ -35,23 +38,24 @@ struct HapticOutput {
 
 class HapticStep {
  public:
-  // lcp_max_rows: capacity of the lcp solver (0: no lcp; memory ≈ 16 lcp_max_rows² bytes);
-  // lcp_friction_sweeps > 0: it also solves friction rows, with that many sweeps a step.
+  // lcp_max_rows: capacity of the rows' solver (0: no rows; memory ≈ 16 lcp_max_rows² bytes);
+  // lcp_friction_sweeps > 0: it also solves friction rows, with that many sweeps a step;
+  // hold_frame_contacts: it holds the frame's active rows as equalities (the hybrid mode).
   HapticStep(ToolModel tool, const CouplingParams& coupling, const Eigen::Vector3d& gravity_m_s2,
              double dt_s, const ToolState& initial_tool, int lcp_max_rows = 0,
-             int lcp_friction_sweeps = 0);
+             int lcp_friction_sweeps = 0, bool hold_frame_contacts = false);
 
   // Replaces the contact model (a copy of fixed-size data: no allocation).
   void SetContactModel(const contact::LinearContactModel& model) { model_ = model; }
-  // lcp mode: the rows to solve on from the next step (not copied: they must stay unchanged
-  // until replaced); nullptr returns to the linear model. The model set by SetContactModel is
-  // the fallback when a solve fails. `prepared`, if given, is a solver on which Prepare(rows)
-  // was called off the loop (it is then used, and must outlive its use); else the step's own.
+  // lcp and hybrid modes: the rows to solve on from the next step (not copied: they must stay
+  // unchanged until replaced); nullptr returns to the linear model. The model set by
+  // SetContactModel is the fallback when a solve fails. `prepared`, if given, is a solver on
+  // which Prepare(rows) was called off the loop (it is then used, and must outlive its use); else
+  // the step's own. `linearised`: the tool state the rows were linearised at (their gaps are
+  // for it); null: the haptic tool as it stands (the in-process simulator's frame).
   void SetContactRows(const contact::ContactRows* rows,
-                      contact::HapticLcpSolver* prepared = nullptr) {
-    rows_ = rows;
-    solver_ = prepared != nullptr ? prepared : &lcp_;
-  }
+                      contact::HapticLcpSolver* prepared = nullptr,
+                      const ToolState* linearised = nullptr);
   // Prepares the step's own solver for `rows` (HapticLcpSolver::Prepare with the tool system at
   // the current haptic tool state), so that the first step on them is a warm one: for the
   // in-process simulator, which calls it at the visual frame. Returns Prepare's result.
@@ -66,6 +70,7 @@ class HapticStep {
   // The haptic tool as a coupling target for the visual tool (pose and velocities).
   DeviceState tool_as_target() const;
   double dt_s() const { return dt_s_; }
+  const Eigen::Vector3d& gravity_m_s2() const { return gravity_m_s2_; }
   const ToolModel& tool_model() const { return tool_; }
   const CouplingParams& coupling() const { return coupling_; }
 
@@ -80,6 +85,14 @@ class HapticStep {
   contact::HapticLcpSolver lcp_;
   contact::HapticLcpSolver* solver_ = &lcp_;
   GeometricHapticContact* geometric_ = nullptr;
+  // hybrid: the free rows' targets of this step (CalcFreeRowTargets), the tool state the rows
+  // are linearised at and the steps taken on them.
+  Eigen::VectorXd targets_;
+  ToolState rows_linearised_at_;
+  long steps_on_rows_ = 0;
+
+  bool TracksFreeRows() const;
+  void CalcFreeRowTargets();
 };
 
 // A device state at the tool's pose and velocities (a coupling target with zero error).

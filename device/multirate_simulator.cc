@@ -12,7 +12,9 @@ contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual,
   const int ratio = o.mode == HapticMode::kReference ? 1 : o.haptic_steps_per_frame;
   visual.dt_s = ratio * o.haptic_dt_s;
   visual.haptic_dt_s = o.haptic_dt_s;
-  visual.export_contact_rows = o.mode == HapticMode::kLcp;
+  visual.export_contact_rows = UsesContactRows(o.mode);
+  visual.model_compliance_step =
+      ResolveModelComplianceStep(visual.model_compliance_step, o.mode, visual.dt_s);
   // The ground truth takes no shortcut: the exact compliance, whatever the scene chose.
   if (o.mode == HapticMode::kReference) visual.compliance = contact::ComplianceMethod::kExact;
   return visual;
@@ -20,8 +22,18 @@ contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual,
 
 }  // namespace
 
+contact::ModelComplianceStep ResolveModelComplianceStep(contact::ModelComplianceStep step,
+                                                        HapticMode mode, double visual_dt_s) {
+  if (step != contact::ModelComplianceStep::kAuto) return step;
+  return mode == HapticMode::kHybrid && visual_dt_s * kHapticComplianceBelowHz > 1.0
+             ? contact::ModelComplianceStep::kHaptic
+             : contact::ModelComplianceStep::kVisual;
+}
+
 const char* ToString(HapticMode mode) {
   switch (mode) {
+    case HapticMode::kHybrid:
+      return "hybrid";
     case HapticMode::kLinear:
       return "linear";
     case HapticMode::kLcp:
@@ -61,9 +73,11 @@ MultirateSimulator::MultirateSimulator(const fem::Model* body, const fem::FemOpt
       body_state_(body ? fem::MakeRestState(*body) : fem::State{}),
       visual_tool_(initial_tool),
       haptic_(tool, visual_options_.coupling, visual_options_.gravity_m_s2, options.haptic_dt_s,
-              initial_tool, options.mode == HapticMode::kLcp ? options.lcp_max_rows : 0,
-              options.mode == HapticMode::kLcp ? options.lcp_friction_sweeps : 0) {
+              initial_tool, UsesContactRows(options.mode) ? options.lcp_max_rows : 0,
+              UsesContactRows(options.mode) ? options.lcp_friction_sweeps : 0,
+              HoldsFrameContacts(options.mode)) {
   if (options.haptic_steps_per_frame < 1) throw std::invalid_argument("haptic_steps_per_frame < 1");
+  observed_tool_x_W_m_ = initial_tool.x_W_m;
   if (IsGeometricMode(options.mode)) {
     geometric_ = std::make_unique<GeometricHapticContact>(options.mode, options.geometric, tool,
                                                           body, visual_options_.rigid_objects);
@@ -93,6 +107,7 @@ void MultirateSimulator::Run(DeviceBackend* backend, long num_haptic_steps,
     const DeviceState device = backend->Read(k * options_.haptic_dt_s, &age_s, &sequence);
     HapticSample sample;
     switch (options_.mode) {
+      case HapticMode::kHybrid:
       case HapticMode::kLinear:
       case HapticMode::kLcp:
       case HapticMode::kPenalty:
@@ -113,9 +128,16 @@ void MultirateSimulator::Run(DeviceBackend* backend, long num_haptic_steps,
     sample.t_s = k * options_.haptic_dt_s;
     sample.device_x_W_m = device.x_W_m;
     backend->Write(sample.device_force_W_N, sample.device_torque_W_N_m);
-    // The wrench sent this step paired with the handle's velocity read for it (Hannaford & Ryu).
+    // The wrench sent this step paired with the handle's velocity read for it (Hannaford & Ryu),
+    // and gravity's work on the rendered tool over the step (godobject's proxy has no weight).
+    const double gravity_work_J =
+        options_.mode == HapticMode::kGodObject
+            ? 0.0
+            : CalcGravityWork(frame_.tool_model().mass_kg, visual_options_.gravity_m_s2,
+                              observed_tool_x_W_m_, sample.tool_x_W_m);
+    observed_tool_x_W_m_ = sample.tool_x_W_m;
     passivity_.Update(sample.device_force_W_N, sample.device_torque_W_N_m, device.v_W_m_s,
-                      device.w_W_rad_s, options_.haptic_dt_s);
+                      device.w_W_rad_s, options_.haptic_dt_s, gravity_work_J);
     sample.passivity_energy_J = passivity_.energy_in_J();
     if (on_haptic_step) on_haptic_step(sample);
   }
@@ -125,7 +147,7 @@ void MultirateSimulator::Run(DeviceBackend* backend, long num_haptic_steps,
 // visual tool in the full simulation at the visual rate, the haptic tool at 1 kHz with the linear
 // contact model (or, lcp, the contact rows) of the last visual frame.
 HapticSample MultirateSimulator::StepHapticTool(const DeviceState& device, long k) {
-  const bool lcp = options_.mode == HapticMode::kLcp;
+  const bool lcp = UsesContactRows(options_.mode);
   if (k % options_.haptic_steps_per_frame == 0) {
     const contact::VisualFrameStats stats =
         frame_.Step(device, &body_state_, &visual_tool_, &haptic_.tool_state());

@@ -100,6 +100,22 @@ bool CheckRowArray(const std::vector<std::vector<double>>& rows, int num_rows, i
 // PackedRowStart(n) is the number of entries.
 std::int64_t PackedRowStart(std::int64_t i) { return i * (i + 1) / 2; }
 
+// contact_model_t.gap_m and body_velocity_m_s: none, or one finite entry each per row.
+bool CheckRowGaps(const hapsim_lcm::contact_model_t& msg, std::string* error) {
+  const int gaps = msg.num_row_gaps;
+  if (gaps != 0 && gaps != msg.num_rows) {
+    SetError(error, "contact_model_t.num_row_gaps: " + std::to_string(gaps) + ", expected 0 or " +
+                        std::to_string(msg.num_rows) + " (num_rows)");
+    return false;
+  }
+  return CheckSize(msg.gap_m.size(), gaps, "contact_model_t.gap_m", "entries", error) &&
+         CheckFinite(msg.gap_m.data(), gaps, "contact_model_t.gap_m", error) &&
+         CheckSize(msg.body_velocity_m_s.size(), gaps, "contact_model_t.body_velocity_m_s",
+                   "entries", error) &&
+         CheckFinite(msg.body_velocity_m_s.data(), gaps, "contact_model_t.body_velocity_m_s",
+                     error);
+}
+
 // contact_model_t.rows_per_contact and its friction coefficients: 1 (or 0 without rows) and
 // none, or 3 with one finite μ ≥ 0 per three rows.
 bool CheckRowLayout(const hapsim_lcm::contact_model_t& msg, std::string* error) {
@@ -216,7 +232,7 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
          CheckSize(msg.lambda_frame_N.size(), n, "contact_model_t.lambda_frame_N", "entries",
                    error) &&
          CheckFinite(msg.lambda_frame_N.data(), n, "contact_model_t.lambda_frame_N", error) &&
-         CheckRowLayout(msg, error) && CheckBodyCompliance(msg, error);
+         CheckRowGaps(msg, error) && CheckRowLayout(msg, error) && CheckBodyCompliance(msg, error);
 }
 
 // The ranges of the lcp rows that decoding alone cannot catch: J_v,i = −n_iᵀ is a unit normal;
@@ -391,6 +407,10 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   msg.rows_per_contact = static_cast<std::int8_t>(per);
   msg.body_rhs.resize(n);
   msg.lambda_frame_N.assign(n, 0.0);
+  const bool gaps = rows.gap_m.size() == n && rows.body_velocity_m_s.size() == n;
+  msg.num_row_gaps = gaps ? n : 0;
+  msg.gap_m.assign(msg.num_row_gaps, 0.0);
+  msg.body_velocity_m_s.assign(msg.num_row_gaps, 0.0);
   for (int i = 0; i < n; ++i) {
     for (int c = 0; c < 3; ++c) {
       msg.J_v[i][c] = rows.J_v(i, c);
@@ -400,6 +420,10 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
     for (int c = first; c <= i; ++c) PackedBodyEntry(msg, i, c) = rows.W_body(i, c);
     msg.body_rhs[i] = rows.body_rhs[i];
     if (rows.lambda_frame_N.size() == n) msg.lambda_frame_N[i] = rows.lambda_frame_N[i];
+    if (gaps) {
+      msg.gap_m[i] = rows.gap_m[i];
+      msg.body_velocity_m_s[i] = rows.body_velocity_m_s[i];
+    }
   }
   msg.num_friction_coefficients = static_cast<std::int32_t>(rows.friction_coefficient.size());
   msg.friction_coefficient.assign(
@@ -456,6 +480,12 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
       rows->W_body(i, c) = rows->W_body(c, i) = PackedBodyEntry(msg, i, c);
     rows->body_rhs[i] = msg.body_rhs[i];
     rows->lambda_frame_N[i] = msg.lambda_frame_N[i];
+  }
+  rows->gap_m.resize(msg.num_row_gaps);
+  rows->body_velocity_m_s.resize(msg.num_row_gaps);
+  for (int i = 0; i < msg.num_row_gaps; ++i) {
+    rows->gap_m[i] = msg.gap_m[i];
+    rows->body_velocity_m_s[i] = msg.body_velocity_m_s[i];
   }
   rows->rows_per_contact = per;
   rows->num_uncoupled_rows = n - coupled;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the 1 kHz loop figures of docs/BENCHMARKS.md (issue 4): two-process runs of
-# scenes/block_press.yaml (`hapsim run`, which spawns `hapsim haptic`) in the linear and lcp
-# modes, each once as is (the visual process busy on the other core ~20% of the time) and once
+# scenes/block_press.yaml (`hapsim run`, which spawns `hapsim haptic`) in the hybrid (the
+# default), linear and lcp modes, each once as is (the visual process busy on the other core ~20% of the time) and once
 # with an extra CPU-bound job (`hapsim fem` on the 28,800-tet block) competing for the cores.
 # Reports the haptic period error p50/p99/p99.9/max (beside the empty loop's, and the p99 ratio
 # of the two), model latency from publication to first use
@@ -30,7 +30,7 @@ rounds="${ROUNDS:-3}"
 rm -f "$out"/*.json
 for round in $(seq "$rounds"); do
   echo "bench_haptic: round $round of $rounds" >&2
-  for mode in linear lcp; do
+  for mode in hybrid linear lcp; do
     run "${mode}_$round" "$mode"
     build/apps/hapsim fem scenes/block_large.yaml --steps 400 --out "$out/load" > /dev/null 2>&1 &
     load_pid=$!
@@ -53,7 +53,8 @@ print(f"Medians over {rounds} rounds (every round's ratio in brackets):")
 print()
 print("| run | period error p50 / p99 / p99.9 / max (us) | empty loop just before: p99 / p99.9 (us) | p99 / empty p99 | overruns | model latency p50 / p99 (ms) | publish to ready p50 / p99 (ms) | compute p50 / max (us) |")
 print("|---|---|---|---|---|---|---|---|")
-for name in ["linear", "linear_loaded", "lcp", "lcp_loaded", "lcp_friction"]:
+for name in ["hybrid", "hybrid_loaded", "linear", "linear_loaded", "lcp", "lcp_loaded",
+             "lcp_friction"]:
     runs = [json.load(open(os.path.join(out, f"{name}_{r}.json"))) for r in range(1, rounds + 1)]
     floors = [json.load(open(os.path.join(out, f"{name}_{r}_floor.json"))) for r in range(1, rounds + 1)]
     m = lambda get: med(get(s) for s in runs)

@@ -10,9 +10,9 @@ scripts/setup.sh
 out=out/bench_modes
 mkdir -p "$out"
 # scene:modes (the godobject mode needs a point tool: probe only; lcp: normal rows, any scene)
-runs=("block_press:reference linear lcp coupling penalty material impact"
-      "probe:reference linear lcp coupling penalty material impact godobject"
-      "peg_in_hole:reference linear lcp coupling penalty material impact")
+runs=("block_press:reference hybrid linear lcp coupling penalty material impact"
+      "probe:reference hybrid linear lcp coupling penalty material impact godobject"
+      "peg_in_hole:reference hybrid linear lcp coupling penalty material impact")
 for entry in "${runs[@]}"; do
   scene=${entry%%:*}
   read -r -a modes <<< "${entry#*:}"

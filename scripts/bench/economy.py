@@ -41,6 +41,9 @@ from economy_report import chart, markdown
 sys.path.insert(0, os.path.join(REPO, "scripts"))
 from compare_modes import errors, read_forces  # noqa: E402
 
+# haptic.mode when a scene does not say (device/haptic_mode.h kDefaultHapticMode).
+DEFAULT_MODE = "hybrid"
+
 # Bench-only scenes: measured by their own experiments (indentation, cantilever) or scripts
 # (block_press_friction, block_press_large), not swept here.
 BENCH_ONLY = {"hertz_indentation": "bench-only (the indentation experiment's Hertz press)",
@@ -160,10 +163,10 @@ def spec_for(name, path, scene, plan):
     if "knobs" in plan:
         knobs = [k for k in knobs if k in plan["knobs"]]
     finest = {k: v[-1] for k, v in values.items()}
-    mode = scene.get("haptic", {}).get("mode", "linear")
+    mode = scene.get("haptic", {}).get("mode", DEFAULT_MODE)
     return {"name": name, "path": path, "scene": scene, "plan": plan, "values": values,
             "knobs": knobs, "finest": finest, "mesh_kind": kind, "fem": body is not None,
-            "mode": "linear" if mode == "reference" else mode, "num_steps": plan.get("num_steps"),
+            "mode": DEFAULT_MODE if mode == "reference" else mode, "num_steps": plan.get("num_steps"),
             "duration_s": float(scene["time"]["dt_s"]) * (plan.get("num_steps")
                                                          or scene["time"]["num_steps"])}
 
@@ -274,7 +277,7 @@ class SceneRuns:
         options = ["--visual-hz", config["visual_hz"]]
         if spec["fem"]:
             options += ["--compliance", config["compliance"]]
-        if spec["mode"] != spec["scene"].get("haptic", {}).get("mode", "linear"):
+        if spec["mode"] != spec["scene"].get("haptic", {}).get("mode", DEFAULT_MODE):
             options += ["--mode", spec["mode"]]
         started = time.monotonic()
         record = {"config": dict(config), "description": describe(spec, config)}

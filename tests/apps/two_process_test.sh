@@ -78,7 +78,7 @@ attempts=3
 # datagram (the log then misses a step, which replay reports) or delay the models beyond what
 # the tolerance below allows: either way the run is repeated ($attempts times at most), and said
 # so. A replay that differs from a complete log fails at once.
-"$hapsim" sim "$scene" --mode linear --out "$work/sim" > /dev/null
+"$hapsim" sim "$scene" --out "$work/sim" > /dev/null  # the scene's mode, as `run` takes it
 good=0
 for attempt in $(seq "$attempts"); do
   "$hapsim" run "$scene" --lcm-url "$url" --log "$work/run.lcm" \
@@ -155,7 +155,7 @@ assert fade is not None and fade <= s["model_stale_s"] + 1e-9, (fade, s["model_s
 assert s["force_after_stale_N"] == 0.0, s["force_after_stale_N"]
 PY
 # 5. Clamped at 2 N (the run peaks at 3.1 N), logged by the stock lcm-logger.
-sed 's/^  mode: linear$/  mode: linear\n  safety: {max_force_N: 2.0}/' "$scene" > "$work/clamped.yaml"
+sed 's/^  rate_hz: 1000$/  rate_hz: 1000\n  safety: {max_force_N: 2.0}/' "$scene" > "$work/clamped.yaml"
 grep -q "max_force_N: 2.0" "$work/clamped.yaml" || fail "could not make the clamped scene"
 # The logger is a separate process that must keep up with 3 kHz of messages while the haptic
 # process runs at SCHED_FIFO: as root it gets a real-time priority below the haptic loop's, so a
@@ -379,7 +379,7 @@ echo "self-contained logs: replay from another folder, after a scene edit; chang
 import struct, sys
 data = open(sys.argv[1], "rb").read()
 pos = 0
-while pos < len(data):  # the first CONTACT_MODEL of check 1's log (linear mode: num_rows = 0)
+while pos < len(data):  # the first CONTACT_MODEL of check 1's log
     _, _, _, clen, dlen = struct.unpack(">IqqII", data[pos:pos + 28])
     channel = data[pos + 28:pos + 28 + clen].decode()
     payload = data[pos + 28 + clen:pos + 28 + clen + dlen]
@@ -390,7 +390,7 @@ run_id = struct.pack(">q", 0x1234abcd)
 model = bytearray(payload)
 model[16:24] = run_id
 negative_rows = bytearray(model)
-negative_rows[-8:-4] = struct.pack(">i", -1)  # num_rows, then num_W_body_lower, end the message
+negative_rows[-8:-4] = struct.pack(">i", -1)  # num_body_nodes (then num_objects ends it)
 nan_offset = bytearray(model)
 nan_offset[220:228] = struct.pack(">d", float("nan"))  # F_c0_N[0]
 other_run = bytearray(payload)

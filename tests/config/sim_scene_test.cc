@@ -132,7 +132,8 @@ TEST(SimSceneTest, OptionalSectionsTakeDefaults) {
   EXPECT_EQ(scene.contact.restitution, 0.0);
   EXPECT_EQ(scene.contact.margin_m, 1e-3);
   EXPECT_EQ(scene.haptic.rate_hz, 1000.0);
-  EXPECT_EQ(scene.haptic.mode, HapticMode::kLinear);
+  EXPECT_EQ(scene.haptic.mode, HapticMode::kHybrid);  // issue 25: the default holds a fast tool
+  EXPECT_EQ(scene.contact.model_compliance_step, contact::ModelComplianceStep::kAuto);
   EXPECT_EQ(scene.haptic.steps_per_frame, 1);
   ASSERT_EQ(scene.trajectory.size(), 1u);
 }
@@ -229,7 +230,7 @@ const BadCase kBadCases[] = {
      "contact.compliance", "one of: warped, exact"},
     {"UnknownModelComplianceStep", "margin_m: 0.002",
      "margin_m: 0.002\n  model_compliance_step: frame", 16, "contact.model_compliance_step",
-     "one of: visual, haptic"},
+     "one of: visual, haptic, auto"},
     {"HapticStepComplianceUnusedByTheMode", "margin_m: 0.002",
      "margin_m: 0.002\n  model_compliance_step: haptic", 16, "contact.model_compliance_step",
      "which the coupling mode does not use"},
@@ -240,7 +241,8 @@ const BadCase kBadCases[] = {
     {"LessThanOneStepPerFrame", "rate_hz: 500", "rate_hz: 10", 17, "haptic.rate_hz",
      "0.2 haptic steps per visual frame"},
     {"UnknownMode", "mode: coupling", "mode: spring", 18, "haptic.mode",
-     "one of: linear, lcp, coupling, reference, penalty, material, impact, godobject"},
+     "one of: hybrid, linear, lcp, coupling, reference, penalty, material, impact, "
+     "godobject"},
     {"GodObjectNeedsAPoint", "mode: coupling", "mode: godobject", 18, "haptic.mode",
      "renders a 3-DOF point: give tool.shape.point"},
     {"PointToolOnly", kCapsule, "point: {radius_m: 0.001}\n    sphere: {radius_m: 0.01}", 6,
@@ -459,7 +461,7 @@ TEST(SimSceneTest, BlockPressMatchesItsDescription) {
   EXPECT_EQ(scene.contact.stabilization_beta, 0.2);
   EXPECT_EQ(scene.contact.margin_m, 0.001);
   EXPECT_EQ(scene.haptic.rate_hz, 1000.0);
-  EXPECT_EQ(scene.haptic.mode, HapticMode::kLinear);
+  EXPECT_EQ(scene.haptic.mode, HapticMode::kHybrid);  // the default: the scene does not say
   EXPECT_EQ(scene.haptic.steps_per_frame, 30);
 
   // The script: starts at the tool, presses the bottom face 4 mm below the top, slides 8 mm,

@@ -54,7 +54,8 @@ void CheckAccepted(const contact::LinearContactModel& model, const contact::Cont
                  rows.lambda_frame_N.size() == n,
              "contact_model_t rows of sizes that disagree with num_rows " + std::to_string(n));
   CheckOrDie(rows.J_v.allFinite() && rows.J_w.allFinite() && rows.W_body.allFinite() &&
-                 rows.body_rhs.allFinite() && rows.lambda_frame_N.allFinite(),
+                 rows.body_rhs.allFinite() && rows.lambda_frame_N.allFinite() &&
+                 rows.gap_m.allFinite() && rows.body_velocity_m_s.allFinite(),
              "contact_model_t accepted non-finite rows");
   CheckOrDie(rows.W_body == rows.W_body.transpose(), "contact_model_t: W_body not symmetric");
   for (int i = 0; i < n; ++i) {

@@ -130,7 +130,12 @@ hapsim_lcm::contact_model_t SomeRows(hapsim_lcm::contact_model_t msg, int couple
   pick(&msg.J_w);
   pick(&msg.body_rhs);
   pick(&msg.lambda_frame_N);
+  if (msg.num_row_gaps > 0) {
+    pick(&msg.gap_m);
+    pick(&msg.body_velocity_m_s);
+  }
   msg.num_rows = coupled + uncoupled;
+  msg.num_row_gaps = msg.num_row_gaps > 0 ? msg.num_rows : 0;
   msg.num_coupled_rows = coupled;
   msg.num_W_body_lower = coupled * (coupled + 1) / 2;
   msg.W_body_lower.resize(msg.num_W_body_lower);

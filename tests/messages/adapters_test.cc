@@ -231,6 +231,8 @@ struct ContactModelFixture {
     rows.body_rhs = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
     rows.lambda_frame_N =
         Eigen::VectorXd::NullaryExpr(num_rows, [&] { return std::max(0.0, random()); });
+    rows.gap_m = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return 1e-3 * random(); });
+    rows.body_velocity_m_s = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
     header = {1717000000000001,  99,         1.0 / 60.0, 1e-3, 1.65, random.Vector(),
               random.Rotation(), ToolState{}};
     header.visual_tool.x_W_m = random.Vector();
@@ -257,6 +259,8 @@ void ExpectSameRowsAndHeader(const ContactModelFixture& in, const contact::Conta
   ExpectBitIdentical(rows.W_body, in.rows.W_body, "W_body");
   ExpectBitIdentical(rows.body_rhs, in.rows.body_rhs, "body_rhs");
   ExpectBitIdentical(rows.lambda_frame_N, in.rows.lambda_frame_N, "lambda_frame_N");
+  ExpectBitIdentical(rows.gap_m, in.rows.gap_m, "gap_m");
+  ExpectBitIdentical(rows.body_velocity_m_s, in.rows.body_velocity_m_s, "body_velocity_m_s");
   EXPECT_EQ(rows.rows_per_contact, in.rows.rows_per_contact);
   EXPECT_EQ(rows.num_uncoupled_rows, in.rows.num_uncoupled_rows);
   ExpectBitIdentical(rows.friction_coefficient, in.rows.friction_coefficient,
@@ -315,6 +319,9 @@ TEST(ContactModelMessage, FrictionRowsRoundTripAndBadLayoutsAreRejected) {
       {"friction_coefficient[1]", [](auto* m) { m->friction_coefficient[1] = -0.1; }},
       {"friction_coefficient", [](auto* m) { m->friction_coefficient[0] = kNaN; }},
       {"lambda_frame_N[3]", [](auto* m) { m->lambda_frame_N[3] = -0.5; }},  // a normal row
+      {"num_row_gaps", [](auto* m) { m->num_row_gaps = 1; }},
+      {"gap_m", [](auto* m) { m->gap_m[2] = kNaN; }},
+      {"body_velocity_m_s", [](auto* m) { m->body_velocity_m_s.pop_back(); }},
   };
   for (const Case& c : cases) {
     hapsim_lcm::contact_model_t bad = msg;

@@ -47,6 +47,9 @@ hapsim_lcm::contact_model_t MakeContactModel(int rows) {
   msg.W_body_lower.assign(msg.num_W_body_lower, 0.5);
   msg.body_rhs.assign(rows, 0.1);
   msg.lambda_frame_N.assign(rows, 0.0);
+  msg.num_row_gaps = rows;
+  msg.gap_m.assign(rows, 1e-3);
+  msg.body_velocity_m_s.assign(rows, 0.0);
   return msg;
 }
 
@@ -132,9 +135,9 @@ TEST(WireDecode, EveryTypeRoundTripsThroughTheLayoutCheck) {
 }
 
 // With no rows and no world a contact model ends in num_rows, num_coupled_rows,
-// num_W_body_lower, num_W_body_contact_lower (int32), rows_per_contact (int8),
+// num_W_body_lower, num_W_body_contact_lower, num_row_gaps (int32), rows_per_contact (int8),
 // num_friction_coefficients, num_body_nodes, num_objects (int32).
-std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 29; }
+std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 33; }
 std::size_t NumFrictionCoefficientsOffset() { return Encode(MakeContactModel(0)).size() - 12; }
 std::size_t NumBodyNodesOffset() { return Encode(MakeContactModel(0)).size() - 8; }
 
@@ -171,7 +174,8 @@ TEST(WireDecode, ACountOfZeroEmptiesTheArrayOfAReusedMessage) {
   ASSERT_TRUE(Decode(without_rows.data(), without_rows.size(), &reused, &error)) << error;
   EXPECT_EQ(reused.num_rows, 0);
   EXPECT_TRUE(reused.J_v.empty() && reused.J_w.empty() && reused.W_body_lower.empty() &&
-              reused.body_rhs.empty() && reused.lambda_frame_N.empty());
+              reused.body_rhs.empty() && reused.lambda_frame_N.empty() && reused.gap_m.empty() &&
+              reused.body_velocity_m_s.empty());
   contact::LinearContactModel model;
   contact::ContactRows rows;
   ContactModelHeader header;

@@ -1,0 +1,190 @@
+// The hybrid mode's solve (contact/haptic_lcp_solver.h, hold_frame_contacts): the frame's active
+// rows held as equalities, its other rows unilateral (a mixed LCP), against independent values:
+//  - enumeration: every subset of the free rows, each solved densely with the held rows by LU on
+//    the assembled W; the one subset whose solution meets the mixed LCP's conditions is the
+//    answer (unique, W's symmetric part positive definite);
+//  - the linear contact model (MakeLinearContactModel) on the held rows when no free row engages,
+//    also while a held row pulls (λ < 0), which the plain lcp solve would not allow;
+//  - no heap allocation after construction.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "contact/contact_jacobian.h"
+#include "contact/haptic_lcp_solver.h"
+#include "contact/linear_contact_model.h"
+#include "tests/allocation_counter.h"
+#include "tests/contact/haptic_test_problems.h"
+
+namespace hapsim::contact {
+namespace {
+
+// Both methods are exact; they differ by round-off amplified by W's condition number (≤ 1e5 for
+// these problems).
+constexpr double kRelativeTolerance = 1e-9;
+
+// The mixed LCP by enumeration: for each subset A of the free rows, λ on H ∪ A from
+// Δt W_{(H∪A)(H∪A)} λ = rhs (dense LU), zero elsewhere; the answer is the subset with λ_A ≥ 0
+// and c = Δt W λ − rhs ≥ 0 on the free rows outside A. 2^free subsets: small problems only.
+Eigen::VectorXd SolveByEnumeration(const DenseProblem& dense, double dt_s,
+                                   const std::vector<bool>& held) {
+  const int n = static_cast<int>(held.size());
+  std::vector<int> free_rows;
+  for (int i = 0; i < n; ++i)
+    if (!held[i]) free_rows.push_back(i);
+  const int num_free = static_cast<int>(free_rows.size());
+  const double tolerance = 1e-12 * (1.0 + dense.rhs.cwiseAbs().maxCoeff());
+  Eigen::VectorXd found;
+  int num_found = 0;
+  for (unsigned mask = 0; mask < (1u << num_free); ++mask) {
+    std::vector<int> set;
+    for (int i = 0; i < n; ++i)
+      if (held[i]) set.push_back(i);
+    for (int f = 0; f < num_free; ++f)
+      if (mask & (1u << f)) set.push_back(free_rows[f]);
+    const int k = static_cast<int>(set.size());
+    Eigen::MatrixXd W_set(k, k);
+    Eigen::VectorXd rhs_set(k);
+    for (int a = 0; a < k; ++a) {
+      rhs_set[a] = dense.rhs[set[a]];
+      for (int b = 0; b < k; ++b) W_set(a, b) = dt_s * dense.W(set[a], set[b]);
+    }
+    Eigen::VectorXd lambda = Eigen::VectorXd::Zero(n);
+    if (k > 0) {
+      const Eigen::VectorXd x = W_set.partialPivLu().solve(rhs_set);
+      for (int a = 0; a < k; ++a) lambda[set[a]] = x[a];
+    }
+    const Eigen::VectorXd c = dt_s * dense.W * lambda - dense.rhs;
+    bool ok = true;
+    for (int f = 0; f < num_free; ++f) {
+      const int i = free_rows[f];
+      ok = ok && ((mask & (1u << f)) ? lambda[i] >= -tolerance : c[i] >= -tolerance);
+    }
+    if (ok) {
+      found = lambda;
+      ++num_found;
+    }
+  }
+  EXPECT_EQ(num_found, 1) << "the mixed LCP's solution is unique";
+  return found;
+}
+
+// `rows` with the frame's impulses set so that `held` are the frame's active rows.
+void MarkFrameActive(const std::vector<bool>& held, ContactRows* rows) {
+  rows->lambda_frame_N = Eigen::VectorXd::Zero(rows->num_rows());
+  for (int i = 0; i < rows->num_rows(); ++i)
+    if (held[i]) rows->lambda_frame_N[i] = 1.0;
+}
+
+TEST(HapticHybridSolve, MatchesEnumerationOfTheMixedLcp) {
+  int num_pulling = 0, num_free_engaged = 0;
+  for (const int n : {6, 9, 12}) {
+    for (unsigned seed = 1; seed <= 6; ++seed) {
+      const LcpProblem p = MakeLcpProblem(n, 1000 * n + seed, 0.0, 1.0);
+      std::vector<bool> held(n, false);
+      for (int i = 0; i < n; i += 3) held[i] = true;  // a third held, the rest free
+      ContactRows rows = p.rows;
+      MarkFrameActive(held, &rows);
+      HapticLcpSolver solver(16, 0, /*hold_frame_contacts=*/true);
+      for (const double swing : {0.0, 2.0, -2.0}) {  // F̂ changes over the frame's steps
+        const Eigen::Vector3d F_hat = p.F_hat_N + swing * Eigen::Vector3d(0.2, -0.1, 1.0);
+        Eigen::Vector3d F_c, T_c;
+        const std::string where = "n " + std::to_string(n) + " seed " + std::to_string(seed) +
+                                  " swing " + std::to_string(swing);
+        ASSERT_TRUE(solver.Solve(rows, p.tool, F_hat, p.T_hat_N_m, &F_c, &T_c)) << where;
+        EXPECT_LT(solver.last_residual(), 1e-10) << where;
+        const DenseProblem dense = AssembleDense(rows, p.tool, F_hat, p.T_hat_N_m);
+        const Eigen::VectorXd expected = SolveByEnumeration(dense, p.tool.dt_s, held);
+        const Eigen::VectorXd lambda = solver.last_impulses();
+        EXPECT_LE((lambda - expected).norm(), kRelativeTolerance * expected.norm()) << where;
+        const double F_scale = expected.cwiseAbs().sum();
+        EXPECT_LE((F_c - rows.J_v.transpose() * expected).norm(), kRelativeTolerance * F_scale)
+            << where;
+        for (int i = 0; i < n; ++i) {
+          num_pulling += held[i] && expected[i] < 0.0;
+          num_free_engaged += !held[i] && expected[i] > 0.0;
+        }
+      }
+    }
+  }
+  // The cases exercise both halves of the law: held rows that pull, free rows that engage.
+  EXPECT_GT(num_pulling, 5);
+  EXPECT_GT(num_free_engaged, 5);
+}
+
+// Free rows far from engaging (a large separating target): the solve is the linear contact model
+// of the held rows, pulling rows included, at every F̂.
+TEST(HapticHybridSolve, WithNoFreeRowEngagedIsTheLinearContactModel) {
+  const int n = 20;
+  const LcpProblem p = MakeLcpProblem(n, 77, 0.0, 1.0);
+  std::vector<bool> held(n, false);
+  std::vector<int> held_rows;
+  for (int i = 0; i < n; i += 2) held[i] = true, held_rows.push_back(i);
+  ContactRows rows = p.rows;
+  for (int i = 0; i < n; ++i)
+    if (!held[i]) rows.body_rhs[i] = -10.0;  // each would need 10 m/s more approach to engage
+  MarkFrameActive(held, &rows);
+  const int k = static_cast<int>(held_rows.size());
+  ContactJacobian J;
+  J.J_v.resize(k, 3);
+  J.J_w.resize(k, 3);
+  Eigen::VectorXd body_rhs(k);
+  for (int a = 0; a < k; ++a) {
+    J.J_v.row(a) = rows.J_v.row(held_rows[a]);
+    J.J_w.row(a) = rows.J_w.row(held_rows[a]);
+    body_rhs[a] = rows.body_rhs[held_rows[a]];
+  }
+  const ContactRows held_only = MakeContactRows(J, rows.W_body, held_rows, body_rhs);
+  const Eigen::MatrixXd W = CalcToolDelassus(J, p.tool) + held_only.W_body;
+  const LinearContactModel model = MakeLinearContactModel(J, W, p.tool, held_only.body_rhs);
+  HapticLcpSolver hybrid(n, 0, /*hold_frame_contacts=*/true);
+  HapticLcpSolver lcp(n);
+  int num_pulling = 0;
+  for (const double scale : {0.0, 1.0, -1.0, 3.0}) {
+    const Eigen::Vector3d F_hat = p.F_hat_N + scale * Eigen::Vector3d(0.5, -1.0, 2.0);
+    Eigen::Vector3d F_c, T_c, F_model, T_model, F_lcp, T_lcp;
+    ASSERT_TRUE(hybrid.Solve(rows, p.tool, F_hat, p.T_hat_N_m, &F_c, &T_c)) << scale;
+    EvaluateLinearContactModel(model, F_hat, p.T_hat_N_m, &F_model, &T_model);
+    EXPECT_LT((F_c - F_model).norm(), kRelativeTolerance * (1.0 + F_model.norm())) << scale;
+    EXPECT_LT((T_c - T_model).norm(), kRelativeTolerance * (1.0 + T_model.norm())) << scale;
+    for (int i = 0; i < n; ++i) {
+      if (!held[i]) {
+        EXPECT_EQ(hybrid.last_impulses()[i], 0.0) << scale << " row " << i;
+      }
+      num_pulling += held[i] && hybrid.last_impulses()[i] < 0.0;
+    }
+    // The plain lcp solve lets a pulling row go: where one pulls, the two differ.
+    ASSERT_TRUE(lcp.Solve(rows, p.tool, F_hat, p.T_hat_N_m, &F_lcp, &T_lcp));
+    EXPECT_GE(lcp.last_impulses().minCoeff(), 0.0);
+  }
+  EXPECT_GT(num_pulling, 0) << "the case must include a held row that pulls";
+}
+
+TEST(HapticHybridSolve, AllocatesNothingAfterConstruction) {
+  if (!AllocationCounter::enabled()) GTEST_SKIP() << "allocations not counted (sanitizer)";
+  std::vector<LcpProblem> problems = {MakeLcpProblem(125, 21), MakeLcpProblem(60, 22, 0.3, 30.0),
+                                      MakeLcpProblem(150, 23)};
+  for (LcpProblem& p : problems) {
+    std::vector<bool> held(p.rows.num_rows(), false);
+    for (int i = 0; i < p.rows.num_rows(); i += 4) held[i] = true;
+    MarkFrameActive(held, &p.rows);
+  }
+  HapticLcpSolver solver(150, 0, /*hold_frame_contacts=*/true);
+  Eigen::Vector3d F_c, T_c;
+  int failures = 0;
+  AllocationCounter counter;
+  for (int step = 0; step < 240; ++step) {
+    const LcpProblem& p = problems[(step / 40) % problems.size()];
+    const double phase = 0.3 * step;
+    const Eigen::Vector3d F_hat =
+        p.F_hat_N + 3.0 * Eigen::Vector3d(std::cos(phase), std::sin(phase), 0.0);
+    failures += !solver.Solve(p.rows, p.tool, F_hat, p.T_hat_N_m, &F_c, &T_c);
+  }
+  EXPECT_EQ(counter.count(), 0);
+  EXPECT_EQ(failures, 0);
+}
+
+}  // namespace
+}  // namespace hapsim::contact
