@@ -158,7 +158,8 @@ bool HasConsistentShape(const ContactRows& rows) {
       rows.body_rhs.size() != n ||
       (rows.lambda_frame_N.size() != 0 && rows.lambda_frame_N.size() != n) ||
       (rows.gap_m.size() != 0 && rows.gap_m.size() != n) ||
-      rows.body_velocity_m_s.size() != rows.gap_m.size())
+      rows.gap_target_m_s.size() != rows.gap_m.size() ||
+      rows.surface_velocity_m_s.size() != rows.gap_m.size())
     return false;
   if (rows.num_uncoupled_rows < 0 || rows.num_uncoupled_rows > n ||
       rows.num_uncoupled_rows % std::max(rows.rows_per_contact, 1) != 0)

@@ -24,13 +24,17 @@ struct ContactRows {
   // set, are the solver's first guess when the rows change: far closer than "every row that asks
   // for a push", which on block_press holds twice the ~70 active rows and cost 1.1 ms to shrink.
   Eigen::VectorXd lambda_frame_N;
-  // (n each, or both empty) What the hybrid mode needs to follow a row the frame did not find
-  // active between frames (device/haptic_step.h): its gap φ_i at the tool pose the rows are
-  // linearised at, m (a normal row's; 0 on tangential rows), and the body's (or a moving rigid
-  // object's) part of its separating velocity, frozen for the frame, m/s:
-  //   c_i = J_v,i v + J_ω,i ω + body_velocity_i,   body_rhs_i = b_i − body_velocity_i.
+  // (n each, or all three empty) What the hybrid mode needs to follow a row the frame did not find
+  // active between frames (device/haptic_step.h), normal rows (0 on tangential ones):
+  //   gap_m                φ_i, the row's gap at the tool pose the rows are linearised at, m
+  //   gap_target_m_s       the part of body_rhs_i that closes that gap over the visual frame,
+  //                        −φ_i/Δt_visual (−β φ_i/Δt_visual when penetrating), m/s
+  //   surface_velocity_m_s how fast the surface's own motion opens the gap, frozen for the frame:
+  //                        the body's normal velocity after the frame, J_u,i u̇, plus a moving rigid
+  //                        object's, m/s (dφ_i/dt = J_v,i v + J_ω,i ω + this)
   Eigen::VectorXd gap_m;
-  Eigen::VectorXd body_velocity_m_s;
+  Eigen::VectorXd gap_target_m_s;
+  Eigen::VectorXd surface_velocity_m_s;
   // Friction (issue 13): with rows_per_contact 3 the rows come in threes per contact (normal,
   // t1, t2, as CalcContactJacobian orders them) and friction_coefficient holds one μ ≥ 0 per
   // contact; HapticFrictionSolver solves them. With 1 (normal rows only) it is empty.
@@ -103,7 +107,7 @@ struct ContactRowCache {
 };
 
 // The checks both haptic solvers make of rows they are handed: W_body square of num_rows,
-// body_rhs, J_w and lambda_frame_N, gap_m, body_velocity_m_s (if given) of num_rows rows,
+// body_rhs, J_w and lambda_frame_N and the three gap vectors (if given) of num_rows rows,
 // friction_coefficient one finite μ ≥ 0 per contact with rows_per_contact 3 (a whole number of
 // contacts) and empty with 1, num_uncoupled_rows whole contacts of num_rows. (The other entries'
 // finiteness and W_body's symmetry are checked where a solver copies them.)

@@ -135,17 +135,20 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
     }
   }
   const ContactJacobian J = CalcJacobian(ordered, tool.x_W_m);
+  // What the hybrid mode follows the rows with (ContactRows::gap_m): b_all = b_gap − c_object.
+  const Eigen::VectorXd c_object = CalcObjectSeparatingVelocity(moved);
+  const Eigen::VectorXd body_normal_velocity = b_all - rhs_uncoupled;  // J_u u̇
   Eigen::VectorXd rhs(static_cast<Eigen::Index>(rows.size()));
-  Eigen::VectorXd lambda(rhs.size()), body_velocity(rhs.size());
+  Eigen::VectorXd lambda(rhs.size()), gap_target(rhs.size()), surface_velocity(rhs.size());
   Eigen::VectorXd gap_m = Eigen::VectorXd::Zero(rhs.size());
   const int num_coupled = rows_per_contact_ * static_cast<int>(coupled.size());  // rows
   for (size_t r = 0; r < rows.size(); ++r) {
     rhs[static_cast<Eigen::Index>(r)] =
         static_cast<int>(r) < num_coupled ? rhs_all[rows[r]] : rhs_uncoupled[rows[r]];
     lambda[static_cast<Eigen::Index>(r)] = lambda_[rows[r]];
-    // b − body_rhs: what the row's target leaves to the body (c_i = J_v v + J_ω ω + this).
-    body_velocity[static_cast<Eigen::Index>(r)] =
-        b_all[rows[r]] - rhs[static_cast<Eigen::Index>(r)];
+    gap_target[static_cast<Eigen::Index>(r)] = b_all[rows[r]] + c_object[rows[r]];
+    surface_velocity[static_cast<Eigen::Index>(r)] =
+        body_normal_velocity[rows[r]] + c_object[rows[r]];
     if (rows[r] % rows_per_contact_ == 0)
       gap_m[static_cast<Eigen::Index>(r)] = moved[rows[r] / rows_per_contact_].gap_m;
   }
@@ -165,7 +168,8 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   contact_rows_.num_uncoupled_rows = n - num_coupled;
   contact_rows_.lambda_frame_N = lambda;
   contact_rows_.gap_m = gap_m;
-  contact_rows_.body_velocity_m_s = body_velocity;
+  contact_rows_.gap_target_m_s = gap_target;
+  contact_rows_.surface_velocity_m_s = surface_velocity;
   StampNewContactRows(&contact_rows_);  // last: the rows are complete
 }
 

@@ -32,19 +32,24 @@ void HapticStep::SetContactRows(const contact::ContactRows* rows,
 bool HapticStep::TracksFreeRows() const {
   const Eigen::Index n = rows_->num_rows();
   return solver_->hold_frame_contacts() && rows_->rows_per_contact == 1 &&
-         rows_->gap_m.size() == n && rows_->body_velocity_m_s.size() == n &&
-         rows_->lambda_frame_N.size() == n && n <= targets_.size();
+         rows_->gap_m.size() == n && rows_->gap_target_m_s.size() == n &&
+         rows_->surface_velocity_m_s.size() == n && rows_->lambda_frame_N.size() == n &&
+         n <= targets_.size();
 }
 
 // The frame's free rows (not active at the frame) follow the haptic tool between frames. A row's
 // gap now, to first order in the tool's motion since the rows' linearisation (Δx, and θ the
-// rotation vector of q q₀⁻¹) and the body's frozen velocity over the time τ since they came,
-//   φ_i(t) = φ_i + J_v,i Δx + J_ω,i θ + body_velocity_i τ        (c_i = dφ_i/dt),
-// gives the target that lets this step close at most that gap, b_i = −max(φ_i(t), 0)/Δt: the
-// speculative contact of the 1 kHz reference, which engages a row when the tool reaches it (the
-// frame's own target, −φ_i/Δt_visual, would engage it as soon as the approach could close the
-// gap within a visual frame: early, and so a drag on a sliding tool). A row the tool has passed
-// holds (b = 0) until the next frame pushes it out. The held rows keep the frame's target, as
+// rotation vector of q q₀⁻¹) and the surface's frozen velocity over the time τ since they came,
+//   φ_i(t) = φ_i + J_v,i Δx + J_ω,i θ + surface_velocity_i τ        (dφ_i/dt),
+// gives the gap target that lets this step close at most that gap, −max(φ_i(t), 0)/Δt, which
+// takes the place of the frame's (gap_target_i = −φ_i/Δt_visual) in the row's body_rhs: the
+// speculative contact of the 1 kHz reference, which engages a row when the tool reaches it. The
+// frame's own target would engage it as soon as the approach could close the gap within a visual
+// frame: early, a push on a resting tool and a drag on a sliding one (0.035 N RMS at rest on
+// block_press). A row the tool has passed holds (target 0) until the next frame pushes it out.
+// The surface velocity is the body's motion after the frame, not the contact-free velocity of
+// body_rhs: that one assumes the frame's contact force gone, and integrated over a frame it moved
+// the liver's surface millimetres into a resting tool. The held rows keep the frame's target, as
 // the linear contact model does (the solver holds the same rows: λ_frame > 0).
 void HapticStep::CalcFreeRowTargets() {
   const contact::ContactRows& rows = *rows_;
@@ -57,10 +62,9 @@ void HapticStep::CalcFreeRowTargets() {
       targets_[i] = rows.body_rhs[i];
       continue;
     }
-    const double body_m_s = rows.body_velocity_m_s[i];
     const double gap_m = rows.gap_m[i] + rows.J_v.row(i).dot(dx_W_m) +
-                         rows.J_w.row(i).dot(theta_W_rad) + body_m_s * tau_s;
-    targets_[i] = -std::max(gap_m, 0.0) / dt_s_ - body_m_s;
+                         rows.J_w.row(i).dot(theta_W_rad) + rows.surface_velocity_m_s[i] * tau_s;
+    targets_[i] = rows.body_rhs[i] - rows.gap_target_m_s[i] - std::max(gap_m, 0.0) / dt_s_;
   }
 }
 

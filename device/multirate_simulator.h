@@ -42,11 +42,11 @@ namespace hapsim::device {
 // contact.model_compliance_step `auto` for `mode` at the visual step visual_dt_s: the haptic
 // step's compliance in the hybrid mode below kHapticComplianceBelowHz, else the visual step's
 // (the paper's; the linear and lcp modes keep it, so that `linear` stays the paper's model).
-// Measured on block_press against the 1 kHz reference (hybrid, RMS device-force error, N):
-// 10 Hz 0.41 visual / 0.19 haptic, 33 Hz 0.058 / 0.049, 100 Hz 0.014 / 0.016, 200 Hz 0.0069 /
-// 0.0077. A 1 kHz solve that switches rows on feels the body's response over one haptic step,
-// and the frame's step overstates its stiffness when frames are long. kVisual and kHaptic are
-// returned as they are.
+// Measured on block_press against the 1 kHz reference (hybrid, RMS device-force error, N,
+// visual / haptic step): 10 Hz 0.406 / 0.172, 33 Hz 0.056 / 0.040, 100 Hz 0.0124 / 0.0123,
+// 200 Hz 0.0059 / 0.0060. A 1 kHz solve that switches rows on feels the body's response over one
+// haptic step, and the frame's step overstates its stiffness when frames are long. kVisual and
+// kHaptic are returned as they are.
 constexpr double kHapticComplianceBelowHz = 100.0;
 contact::ModelComplianceStep ResolveModelComplianceStep(contact::ModelComplianceStep step,
                                                         HapticMode mode, double visual_dt_s);

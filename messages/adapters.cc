@@ -100,7 +100,8 @@ bool CheckRowArray(const std::vector<std::vector<double>>& rows, int num_rows, i
 // PackedRowStart(n) is the number of entries.
 std::int64_t PackedRowStart(std::int64_t i) { return i * (i + 1) / 2; }
 
-// contact_model_t.gap_m and body_velocity_m_s: none, or one finite entry each per row.
+// contact_model_t.gap_m, gap_target_m_s, surface_velocity_m_s: none, or one finite entry each
+// per row.
 bool CheckRowGaps(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   const int gaps = msg.num_row_gaps;
   if (gaps != 0 && gaps != msg.num_rows) {
@@ -110,9 +111,12 @@ bool CheckRowGaps(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   }
   return CheckSize(msg.gap_m.size(), gaps, "contact_model_t.gap_m", "entries", error) &&
          CheckFinite(msg.gap_m.data(), gaps, "contact_model_t.gap_m", error) &&
-         CheckSize(msg.body_velocity_m_s.size(), gaps, "contact_model_t.body_velocity_m_s",
+         CheckSize(msg.gap_target_m_s.size(), gaps, "contact_model_t.gap_target_m_s", "entries",
+                   error) &&
+         CheckFinite(msg.gap_target_m_s.data(), gaps, "contact_model_t.gap_target_m_s", error) &&
+         CheckSize(msg.surface_velocity_m_s.size(), gaps, "contact_model_t.surface_velocity_m_s",
                    "entries", error) &&
-         CheckFinite(msg.body_velocity_m_s.data(), gaps, "contact_model_t.body_velocity_m_s",
+         CheckFinite(msg.surface_velocity_m_s.data(), gaps, "contact_model_t.surface_velocity_m_s",
                      error);
 }
 
@@ -235,7 +239,9 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
          CheckRowGaps(msg, error) && CheckRowLayout(msg, error) && CheckBodyCompliance(msg, error);
 }
 
-// The ranges of the lcp rows that decoding alone cannot catch: J_v,i = −n_iᵀ is a unit normal;
+// The ranges of the lcp rows that decoding alone cannot catch: J_v,i = −n_iᵀ is a unit normal, or
+// zero with J_ω,i zero for a row that touches no tool (a body node on a rigid object: its row
+// couples to the tool's only through the body, CalcContactJacobian);
 // W_body is positive semidefinite, so its diagonal is ≥ 0 (symmetry holds by construction: only
 // the lower triangle travels); the frame's normal impulses are ≥ 0 (unilateral contacts push;
 // a tangential one has either sign).
@@ -244,9 +250,12 @@ bool CheckContactRowRanges(const hapsim_lcm::contact_model_t& msg, std::string* 
   for (int i = 0; i < msg.num_rows; ++i) {
     const double norm = std::sqrt(msg.J_v[i][0] * msg.J_v[i][0] + msg.J_v[i][1] * msg.J_v[i][1] +
                                   msg.J_v[i][2] * msg.J_v[i][2]);
-    if (std::abs(norm - 1.0) > kUnitTolerance) {
+    const bool off_tool =
+        norm == 0.0 && msg.J_w[i][0] == 0.0 && msg.J_w[i][1] == 0.0 && msg.J_w[i][2] == 0.0;
+    if (std::abs(norm - 1.0) > kUnitTolerance && !off_tool) {
       SetError(error, "contact_model_t.J_v[" + std::to_string(i) + "]: norm " +
-                          std::to_string(norm) + ", expected a unit normal");
+                          std::to_string(norm) +
+                          ", expected a unit normal (or zero, with J_w zero: no tool)");
       return false;
     }
     if (PackedBodyEntry(msg, i, i) < 0.0) {
@@ -407,10 +416,12 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   msg.rows_per_contact = static_cast<std::int8_t>(per);
   msg.body_rhs.resize(n);
   msg.lambda_frame_N.assign(n, 0.0);
-  const bool gaps = rows.gap_m.size() == n && rows.body_velocity_m_s.size() == n;
+  const bool gaps = rows.gap_m.size() == n && rows.gap_target_m_s.size() == n &&
+                    rows.surface_velocity_m_s.size() == n;
   msg.num_row_gaps = gaps ? n : 0;
   msg.gap_m.assign(msg.num_row_gaps, 0.0);
-  msg.body_velocity_m_s.assign(msg.num_row_gaps, 0.0);
+  msg.gap_target_m_s.assign(msg.num_row_gaps, 0.0);
+  msg.surface_velocity_m_s.assign(msg.num_row_gaps, 0.0);
   for (int i = 0; i < n; ++i) {
     for (int c = 0; c < 3; ++c) {
       msg.J_v[i][c] = rows.J_v(i, c);
@@ -422,7 +433,8 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
     if (rows.lambda_frame_N.size() == n) msg.lambda_frame_N[i] = rows.lambda_frame_N[i];
     if (gaps) {
       msg.gap_m[i] = rows.gap_m[i];
-      msg.body_velocity_m_s[i] = rows.body_velocity_m_s[i];
+      msg.gap_target_m_s[i] = rows.gap_target_m_s[i];
+      msg.surface_velocity_m_s[i] = rows.surface_velocity_m_s[i];
     }
   }
   msg.num_friction_coefficients = static_cast<std::int32_t>(rows.friction_coefficient.size());
@@ -482,10 +494,12 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
     rows->lambda_frame_N[i] = msg.lambda_frame_N[i];
   }
   rows->gap_m.resize(msg.num_row_gaps);
-  rows->body_velocity_m_s.resize(msg.num_row_gaps);
+  rows->gap_target_m_s.resize(msg.num_row_gaps);
+  rows->surface_velocity_m_s.resize(msg.num_row_gaps);
   for (int i = 0; i < msg.num_row_gaps; ++i) {
     rows->gap_m[i] = msg.gap_m[i];
-    rows->body_velocity_m_s[i] = msg.body_velocity_m_s[i];
+    rows->gap_target_m_s[i] = msg.gap_target_m_s[i];
+    rows->surface_velocity_m_s[i] = msg.surface_velocity_m_s[i];
   }
   rows->rows_per_contact = per;
   rows->num_uncoupled_rows = n - coupled;

@@ -137,7 +137,7 @@ bool CheckWireLayout<hapsim_lcm::contact_model_t>(const void* data, int size, st
   wire.Skip(contact_lower, kDouble, "W_body_contact_lower");
   wire.Skip(2 * rows, kDouble, "body_rhs, lambda_frame_N");
   const std::int64_t gaps = wire.ReadCount("num_row_gaps");
-  wire.Skip(2 * gaps, kDouble, "gap_m, body_velocity_m_s");
+  wire.Skip(3 * gaps, kDouble, "gap_m, gap_target_m_s, surface_velocity_m_s");
   wire.Skip(1, kInt8, "rows_per_contact");
   const std::int64_t mus = wire.ReadCount("num_friction_coefficients");
   wire.Skip(mus, kDouble, "friction_coefficient");
@@ -213,7 +213,8 @@ void SizeArraysToCounts(hapsim_lcm::contact_model_t* msg) {
   msg->body_rhs.resize(msg->num_rows);
   msg->lambda_frame_N.resize(msg->num_rows);
   msg->gap_m.resize(msg->num_row_gaps);
-  msg->body_velocity_m_s.resize(msg->num_row_gaps);
+  msg->gap_target_m_s.resize(msg->num_row_gaps);
+  msg->surface_velocity_m_s.resize(msg->num_row_gaps);
   msg->friction_coefficient.resize(msg->num_friction_coefficients);
   msg->body_x_W_m.resize(msg->num_body_nodes);
   msg->object_x_W_m.resize(msg->num_objects);

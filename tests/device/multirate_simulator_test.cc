@@ -371,7 +371,8 @@ TEST(HapticStep, LcpAndHybridStepsAllocateNothing) {
       rows_a.lambda_frame_N = Eigen::VectorXd::Zero(n);
       for (int i = 0; i < n; i += 3) rows_a.lambda_frame_N[i] = 1.0;  // the pushing rows held
       rows_a.gap_m = Eigen::VectorXd::Constant(n, 2e-4);
-      rows_a.body_velocity_m_s = Eigen::VectorXd::Zero(n);
+      rows_a.gap_target_m_s = Eigen::VectorXd::Constant(n, -2e-4 / 0.033);
+      rows_a.surface_velocity_m_s = Eigen::VectorXd::Zero(n);
     }
     contact::ContactRows rows_b = rows_a;
     rows_b.body_rhs *= -1.0;

@@ -55,12 +55,14 @@ void CheckAccepted(const contact::LinearContactModel& model, const contact::Cont
              "contact_model_t rows of sizes that disagree with num_rows " + std::to_string(n));
   CheckOrDie(rows.J_v.allFinite() && rows.J_w.allFinite() && rows.W_body.allFinite() &&
                  rows.body_rhs.allFinite() && rows.lambda_frame_N.allFinite() &&
-                 rows.gap_m.allFinite() && rows.body_velocity_m_s.allFinite(),
+                 rows.gap_m.allFinite() && rows.gap_target_m_s.allFinite() &&
+                 rows.surface_velocity_m_s.allFinite(),
              "contact_model_t accepted non-finite rows");
   CheckOrDie(rows.W_body == rows.W_body.transpose(), "contact_model_t: W_body not symmetric");
   for (int i = 0; i < n; ++i) {
+    const bool off_tool = rows.J_v.row(i).norm() == 0.0 && rows.J_w.row(i).norm() == 0.0;
     CheckOrDie(
-        std::abs(rows.J_v.row(i).norm() - 1.0) <= kUnitTolerance,
+        std::abs(rows.J_v.row(i).norm() - 1.0) <= kUnitTolerance || off_tool,
         "contact_model_t accepted a J_v row of norm " + std::to_string(rows.J_v.row(i).norm()));
     CheckOrDie(rows.W_body(i, i) >= 0.0 &&
                    (i % rows.rows_per_contact != 0 || rows.lambda_frame_N[i] >= 0.0),

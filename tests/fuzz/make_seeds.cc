@@ -132,7 +132,8 @@ hapsim_lcm::contact_model_t SomeRows(hapsim_lcm::contact_model_t msg, int couple
   pick(&msg.lambda_frame_N);
   if (msg.num_row_gaps > 0) {
     pick(&msg.gap_m);
-    pick(&msg.body_velocity_m_s);
+    pick(&msg.gap_target_m_s);
+    pick(&msg.surface_velocity_m_s);
   }
   msg.num_rows = coupled + uncoupled;
   msg.num_row_gaps = msg.num_row_gaps > 0 ? msg.num_rows : 0;

@@ -232,7 +232,8 @@ struct ContactModelFixture {
     rows.lambda_frame_N =
         Eigen::VectorXd::NullaryExpr(num_rows, [&] { return std::max(0.0, random()); });
     rows.gap_m = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return 1e-3 * random(); });
-    rows.body_velocity_m_s = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
+    rows.gap_target_m_s = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
+    rows.surface_velocity_m_s = Eigen::VectorXd::NullaryExpr(num_rows, [&] { return random(); });
     header = {1717000000000001,  99,         1.0 / 60.0, 1e-3, 1.65, random.Vector(),
               random.Rotation(), ToolState{}};
     header.visual_tool.x_W_m = random.Vector();
@@ -260,7 +261,9 @@ void ExpectSameRowsAndHeader(const ContactModelFixture& in, const contact::Conta
   ExpectBitIdentical(rows.body_rhs, in.rows.body_rhs, "body_rhs");
   ExpectBitIdentical(rows.lambda_frame_N, in.rows.lambda_frame_N, "lambda_frame_N");
   ExpectBitIdentical(rows.gap_m, in.rows.gap_m, "gap_m");
-  ExpectBitIdentical(rows.body_velocity_m_s, in.rows.body_velocity_m_s, "body_velocity_m_s");
+  ExpectBitIdentical(rows.gap_target_m_s, in.rows.gap_target_m_s, "gap_target_m_s");
+  ExpectBitIdentical(rows.surface_velocity_m_s, in.rows.surface_velocity_m_s,
+                     "surface_velocity_m_s");
   EXPECT_EQ(rows.rows_per_contact, in.rows.rows_per_contact);
   EXPECT_EQ(rows.num_uncoupled_rows, in.rows.num_uncoupled_rows);
   ExpectBitIdentical(rows.friction_coefficient, in.rows.friction_coefficient,
@@ -321,7 +324,8 @@ TEST(ContactModelMessage, FrictionRowsRoundTripAndBadLayoutsAreRejected) {
       {"lambda_frame_N[3]", [](auto* m) { m->lambda_frame_N[3] = -0.5; }},  // a normal row
       {"num_row_gaps", [](auto* m) { m->num_row_gaps = 1; }},
       {"gap_m", [](auto* m) { m->gap_m[2] = kNaN; }},
-      {"body_velocity_m_s", [](auto* m) { m->body_velocity_m_s.pop_back(); }},
+      {"gap_target_m_s", [](auto* m) { m->gap_target_m_s.pop_back(); }},
+      {"surface_velocity_m_s", [](auto* m) { m->surface_velocity_m_s[0] = kNaN; }},
   };
   for (const Case& c : cases) {
     hapsim_lcm::contact_model_t bad = msg;
@@ -497,6 +501,10 @@ TEST(ContactModelMessage, InconsistentOrNonFiniteMessagesAreRejected) {
       // Ranges (issue 9): a normal that is not unit, a W_body that cannot be positive
       // semidefinite, an impulse that pulls.
       {"J_v[2]", [](auto* m) { m->J_v[2][0] += 0.01; }},
+      {"J_v[1]",
+       [](auto* m) {
+         m->J_v[1] = {0.0, 0.0, 0.0};
+       }},                                                            // zero, but J_w is not
       {"W_body_lower", [](auto* m) { m->W_body_lower[2] = -1e-9; }},  // diagonal of row 1
       {"lambda_frame_N[0]", [](auto* m) { m->lambda_frame_N[0] = -0.5; }},
   };
@@ -513,6 +521,22 @@ TEST(ContactModelMessage, InconsistentOrNonFiniteMessagesAreRejected) {
     ExpectSameModel(model, before.model);
     ExpectSameRowsAndHeader(before, rows, header);
   }
+}
+
+// A row that touches no tool (a body node on a rigid object, as the lcp and hybrid rows of a
+// scene with a tray carry): J_v and J_w zero. It travels; the train_test's liver on its tray once
+// found every such model refused by the unit-normal check.
+TEST(ContactModelMessage, RowsThatTouchNoToolTravel) {
+  ContactModelFixture in(4);
+  in.rows.J_v.row(2).setZero();
+  in.rows.J_w.row(2).setZero();
+  const auto msg = ToMessage(in.model, &in.rows, in.header);
+  contact::LinearContactModel model;
+  contact::ContactRows rows;
+  ContactModelHeader header;
+  std::string error;
+  ASSERT_TRUE(FromMessage(msg, &model, &rows, &header, &error)) << error;
+  ExpectSameRowsAndHeader(in, rows, header);
 }
 
 // The receive thread refills the same ContactRows every frame; with an unchanged row count

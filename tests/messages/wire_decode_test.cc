@@ -49,7 +49,8 @@ hapsim_lcm::contact_model_t MakeContactModel(int rows) {
   msg.lambda_frame_N.assign(rows, 0.0);
   msg.num_row_gaps = rows;
   msg.gap_m.assign(rows, 1e-3);
-  msg.body_velocity_m_s.assign(rows, 0.0);
+  msg.gap_target_m_s.assign(rows, -0.03);
+  msg.surface_velocity_m_s.assign(rows, 0.0);
   return msg;
 }
 
@@ -175,7 +176,7 @@ TEST(WireDecode, ACountOfZeroEmptiesTheArrayOfAReusedMessage) {
   EXPECT_EQ(reused.num_rows, 0);
   EXPECT_TRUE(reused.J_v.empty() && reused.J_w.empty() && reused.W_body_lower.empty() &&
               reused.body_rhs.empty() && reused.lambda_frame_N.empty() && reused.gap_m.empty() &&
-              reused.body_velocity_m_s.empty());
+              reused.gap_target_m_s.empty() && reused.surface_velocity_m_s.empty());
   contact::LinearContactModel model;
   contact::ContactRows rows;
   ContactModelHeader header;
