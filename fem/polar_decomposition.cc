@@ -220,8 +220,19 @@ struct alignas(64) LaneBlock {
 // depend on the machine. The build itself stays baseline x86-64. The clones are of this internal
 // function, not of the public one: Clang 14 mishandles clones of a function declared before
 // without the attribute (as in the header).
+// Not under ThreadSanitizer: ld.so calls the ifunc's resolver while it relocates the program,
+// before TSan's runtime exists, and GCC 12 and Clang 14 both instrument the resolver
+// (__tsan_func_entry), so every program linking this file died with SIGSEGV before main (issue
+// 25; google/sanitizers#342). The TSan build takes the baseline loop alone.
 #if defined(__x86_64__) && defined(__GLIBC__) && (defined(__GNUC__) || defined(__clang__))
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define HAPSIM_THREAD_SANITIZER 1
+#endif
+#endif
+#if !defined(__SANITIZE_THREAD__) && !defined(HAPSIM_THREAD_SANITIZER)
 __attribute__((target_clones("avx2", "default")))
+#endif
 #endif
 void CalcRotationsByLanes(const Eigen::Matrix3d* F, int count, Eigen::Matrix3d* R) {
   for (int start = 0; start < count; start += kLanes) {

@@ -6,7 +6,7 @@
 # which checks that it reproduces every device force bit for bit and exports them as CSV.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/setup.sh
+scripts/setup.sh --demo  # the packages and the one program this job needs (scripts/test.sh: the rest)
 out=out/demo
 mkdir -p "$out"
 run=(build/apps/hapsim run scenes/block_press.yaml --log "$out/run.lcm"

@@ -1,9 +1,18 @@
 #!/usr/bin/env bash
 # Installs the Debian packages hapsim needs (skipping those already there; needs root or sudo
 # only when something is missing), then configures and builds into build/.
-# Usage: scripts/setup.sh [extra cmake -D options]
+# Usage: scripts/setup.sh [--demo] [extra cmake -D options]
+#   --demo  only what scripts/demo.sh runs: the packages `hapsim` needs and the `hapsim` target,
+#           without the tests, fuzzers, benchmarks and their tools (issue 25: a newcomer waited
+#           10 min 54 s for the first result, 7 min of it building what the demo never runs).
+#           A later run without --demo installs and builds the rest into the same build/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+demo=0
+if [ "${1:-}" = "--demo" ]; then
+  demo=1
+  shift
+fi
 
 # Why each package: Eigen (linear algebra), SuiteSparse (CHOLMOD sparse Cholesky), OpenBLAS
 # serial (CHOLMOD's supernodal kernels; about 2x faster than the reference BLAS, single-threaded
@@ -20,13 +29,16 @@ cd "$(dirname "$0")/.."
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas0-serial
-  libyaml-cpp-dev libcli11-dev libgtest-dev libbenchmark-dev libfcl-dev
+  libyaml-cpp-dev libcli11-dev libfcl-dev
   liblcm-dev liblcm-bin libssl-dev
-  nlohmann-json3-dev python3 python3-matplotlib python3-yaml
-  clang libclang-rt-14-dev
+  nlohmann-json3-dev
   libopencv-viz-dev libopencv-imgcodecs-dev libopencv-videoio-dev libx11-dev
-  xvfb xdotool x11-utils
 )
+# The tests, fuzzers, benchmarks and charts only.
+if [ "$demo" -eq 0 ]; then
+  packages+=(libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-yaml
+    clang libclang-rt-14-dev xvfb xdotool x11-utils)
+fi
 
 missing=()
 for package in "${packages[@]}"; do
@@ -45,5 +57,12 @@ if [ ${#missing[@]} -gt 0 ]; then
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
-cmake --build build -j2
+if [ "$demo" -eq 1 ]; then
+  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DHAPSIM_BUILD_TESTS=OFF \
+    -DHAPSIM_BUILD_BENCHMARKS=OFF "$@" >/dev/null
+  cmake --build build -j2 --target hapsim
+else
+  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DHAPSIM_BUILD_TESTS=ON \
+    -DHAPSIM_BUILD_BENCHMARKS=ON "$@" >/dev/null
+  cmake --build build -j2
+fi
