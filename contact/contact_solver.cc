@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "contact/frame_friction_solver.h"
+
 namespace hapsim::contact {
 namespace {
 
@@ -293,8 +295,15 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
       return SolveActiveSet(W, rhs, dt_s, options, lambda);
     case ContactLaw::kFriction:
       if (rows_per_contact != 3) throw std::invalid_argument("friction needs 3 rows per contact");
-      return SolveProjectedGaussSeidel(W, rhs, dt_s, 3, options.friction_coefficient,
-                                       friction_per_contact, options, lambda);
+      if (options.friction_method == FrictionMethod::kDenseGaussSeidel)
+        return SolveProjectedGaussSeidel(W, rhs, dt_s, 3, options.friction_coefficient,
+                                         friction_per_contact, options, lambda);
+      return SolveFrictionOnWorkingSet(
+          W, rhs, dt_s,
+          friction_per_contact
+              ? *friction_per_contact
+              : Eigen::VectorXd::Constant(rhs.size() / 3, options.friction_coefficient),
+          options, lambda);
   }
   throw std::invalid_argument("unknown contact law");
 }

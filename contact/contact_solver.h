@@ -1,12 +1,12 @@
 #pragma once
 // Contact impulses from the Delassus matrix (DESIGN.md §4), three laws behind one function:
 //
-//   equality   (the paper)      Δt W λ = b − c_free                    dense, rank-revealing
-//   unilateral (Signorini)      c = c_free − b + Δt W λ ≥ 0,  λ ≥ 0,  cᵀλ = 0   projected
-//   Gauss–Seidel friction   (Coulomb)        normal rows as unilateral; per contact the tangential
-//   impulse is
-//                               projected onto the disc |λ_t| ≤ μ λ_n     blocked projected
-//                               Gauss–Seidel
+//   equality   (the paper)  Δt W λ = b − c_free                          dense, rank-revealing
+//   unilateral (Signorini)  c = c_free − b + Δt W λ ≥ 0, λ ≥ 0, cᵀλ = 0  primal active set
+//   friction   (Coulomb)    normal rows as unilateral; per contact the tangential impulse in the
+//                           disc |λ_t| ≤ μ λ_n, opposite the slip on its rim: blocked projected
+//                           Gauss–Seidel on a working set with Newton steps
+//                           (frame_friction_solver.h), or over the dense W (FrictionMethod)
 //
 // W is (rows x rows) with W = J_v A_v⁻¹ J_vᵀ + J_ω M⁻¹ A_L⁻¹ J_ωᵀ + J_u A_u⁻¹ J_uᵀ. It is symmetric
 // only when the coupling's torque Jacobian is (zero rotation error), and singular when contacts are
@@ -22,17 +22,27 @@ namespace hapsim::contact {
 enum class ContactLaw { kEquality, kUnilateral, kFriction };
 const char* ToString(ContactLaw law);  // "equality", "unilateral", "friction"
 
+// How kFriction is solved; both stop on the same residual (CalcFrictionResidual ≤ tolerance):
+//   kWorkingSet        sweeps on the contacts that carry load or approach, W applied by columns,
+//                      and Newton steps once their states settle (frame_friction_solver.h)
+//   kDenseGaussSeidel  blocked projected Gauss–Seidel over every row of the dense W (the original
+//                      solver: each sweep and each residual a product with the whole W)
+enum class FrictionMethod { kWorkingSet, kDenseGaussSeidel };
+
 struct ContactSolveOptions {
   ContactLaw law = ContactLaw::kUnilateral;
   double friction_coefficient = 0.0;  // μ ≥ 0, kFriction only
-  int max_iterations = 500;           // Gauss–Seidel sweeps
-  double tolerance = 1e-12;           // on the complementarity residual, relative (see below)
+  // kFriction only
+  FrictionMethod friction_method = FrictionMethod::kWorkingSet;
+  int max_iterations = 500;  // Gauss–Seidel sweeps
+  double tolerance = 1e-12;  // on the complementarity residual, relative (see below)
 };
 
 struct ContactSolveReport {
   int iterations = 0;  // Gauss–Seidel sweeps (0 for the direct equality solve)
   double residual = 0.0;  // max_i |min(λ_i, c_i)|·Δt‖W‖-scaled, or ‖ΔtWλ − rhs‖/‖rhs‖ for equality
   bool converged = false;
+  int newton_steps = 0;  // kFriction, FrictionMethod::kWorkingSet: Newton steps tried (kept or not)
 };
 
 // Solves for the impulses λ (rows). On entry *lambda is the initial guess for Gauss–Seidel

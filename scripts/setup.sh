@@ -16,7 +16,8 @@ fi
 
 # Why each package: Eigen (linear algebra), SuiteSparse (CHOLMOD sparse Cholesky), OpenBLAS
 # serial (CHOLMOD's supernodal kernels; about 2x faster than the reference BLAS, single-threaded
-# so benchmarks measure one core), yaml-cpp (scenes), CLI11 (command line), GoogleTest and
+# so benchmarks measure one core), LAPACK (dgetrf for the frame friction solve's Newton steps,
+# frame_friction_solver.cc; SuiteSparse already pulls it in), yaml-cpp (scenes), CLI11 (command line), GoogleTest and
 # Google Benchmark (tests, benchmarks), nlohmann-json (JSON outputs), matplotlib (charts), PyYAML
 # (the scene variants of scripts/bench.sh; a Debian package rather than a hand-written YAML
 # writer), FCL (collision detection: bounding-volume hierarchy over the body surface, triangle-vs-tool tests),
@@ -28,7 +29,7 @@ fi
 # and x11-utils (headless windows in the tests, driven as a person would; xwininfo).
 packages=(
   build-essential cmake pkg-config
-  libeigen3-dev libsuitesparse-dev libopenblas0-serial
+  libeigen3-dev libsuitesparse-dev libopenblas0-serial liblapack-dev
   libyaml-cpp-dev libcli11-dev libfcl-dev
   liblcm-dev liblcm-bin libssl-dev
   nlohmann-json3-dev
