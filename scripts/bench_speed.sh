@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
 # Issue 13's speed-ups measured before and after in one run, each beside its accuracy.
 #
-#   scripts/bench_speed.sh [BASE_REV]      (default 4eceff2: main before issue 13's speed work)
+#   [CASES="..."] scripts/bench_speed.sh [BASE_REV]   (default 4eceff2: main before issue 13's
+#                                                      speed work)
 #
+# CASES: some of fem fem_step block_press block_press_large block_press_friction friction (all by
+# default), e.g. issue 25's: CASES="block_press block_press_large block_press_friction"
+# scripts/bench_speed.sh 2e7ba71.
 # Builds BASE_REV in a worktree (only the targets used; Release, -j2), then runs the same
 # commands with both builds, the two of each pair one right after the other, on the same scene
 # files (those checked out):
@@ -36,7 +40,11 @@ if [ ! -d "$base_src/.git" ] && [ ! -f "$base_src/.git" ]; then
 fi
 git -C "$base_src" checkout --detach -q "$base_rev"
 cmake -S "$base_src" -B "$base_src/build" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$base_src/build" -j2 --target hapsim fem_step_benchmark haptic_friction_benchmark
+cases=${CASES:-fem fem_step block_press block_press_large block_press_friction friction}
+targets=(hapsim)
+[[ " $cases " == *" fem_step "* ]] && targets+=(fem_step_benchmark)
+[[ " $cases " == *" friction "* ]] && targets+=(haptic_friction_benchmark)
+cmake --build "$base_src/build" -j2 --target "${targets[@]}"
 declare -A bin=([before]="$base_src/build" [after]=build)
 
 # The reference of block_press, once (about 2 minutes).
@@ -80,12 +88,16 @@ measure() {
 before_large=$out/before/block_press_large.yaml
 mkdir -p "$out/before"
 sed 's/, factor_precision: half}/}/' scenes/block_press_large.yaml > "$before_large"
-if grep -q factor_precision "$before_large"; then
+# A base that reads the key (issue 13's work on) runs the scene as it is.
+if git -C "$base_src" grep -q factor_precision -- config/; then
+  cp scenes/block_press_large.yaml "$before_large"
+elif grep -q factor_precision "$before_large"; then
   echo "bench_speed.sh: scenes/block_press_large.yaml's factor_precision is not where the before" \
     "build's copy removes it (', factor_precision: half}' in the solver line)" >&2
   exit 2
 fi
-for what in fem fem_step block_press block_press_large block_press_friction friction; do
+rm -rf "$out/before"/*/ "$out/after"/*/
+for what in $cases; do
   for run in before after; do
     echo "== $what, $run (${bin[$run]})"
     measure "$run" "$what"

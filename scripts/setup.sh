@@ -17,7 +17,8 @@ fi
 # Why each package: Eigen (linear algebra), SuiteSparse (CHOLMOD sparse Cholesky), OpenBLAS
 # serial (CHOLMOD's supernodal kernels; about 2x faster than the reference BLAS, single-threaded
 # so benchmarks measure one core), LAPACK (dgetrf for the frame friction solve's Newton steps,
-# frame_friction_solver.cc; SuiteSparse already pulls it in), yaml-cpp (scenes), CLI11 (command line), GoogleTest and
+# frame_friction_solver.cc; SuiteSparse already pulls it in), yaml-cpp (scenes), CLI11 (command
+# line), GoogleTest and
 # Google Benchmark (tests, benchmarks), nlohmann-json (JSON outputs), matplotlib (charts), PyYAML
 # (the scene variants of scripts/bench.sh; a Debian package rather than a hand-written YAML
 # writer), FCL (collision detection: bounding-volume hierarchy over the body surface, triangle-vs-tool tests),
