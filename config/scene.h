@@ -314,8 +314,8 @@ std::optional<contact::ComplianceMethod> ParseComplianceMethod(const std::string
 
 // Why `mode` cannot take contact.model_compliance_step `step`, or nullopt if it can: the
 // haptic-step compliance is built (and paid for every frame) for the linear contact model, which
-// only linear, lcp and reference read. The scene's own mode is checked as it is read; a mode
-// given on the command line by ResolveHapticMode.
+// only hybrid, linear, lcp and reference read. The scene's own mode is checked as it is read; a
+// mode given on the command line by ResolveHapticMode.
 std::optional<std::string> WhyModelComplianceStepRefused(contact::ModelComplianceStep step,
                                                          HapticMode mode);
 

@@ -458,7 +458,7 @@ std::optional<std::string> WhyModelComplianceStepRefused(contact::ModelComplianc
   if (step != contact::ModelComplianceStep::kHaptic || device::UsesLinearContactModel(mode))
     return std::nullopt;
   return std::string("'haptic' sets the linear contact model's compliance, which the ") +
-         device::ToString(mode) + " mode does not use (linear, lcp, reference)";
+         device::ToString(mode) + " mode does not use (hybrid, linear, lcp, reference)";
 }
 
 std::optional<HapticMode> ParseHapticMode(const std::string& name) {

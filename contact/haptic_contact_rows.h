@@ -25,7 +25,8 @@ struct ContactRows {
   // for a push", which on block_press holds twice the ~70 active rows and cost 1.1 ms to shrink.
   Eigen::VectorXd lambda_frame_N;
   // (n each, or all three empty) What the hybrid mode needs to follow a row the frame did not find
-  // active between frames (device/haptic_step.h), normal rows (0 on tangential ones):
+  // active between frames (device/haptic_step.h), read on normal rows (gap and gap target are 0 on
+  // tangential ones, the surface velocity is the tangential one there):
   //   gap_m                φ_i, the row's gap at the tool pose the rows are linearised at, m
   //   gap_target_m_s       the part of body_rhs_i that closes that gap over the visual frame,
   //                        −φ_i/Δt_visual (−β φ_i/Δt_visual when penetrating), m/s

@@ -77,11 +77,12 @@ bool FactorCholeskyInPlace(Eigen::Ref<Eigen::MatrixXd> K) {
 //   W̄_jB x_B + U_j y + Σ_entered W̄_jj' ξ_t' = r_j   (entered row j, ξ_t = x_j)
 //   e_iᵀ x_B = 0                                     (left row i)
 //
-// whose Schur complement on K0 is m × m, m = 6 + items. Y = L⁻¹[U_B V], P = YᵀY = [U_B V]ᵀK0⁻¹
-// [U_B V] and q = Yᵀh, h = L⁻¹ body_rhs_B, do not depend on the step and are updated one column
-// (one forward substitution) per change; with r_B = body_rhs_B − U_B s_free everything
-// step-dependent in the border is 6-dimensional, and x_B = L⁻ᵀ(h − Y [s_free + y; ξ]) costs one
-// back substitution per solve.
+// whose Schur complement on K0 is m × m, m = 6 + items. Y = L⁻¹[U_B V] and P = YᵀY = [U_B V]ᵀK0⁻¹
+// [U_B V] do not depend on the step and are updated one column (one forward substitution) per
+// change; h = L⁻¹ target_B and q = Yᵀh depend on the step's targets (body_rhs unless Solve is
+// given others) and are redone when they change (RefreshTargets). With r_B = target_B − U_B s_free
+// everything else step-dependent in the border is 6-dimensional, and x_B = L⁻ᵀ(h − Y [s_free + y;
+// ξ]) costs one back substitution per solve.
 // The rows themselves (n, W, U, body_rhs) are the ContactRowCache it extends.
 struct HapticLcpSolver::Workspace : ContactRowCache {
   explicit Workspace(int max_rows_in)
@@ -100,6 +101,7 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
         q(kMaxBorder),
         active(max_rows_in, 0),
         held(max_rows_in, 0),
+        frame_active(max_rows_in, 0),
         r(max_rows_in),
         x(max_rows_in),
         z(max_rows_in),
@@ -126,6 +128,13 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   void GuessActiveSet(const ContactRows& rows, const Eigen::VectorXd& push, bool hold);
   void StartFromGuess();
   void RefreshTargets();
+  bool HoldsFrameSet(const ContactRows& rows) const {
+    const bool frame_set = rows.lambda_frame_N.size() == n;
+    for (int i = 0; i < n; ++i)
+      if (static_cast<bool>(frame_active[i]) != (frame_set && rows.lambda_frame_N[i] > 0.0))
+        return false;
+    return true;
+  }
   void ForwardSolveInPlace(int first, Eigen::Ref<Eigen::VectorXd> v) const;
   void BackSolveInPlace(Eigen::Ref<Eigen::VectorXd> v) const;
   void AddEnteredRow(int j);
@@ -176,6 +185,9 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   // rows): always in the active set, their λ of either sign, never a complementarity test.
   std::vector<std::uint8_t> held;
   int num_held = 0;
+  // (max) the frame's active rows as the rows last gave them (λ_frame > 0): unstamped rows are
+  // the cached ones only if these match too, for they choose the held set.
+  std::vector<std::uint8_t> frame_active;
   Eigen::VectorXd r, x, z, w, column;
   Eigen::VectorXd target;  // (max) this step's body_rhs (rows.body_rhs, or Solve's targets)
   // Border system of one solve.
@@ -258,20 +270,24 @@ void HapticLcpSolver::Workspace::GuessActiveSet(const ContactRows& rows,
   const bool frame_set = rows.lambda_frame_N.size() == n;
   num_held = 0;
   for (int i = 0; i < n; ++i) {
-    held[i] = hold && frame_set && rows.lambda_frame_N[i] > 0.0;
+    frame_active[i] = frame_set && rows.lambda_frame_N[i] > 0.0;
+    held[i] = hold && frame_active[i];
     num_held += held[i];
     active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : push[i] > 0.0;
   }
   rebase_pending = true;
 }
 
-// Factorises the guessed set. A dependent guess leaves an empty base (Rebase): a cold start, from
-// the held rows alone if there are any (they must stay in; if they are dependent themselves, the
-// next SolveOnActiveSet fails and the caller falls back to the linear model).
+// Factorises the guessed set. A dependent guess leaves an empty base (Rebase): a cold start. With
+// held rows the guess is the held set itself, and dependent held rows (redundant contacts, which
+// the frame's solve admits through its small diagonal shift, contact_solver.cc) have no unique
+// equality solution to hold: these rows are then all solved unilaterally, as the lcp mode solves
+// them, until new rows come (which keeps the tool from passing through, unlike a fall-back to the
+// linear model, and costs no retry at the next steps).
 void HapticLcpSolver::Workspace::StartFromGuess() {
   if (Rebase() || num_held == 0) return;
-  for (int i = 0; i < n; ++i) active[i] = held[i];
-  rebase_pending = true;
+  std::fill(held.begin(), held.begin() + n, std::uint8_t{0});
+  num_held = 0;
 }
 
 // New targets on the same rows and base (the hybrid mode's free rows move every step): h = L⁻¹
@@ -568,7 +584,9 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
     return true;
   }
   if (targets != nullptr && (targets->size() < n || !targets->head(n).allFinite())) return false;
-  const bool new_rows = !ws.Holds(rows);
+  bool new_rows = !ws.Holds(rows);
+  // Unstamped rows equal in every entry but the frame's impulses would hold another set.
+  if (!new_rows && hold_frame_contacts_ && rows.stamp == 0) new_rows = !ws.HoldsFrameSet(rows);
   if (new_rows && !ws.Take(rows)) return false;
   // Without targets the cached body_rhs (rows stamped as cached are, by contract, the cache's).
   const Eigen::VectorXd& source = targets != nullptr ? *targets : ws.body_rhs;

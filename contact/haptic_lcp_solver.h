@@ -47,7 +47,8 @@ namespace hapsim::contact {
 // set. Changed rows (a new frame: other contacts, whose indices say nothing about the old set)
 // are copied, checked and factorised once, starting from the frame's active set
 // (ContactRows::lambda_frame_N > 0) or, without it, from the rows that ask for a push,
-// rhs_i > 0. The guess only decides how much work is done, never the answer: the set is first
+// rhs_i > 0. The guess only decides how much work is done, never the answer (held rows, below,
+// are another matter: their set is the frame's): the set is first
 // shrunk until its equality solution is positive, then the active-set iteration runs to
 // complementarity; the LCP has a unique solution whenever W's symmetric part is positive
 // definite, so every guess reaches the same λ.
@@ -78,9 +79,11 @@ namespace hapsim::contact {
 // same rows (with this step's tool system in place of the frame's), and stops a tool that reaches
 // a row the frame did not find active (the linear model alone lets it through). The same
 // active-set iteration solves it: held rows are never dropped and never tested for sign (a convex
-// QP in which they are unconstrained; W's symmetric part positive definite keeps it unique). If
-// the held rows are dependent (W_HH singular) the solve fails and the caller falls back to the
-// linear model, which factorises such a W by a complete orthogonal decomposition.
+// QP in which they are unconstrained; W's symmetric part positive definite keeps it unique).
+// Dependent held rows (W_HH singular: redundant contacts the frame found active, which its own
+// solve admits through a small diagonal shift) are not held: those rows are then solved
+// unilaterally, as in the lcp mode, until new rows come. (The linear model factorises such a W by
+// a complete orthogonal decomposition; the fall-back to it would lose the rows a fast tool meets.)
 //
 // Friction rows (ContactRows::rows_per_contact 3, the friction law) go to a HapticFrictionSolver
 // the solver owns when built with friction_sweeps > 0 (its sweep budget per step); the counters
@@ -129,7 +132,7 @@ class HapticLcpSolver {
   // Equality solves on an active set in the last Solve (1 when the warm start was right).
   int last_iterations() const { return last_iterations_; }
   // max_i |min(λ_i, c_i/(Δt W_ii))| / max_i λ_i (absolute when λ = 0), the measure of
-  // ContactSolveReport::residual; ≲ 1e-12 when converged.
+  // ContactSolveReport::residual, with |c_i/(Δt W_ii)| for a held row; ≲ 1e-12 when converged.
   double last_residual() const { return last_residual_; }
   // Rows with λ ≠ 0 after the last Solve (a held row may pull: λ < 0).
   int last_num_active() const { return last_num_active_; }

@@ -111,13 +111,19 @@ HapticLoopOutput HapticLoop::Step(const DeviceState& device, double device_age_s
   // 4. Passivity of what was sent.
   const bool was_active = passivity_.active();
   if (device_finite) {
+    // Gravity's work counts only while the hand is sent the rendering: a wrench the safety layer
+    // zeroed (no model, a stale device or model, a non-finite wrench) does not carry the tool's
+    // weight to the port, and crediting its descent then would bank energy that hides a later
+    // fault. (Blends and rate limits pass the weight on, late: credited.) A non-finite tool
+    // position is not taken as the next reference.
     const Eigen::Vector3d& tool_x_W_m = tool_state().x_W_m;
+    const bool finite = tool_x_W_m.allFinite();
     const double gravity_work_J =
-        options_.mode == HapticMode::kGodObject
-            ? 0.0
-            : CalcGravityWork(step_.tool_model().mass_kg, step_.gravity_m_s2(),
-                              observed_tool_x_W_m_, tool_x_W_m);
-    observed_tool_x_W_m_ = tool_x_W_m;
+        options_.mode != HapticMode::kGodObject && !out.sent.zeroed && finite
+            ? CalcGravityWork(step_.tool_model().mass_kg, step_.gravity_m_s2(),
+                              observed_tool_x_W_m_, tool_x_W_m)
+            : 0.0;
+    if (finite) observed_tool_x_W_m_ = tool_x_W_m;
     passivity_.Update(out.sent.force_W_N, out.sent.torque_W_N_m, device.v_W_m_s, device.w_W_rad_s,
                       options_.dt_s, gravity_work_J);
   }

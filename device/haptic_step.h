@@ -1,6 +1,6 @@
 #pragma once
-// One step of the 1 kHz haptic loop in the `linear` (the paper's) and `lcp` modes (DESIGN.md §1,
-// §4, §5):
+// One step of the 1 kHz haptic loop in the `hybrid` (the default), `linear` (the paper's) and
+// `lcp` modes (DESIGN.md §1, §4, §5):
 //   1 read the device   2 coupling wrench between device and haptic tool
 //   3 free tool update: A_v, A_L, F̃, T̃ at the haptic Δt, and F̂ = F̃ + A_v v/Δt, T̂ = T̃ + A_L L/Δt
 //   4 contact force and torque on the haptic tool, either

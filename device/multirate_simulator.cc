@@ -130,12 +130,15 @@ void MultirateSimulator::Run(DeviceBackend* backend, long num_haptic_steps,
     backend->Write(sample.device_force_W_N, sample.device_torque_W_N_m);
     // The wrench sent this step paired with the handle's velocity read for it (Hannaford & Ryu),
     // and gravity's work on the rendered tool over the step (godobject's proxy has no weight).
+    // (The in-process simulator has no safety layer: what is rendered is sent.) A non-finite
+    // tool position is not taken as the next reference.
+    const bool finite = sample.tool_x_W_m.allFinite();
     const double gravity_work_J =
-        options_.mode == HapticMode::kGodObject
-            ? 0.0
-            : CalcGravityWork(frame_.tool_model().mass_kg, visual_options_.gravity_m_s2,
-                              observed_tool_x_W_m_, sample.tool_x_W_m);
-    observed_tool_x_W_m_ = sample.tool_x_W_m;
+        options_.mode != HapticMode::kGodObject && finite
+            ? CalcGravityWork(frame_.tool_model().mass_kg, visual_options_.gravity_m_s2,
+                              observed_tool_x_W_m_, sample.tool_x_W_m)
+            : 0.0;
+    if (finite) observed_tool_x_W_m_ = sample.tool_x_W_m;
     passivity_.Update(sample.device_force_W_N, sample.device_torque_W_N_m, device.v_W_m_s,
                       device.w_W_rad_s, options_.haptic_dt_s, gravity_work_J);
     sample.passivity_energy_J = passivity_.energy_in_J();

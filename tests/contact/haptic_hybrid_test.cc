@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,36 @@ Eigen::VectorXd SolveByEnumeration(const DenseProblem& dense, double dt_s,
   }
   EXPECT_EQ(num_found, 1) << "the mixed LCP's solution is unique";
   return found;
+}
+
+// The plain LCP (every row unilateral) with possibly dependent rows: every subset whose equality
+// block is non-singular (complete orthogonal decomposition, minimum norm) and meets the
+// conditions; returns the first (the force J_vᵀλ is the same for all of them).
+Eigen::VectorXd SolveByEnumerationAllowingTies(const DenseProblem& dense, double dt_s) {
+  const int n = static_cast<int>(dense.rhs.size());
+  const double tolerance = 1e-10 * (1.0 + dense.rhs.cwiseAbs().maxCoeff());
+  for (unsigned mask = 0; mask < (1u << n); ++mask) {
+    std::vector<int> set;
+    for (int i = 0; i < n; ++i)
+      if (mask & (1u << i)) set.push_back(i);
+    const int k = static_cast<int>(set.size());
+    Eigen::MatrixXd W_set(k, k);
+    Eigen::VectorXd rhs_set(k);
+    for (int a = 0; a < k; ++a) {
+      rhs_set[a] = dense.rhs[set[a]];
+      for (int b = 0; b < k; ++b) W_set(a, b) = dt_s * dense.W(set[a], set[b]);
+    }
+    Eigen::VectorXd lambda = Eigen::VectorXd::Zero(n);
+    if (k > 0) {
+      const Eigen::VectorXd x = W_set.completeOrthogonalDecomposition().solve(rhs_set);
+      if ((W_set * x - rhs_set).norm() > tolerance) continue;  // inconsistent
+      for (int a = 0; a < k; ++a) lambda[set[a]] = x[a];
+    }
+    const Eigen::VectorXd c = dt_s * dense.W * lambda - dense.rhs;
+    if (lambda.minCoeff() >= -tolerance && c.minCoeff() >= -tolerance) return lambda;
+  }
+  ADD_FAILURE() << "no solution found";
+  return Eigen::VectorXd::Zero(n);
 }
 
 // `rows` with the frame's impulses set so that `held` are the frame's active rows.
@@ -160,6 +191,73 @@ TEST(HapticHybridSolve, WithNoFreeRowEngagedIsTheLinearContactModel) {
     EXPECT_GE(lcp.last_impulses().minCoeff(), 0.0);
   }
   EXPECT_GT(num_pulling, 0) << "the case must include a held row that pulls";
+}
+
+// The step's own targets (Solve's `targets`: the hybrid step's free rows follow the tool): a warm
+// solver, and one prepared on the rows' own body_rhs, solve each step's targets as a fresh solver
+// solves rows whose body_rhs are those targets, and as enumeration does. Exercises RefreshTargets
+// (same base, new h and q) and the border built on earlier targets.
+TEST(HapticHybridSolve, PerStepTargetsAreSolvedExactly) {
+  const int n = 10;
+  const LcpProblem p = MakeLcpProblem(n, 4242, 0.0, 1.0);
+  std::vector<bool> held(n, false);
+  for (int i = 0; i < n; i += 3) held[i] = true;
+  ContactRows rows = p.rows;
+  MarkFrameActive(held, &rows);
+  StampNewContactRows(&rows);
+  HapticLcpSolver warm(16, 0, true), prepared(16, 0, true);
+  ASSERT_TRUE(prepared.Prepare(rows, MakeTool(0.3)));
+  for (int step = 0; step < 12; ++step) {
+    Eigen::VectorXd targets = rows.body_rhs;
+    for (int i = 0; i < n; ++i)  // free rows' targets move, as a tool approaching them would
+      if (!held[i]) targets[i] += 0.05 * std::sin(0.7 * step + i);
+    ContactRows as_rhs = rows;  // the same problem with the targets as its body_rhs
+    as_rhs.body_rhs = targets;
+    as_rhs.stamp = 0;
+    HapticLcpSolver fresh(16, 0, true);
+    Eigen::Vector3d F_warm, F_prepared, F_fresh, T;
+    const std::string where = "step " + std::to_string(step);
+    ASSERT_TRUE(warm.Solve(rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_warm, &T, &targets)) << where;
+    ASSERT_TRUE(prepared.Solve(rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_prepared, &T, &targets))
+        << where;
+    ASSERT_TRUE(fresh.Solve(as_rhs, p.tool, p.F_hat_N, p.T_hat_N_m, &F_fresh, &T)) << where;
+    const Eigen::VectorXd expected = SolveByEnumeration(
+        AssembleDense(as_rhs, p.tool, p.F_hat_N, p.T_hat_N_m), p.tool.dt_s, held);
+    const double scale = kRelativeTolerance * expected.norm();
+    EXPECT_LE((warm.last_impulses() - expected).norm(), scale) << where;
+    EXPECT_LE((prepared.last_impulses() - expected).norm(), scale) << where;
+    EXPECT_LE((fresh.last_impulses() - expected).norm(), scale) << where;
+    if (step == 0) {
+      EXPECT_GT(warm.last_num_factorizations(), 0);  // then borders, new h and q
+    }
+  }
+}
+
+// Held rows that are dependent (the frame found a contact twice active: it admits redundant
+// contacts) have no equality solution to hold: the rows are then solved as the lcp mode solves
+// them, and the solve does not fail (a fall-back to the linear model would lose the free rows).
+TEST(HapticHybridSolve, DependentHeldRowsAreSolvedUnilaterally) {
+  const LcpProblem p = MakeLcpProblem(8, 99, 0.5, 1.0);
+  ContactRows rows = p.rows;
+  // Row 7 becomes a copy of row 0, in J, W_body and body_rhs: the same constraint twice.
+  const int n = rows.num_rows();
+  rows.J_v.row(7) = rows.J_v.row(0);
+  rows.J_w.row(7) = rows.J_w.row(0);
+  rows.W_body.row(7) = rows.W_body.row(0);
+  rows.W_body.col(7) = rows.W_body.col(0);
+  rows.body_rhs[7] = rows.body_rhs[0];
+  std::vector<bool> held(n, false);
+  held[0] = held[7] = held[3] = true;
+  MarkFrameActive(held, &rows);
+  HapticLcpSolver hybrid(16, 0, true);
+  Eigen::Vector3d F_hybrid, F_lcp, T;
+  ASSERT_TRUE(hybrid.Solve(rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_hybrid, &T));
+  const Eigen::VectorXd expected = SolveByEnumerationAllowingTies(
+      AssembleDense(rows, p.tool, p.F_hat_N, p.T_hat_N_m), p.tool.dt_s);
+  // The force is unique though the split between the twin rows is not.
+  EXPECT_LE((F_hybrid - rows.J_v.transpose() * expected).norm(),
+            1e-8 * (1.0 + expected.cwiseAbs().sum()));
+  EXPECT_GE(hybrid.last_impulses().minCoeff(), 0.0);
 }
 
 TEST(HapticHybridSolve, AllocatesNothingAfterConstruction) {

@@ -254,6 +254,7 @@ double FastPressPenetration(HapticMode mode, double* visual_sink_m) {
       {{0, start, I}, {0.05, start, I}, {0.056, down, I}, {0.4, down, I}});
   contact::VisualFrameOptions visual;
   visual.coupling = {1000, 2, 1, 0.005};
+  visual.model_compliance_step = contact::ModelComplianceStep::kAuto;  // a scene's default
   MultirateOptions options;
   options.mode = mode;
   options.haptic_steps_per_frame = kStepsPerFrame;
@@ -289,12 +290,35 @@ TEST(MultirateSimulator, DefaultModeHoldsAFastToolOnAStiffBlock) {
 TEST(MultirateSimulator, RunsAreBitReproducible) {
   const Scene scene = MakeScene();
   const ScriptedTrajectory script = MakeScript(scene.start, false);
-  const auto a =
-      Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 1000);
-  const auto b =
-      Simulate(scene, HapticMode::kLinear, contact::ContactLaw::kUnilateral, script, 1000);
-  for (size_t k = 0; k < a.size(); ++k)
-    ASSERT_EQ(a[k].device_force_W_N, b[k].device_force_W_N) << k;
+  for (const HapticMode mode : {HapticMode::kLinear, HapticMode::kHybrid}) {
+    const auto a = Simulate(scene, mode, contact::ContactLaw::kUnilateral, script, 1000);
+    const auto b = Simulate(scene, mode, contact::ContactLaw::kUnilateral, script, 1000);
+    for (size_t k = 0; k < a.size(); ++k)
+      ASSERT_EQ(a[k].device_force_W_N, b[k].device_force_W_N) << ToString(mode) << " " << k;
+  }
+}
+
+// contact.model_compliance_step `auto`: the haptic step's compliance for the hybrid mode below
+// 100 Hz, the visual step's at and above it and for every other mode; an explicit choice stands.
+TEST(ResolveModelComplianceStep, ChoosesByModeAndVisualRate) {
+  using contact::ModelComplianceStep;
+  const auto resolve = [](ModelComplianceStep step, HapticMode mode, double hz) {
+    return ResolveModelComplianceStep(step, mode, 1.0 / hz);
+  };
+  EXPECT_EQ(resolve(ModelComplianceStep::kAuto, HapticMode::kHybrid, 33.3),
+            ModelComplianceStep::kHaptic);
+  EXPECT_EQ(resolve(ModelComplianceStep::kAuto, HapticMode::kHybrid, 99.0),
+            ModelComplianceStep::kHaptic);
+  EXPECT_EQ(resolve(ModelComplianceStep::kAuto, HapticMode::kHybrid, 100.0),
+            ModelComplianceStep::kVisual);
+  EXPECT_EQ(resolve(ModelComplianceStep::kAuto, HapticMode::kHybrid, 200.0),
+            ModelComplianceStep::kVisual);
+  for (const HapticMode mode : {HapticMode::kLinear, HapticMode::kLcp, HapticMode::kReference})
+    EXPECT_EQ(resolve(ModelComplianceStep::kAuto, mode, 33.3), ModelComplianceStep::kVisual);
+  EXPECT_EQ(resolve(ModelComplianceStep::kVisual, HapticMode::kHybrid, 33.3),
+            ModelComplianceStep::kVisual);
+  EXPECT_EQ(resolve(ModelComplianceStep::kHaptic, HapticMode::kLinear, 200.0),
+            ModelComplianceStep::kHaptic);
 }
 
 TEST(HapticStep, AllocatesNothing) {
