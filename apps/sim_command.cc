@@ -94,7 +94,7 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
 }
 
 nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
-                           const std::string& device, contact::ComplianceMethod compliance,
+                           const std::string& device, const contact::VisualFrameOptions& visual,
                            int steps_per_frame, const device::PassivityObserver& passivity,
                            const SimRecord& record) {
   std::vector<double> stage[8];
@@ -132,12 +132,9 @@ nlohmann::json MakeSummary(const config::Scene& scene, const std::string& mode,
           {"num_haptic_steps", record.haptic.size()},
           {"num_frames", record.frames.size()},
           {"contact_law", contact::ToString(scene.contact.law)},
-          {"compliance", contact::ToString(compliance)},
-          {"model_compliance_step",
-           contact::ToString(device::ResolveModelComplianceStep(
-               scene.contact.model_compliance_step,
-               config::ParseHapticMode(mode).value_or(device::kDefaultHapticMode),
-               steps_per_frame / scene.haptic.rate_hz))},
+          {"compliance", contact::ToString(visual.compliance)},
+          // As the simulator resolved it (`auto` by the mode and the visual rate).
+          {"model_compliance_step", contact::ToString(visual.model_compliance_step)},
           {"frame_stage_median_ms", medians},
           {"max_contacts", max_contacts},
           {"peak_force_N", peak_N},
@@ -217,9 +214,9 @@ void RunSim(const SimCommandOptions& options) {
   CreateOutputDirectory(std::filesystem::path(summary_path).parent_path().string(), "--summary");
   WriteHapticCsv(out_dir + "/haptic.csv", record);
   WriteFramesCsv(out_dir + "/frames.csv", record);
-  const nlohmann::json summary = MakeSummary(
-      scene, device::ToString(mode), options.device, simulator.visual_options().compliance,
-      multirate.haptic_steps_per_frame, simulator.passivity(), record);
+  const nlohmann::json summary =
+      MakeSummary(scene, device::ToString(mode), options.device, simulator.visual_options(),
+                  multirate.haptic_steps_per_frame, simulator.passivity(), record);
   WriteFileAtomically(summary_path, [&](std::ostream& out) { out << summary.dump(2) << '\n'; });
   std::printf(
       "  peak force %.3f N, RMS %.3f N, max contacts %d, max penetration %.2f mm, median frame "

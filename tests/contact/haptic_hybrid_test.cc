@@ -26,6 +26,26 @@ namespace {
 // these problems).
 constexpr double kRelativeTolerance = 1e-9;
 
+// λ with the equality Δt W_SS λ_S = rhs_S on the rows `set` and zero elsewhere (dense LU, or
+// the minimum-norm solution by a complete orthogonal decomposition for possibly dependent rows).
+// Returns the residual of that equality.
+double SolveOnSubset(const DenseProblem& dense, double dt_s, const std::vector<int>& set,
+                     bool minimum_norm, Eigen::VectorXd* lambda) {
+  const int k = static_cast<int>(set.size());
+  Eigen::MatrixXd W_set(k, k);
+  Eigen::VectorXd rhs_set(k);
+  for (int a = 0; a < k; ++a) {
+    rhs_set[a] = dense.rhs[set[a]];
+    for (int b = 0; b < k; ++b) W_set(a, b) = dt_s * dense.W(set[a], set[b]);
+  }
+  *lambda = Eigen::VectorXd::Zero(dense.rhs.size());
+  if (k == 0) return 0.0;
+  const Eigen::VectorXd x = minimum_norm ? W_set.completeOrthogonalDecomposition().solve(rhs_set)
+                                         : Eigen::VectorXd(W_set.partialPivLu().solve(rhs_set));
+  for (int a = 0; a < k; ++a) (*lambda)[set[a]] = x[a];
+  return (W_set * x - rhs_set).norm();
+}
+
 // The mixed LCP by enumeration: for each subset A of the free rows, λ on H ∪ A from
 // Δt W_{(H∪A)(H∪A)} λ = rhs (dense LU), zero elsewhere; the answer is the subset with λ_A ≥ 0
 // and c = Δt W λ − rhs ≥ 0 on the free rows outside A. 2^free subsets: small problems only.
@@ -45,18 +65,8 @@ Eigen::VectorXd SolveByEnumeration(const DenseProblem& dense, double dt_s,
       if (held[i]) set.push_back(i);
     for (int f = 0; f < num_free; ++f)
       if (mask & (1u << f)) set.push_back(free_rows[f]);
-    const int k = static_cast<int>(set.size());
-    Eigen::MatrixXd W_set(k, k);
-    Eigen::VectorXd rhs_set(k);
-    for (int a = 0; a < k; ++a) {
-      rhs_set[a] = dense.rhs[set[a]];
-      for (int b = 0; b < k; ++b) W_set(a, b) = dt_s * dense.W(set[a], set[b]);
-    }
-    Eigen::VectorXd lambda = Eigen::VectorXd::Zero(n);
-    if (k > 0) {
-      const Eigen::VectorXd x = W_set.partialPivLu().solve(rhs_set);
-      for (int a = 0; a < k; ++a) lambda[set[a]] = x[a];
-    }
+    Eigen::VectorXd lambda;
+    SolveOnSubset(dense, dt_s, set, /*minimum_norm=*/false, &lambda);
     const Eigen::VectorXd c = dt_s * dense.W * lambda - dense.rhs;
     bool ok = true;
     for (int f = 0; f < num_free; ++f) {
@@ -82,19 +92,9 @@ Eigen::VectorXd SolveByEnumerationAllowingTies(const DenseProblem& dense, double
     std::vector<int> set;
     for (int i = 0; i < n; ++i)
       if (mask & (1u << i)) set.push_back(i);
-    const int k = static_cast<int>(set.size());
-    Eigen::MatrixXd W_set(k, k);
-    Eigen::VectorXd rhs_set(k);
-    for (int a = 0; a < k; ++a) {
-      rhs_set[a] = dense.rhs[set[a]];
-      for (int b = 0; b < k; ++b) W_set(a, b) = dt_s * dense.W(set[a], set[b]);
-    }
-    Eigen::VectorXd lambda = Eigen::VectorXd::Zero(n);
-    if (k > 0) {
-      const Eigen::VectorXd x = W_set.completeOrthogonalDecomposition().solve(rhs_set);
-      if ((W_set * x - rhs_set).norm() > tolerance) continue;  // inconsistent
-      for (int a = 0; a < k; ++a) lambda[set[a]] = x[a];
-    }
+    Eigen::VectorXd lambda;
+    const double residual = SolveOnSubset(dense, dt_s, set, /*minimum_norm=*/true, &lambda);
+    if (residual > tolerance) continue;  // no solution on this set (dependent, inconsistent)
     const Eigen::VectorXd c = dt_s * dense.W * lambda - dense.rhs;
     if (lambda.minCoeff() >= -tolerance && c.minCoeff() >= -tolerance) return lambda;
   }

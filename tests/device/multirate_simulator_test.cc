@@ -66,18 +66,24 @@ ScriptedTrajectory MakeScript(const ToolState& start, bool slide) {
                              {3.0, start.x_W_m + dx, I}});
 }
 
+// The scene's simulator at kStepsPerFrame haptic steps a frame, its coupling set in `visual`.
+MultirateSimulator MakeSimulator(const Scene& scene, HapticMode mode,
+                                 contact::VisualFrameOptions visual) {
+  visual.coupling = {1000, 2, 1, 0.005};
+  MultirateOptions options;
+  options.mode = mode;
+  options.haptic_steps_per_frame = kStepsPerFrame;
+  return MultirateSimulator(scene.body, fem::FemOptions{},
+                            fem::CalcGravityForce(scene.body, {0, 0, -9.81}), scene.tool,
+                            scene.start, std::move(visual), options);
+}
+
 std::vector<HapticSample> Simulate(const Scene& scene, HapticMode mode, contact::ContactLaw law,
                                    const ScriptedTrajectory& script, long steps,
                                    DeviceBackend* device = nullptr) {
   contact::VisualFrameOptions visual;
-  visual.coupling = {1000, 2, 1, 0.005};
   visual.response.solve.law = law;
-  MultirateOptions options;
-  options.mode = mode;
-  options.haptic_steps_per_frame = kStepsPerFrame;
-  MultirateSimulator simulator(scene.body, fem::FemOptions{},
-                               fem::CalcGravityForce(scene.body, {0, 0, -9.81}), scene.tool,
-                               scene.start, visual, options);
+  MultirateSimulator simulator = MakeSimulator(scene, mode, visual);
   std::vector<HapticSample> samples;
   ScriptedDevice scripted(script);
   simulator.Run(
@@ -253,14 +259,8 @@ double FastPressPenetration(HapticMode mode, double* visual_sink_m) {
   const ScriptedTrajectory script(
       {{0, start, I}, {0.05, start, I}, {0.056, down, I}, {0.4, down, I}});
   contact::VisualFrameOptions visual;
-  visual.coupling = {1000, 2, 1, 0.005};
   visual.model_compliance_step = contact::ModelComplianceStep::kAuto;  // a scene's default
-  MultirateOptions options;
-  options.mode = mode;
-  options.haptic_steps_per_frame = kStepsPerFrame;
-  MultirateSimulator simulator(scene.body, fem::FemOptions{},
-                               fem::CalcGravityForce(scene.body, {0, 0, -9.81}), scene.tool,
-                               scene.start, visual, options);
+  MultirateSimulator simulator = MakeSimulator(scene, mode, visual);
   const double top_plus_half_m = 0.05 + 0.02;  // the tool's COM when its bottom face is on top
   double haptic_depth_m = 0.0;
   *visual_sink_m = 0.0;
@@ -357,6 +357,51 @@ contact::ContactRows MakeRows() {
     rows.body_rhs[i] = i % 3 == 0 ? 1e-3 : -1e-3;  // some rows push, some are slack
   }
   return rows;
+}
+
+// The hybrid step's free rows follow the tool (HapticStep::CalcFreeRowTargets). One row the frame
+// did not find active: a rigid floor 1 mm below the tool's bottom (gap φ = 1 mm, the frame's gap
+// target −φ/Δt_visual at 30 Hz, a still surface). The device lowers the tool slowly, 5 mm/s, to
+// 3 mm below the start: the row must stay off while the tool's tracked gap is open (no force
+// above the floor) and hold the tool at the floor once it reaches it (the coupling then presses
+// 2 mm: k_c·2 mm + m g). With the frame's own target (approach faster than φ/Δt_visual = 33
+// mm/s to engage) the row would never engage at this speed and the tool would sink through.
+TEST(HapticStep, HybridFreeRowEngagesWhereTheToolReachesIt) {
+  const Scene scene = MakeScene();
+  const double k_N_m = 1000.0;
+  HapticStep step(scene.tool, {k_N_m, 2, 1, 0.005}, {0, 0, -9.81}, 1e-3, scene.start, 4, 0, true);
+  contact::ContactRows rows;
+  rows.J_v = Eigen::RowVector3d(0, 0, 1);  // −nᵀ, n = −z out of the tool's bottom face
+  rows.J_w = Eigen::RowVector3d::Zero();
+  rows.W_body = Eigen::MatrixXd::Constant(1, 1, 1e-6);  // nearly rigid
+  const double gap_m = 1e-3, dt_visual_s = 1.0 / 30.0;
+  rows.gap_m = Eigen::VectorXd::Constant(1, gap_m);
+  rows.gap_target_m_s = Eigen::VectorXd::Constant(1, -gap_m / dt_visual_s);
+  rows.surface_velocity_m_s = Eigen::VectorXd::Zero(1);
+  rows.body_rhs = rows.gap_target_m_s;  // b − the surface's velocity (0)
+  rows.lambda_frame_N = Eigen::VectorXd::Zero(1);
+  step.SetContactRows(&rows);  // linearised at the tool as it stands: the gap is from here
+  const Eigen::Quaterniond I = Eigen::Quaterniond::Identity();
+  const Eigen::Vector3d start = scene.start.x_W_m;
+  const ScriptedTrajectory script({{0, start, I},
+                                   {0.6, start - Eigen::Vector3d(0, 0, 0.003), I},
+                                   {1.0, start - Eigen::Vector3d(0, 0, 0.003), I}});
+  const double floor_z_m = start.z() - gap_m;
+  double lowest_z_m = start.z(), force_above_floor_N = 0.0;
+  HapticOutput out;
+  for (int k = 0; k < 1000; ++k) {
+    const double z_before_m = step.tool_state().x_W_m.z();
+    out = step.Step(script.Sample(k * 1e-3));
+    ASSERT_FALSE(out.lcp_fell_back) << k;
+    lowest_z_m = std::min(lowest_z_m, step.tool_state().x_W_m.z());
+    // A step that starts more than one step's travel (5 µm, 10 µm for margin) above the floor.
+    if (z_before_m > floor_z_m + 1e-5)
+      force_above_floor_N = std::max(force_above_floor_N, out.contact_force_W_N.norm());
+  }
+  EXPECT_EQ(force_above_floor_N, 0.0);
+  EXPECT_GE(lowest_z_m, floor_z_m - 1e-5);  // held at the floor (W_body lets it in ~µm)
+  // Resting on it, held 2 mm down: the floor carries the coupling's k_c·2 mm and the weight.
+  EXPECT_NEAR(out.contact_force_W_N.z(), k_N_m * 0.002 + 9.81 * scene.tool.mass_kg, 0.02);
 }
 
 // Steps through 1,000 steps on rows_a and rows_b, alternating every 33 steps (a new frame).
