@@ -358,6 +358,67 @@ bool HapticToolFromMessage(const hapsim_lcm::haptic_state_t& msg, ToolState* too
   return true;
 }
 
+namespace {
+
+// The rows of a contact model (n = rows.num_rows() > 0) into `msg`: checked, W_body's lower
+// triangles packed. Throws std::invalid_argument as ToMessage says.
+void RowsToMessage(const contact::ContactRows& rows, hapsim_lcm::contact_model_t* msg) {
+  const int n = rows.num_rows();
+  if (!contact::HasConsistentShape(rows)) {
+    throw std::invalid_argument("messages::ToMessage: ContactRows sizes disagree with J_v's " +
+                                std::to_string(n) + " rows or its friction layout");
+  }
+  // Only lower triangles travel, and of an uncoupled contact only its own block: an asymmetric
+  // W_body, or one not zero where the rows say it is, would arrive changed.
+  if (rows.W_body != rows.W_body.transpose())
+    throw std::invalid_argument("messages::ToMessage: ContactRows.W_body is not symmetric");
+  const int per = rows.rows_per_contact;
+  const int coupled = rows.num_coupled_rows();
+  for (int a = coupled; a < n; a += per) {
+    if (!(rows.W_body.block(a, 0, per, a).array() == 0.0).all())
+      throw std::invalid_argument("messages::ToMessage: ContactRows.W_body couples uncoupled row " +
+                                  std::to_string(a));
+  }
+  msg->J_v.assign(n, std::vector<double>(3));
+  msg->J_w.assign(n, std::vector<double>(3));
+  msg->num_coupled_rows = coupled;
+  msg->num_W_body_lower = static_cast<std::int32_t>(PackedRowStart(coupled));
+  msg->W_body_lower.resize(msg->num_W_body_lower);
+  msg->num_W_body_contact_lower =
+      static_cast<std::int32_t>((n - coupled) / per * PackedRowStart(per));
+  msg->W_body_contact_lower.resize(msg->num_W_body_contact_lower);
+  msg->rows_per_contact = static_cast<std::int8_t>(per);
+  msg->body_rhs.resize(n);
+  msg->lambda_frame_N.assign(n, 0.0);
+  const bool gaps = rows.gap_m.size() == n && rows.gap_target_m_s.size() == n &&
+                    rows.surface_velocity_m_s.size() == n;
+  msg->num_row_gaps = gaps ? n : 0;
+  msg->gap_m.assign(msg->num_row_gaps, 0.0);
+  msg->gap_target_m_s.assign(msg->num_row_gaps, 0.0);
+  msg->surface_velocity_m_s.assign(msg->num_row_gaps, 0.0);
+  for (int i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      msg->J_v[i][c] = rows.J_v(i, c);
+      msg->J_w[i][c] = rows.J_w(i, c);
+    }
+    const int first = contact::FirstRowOfBlock(i, coupled, per);
+    for (int c = first; c <= i; ++c) PackedBodyEntry(*msg, i, c) = rows.W_body(i, c);
+    msg->body_rhs[i] = rows.body_rhs[i];
+    if (rows.lambda_frame_N.size() == n) msg->lambda_frame_N[i] = rows.lambda_frame_N[i];
+    if (gaps) {
+      msg->gap_m[i] = rows.gap_m[i];
+      msg->gap_target_m_s[i] = rows.gap_target_m_s[i];
+      msg->surface_velocity_m_s[i] = rows.surface_velocity_m_s[i];
+    }
+  }
+  msg->num_friction_coefficients = static_cast<std::int32_t>(rows.friction_coefficient.size());
+  msg->friction_coefficient.assign(
+      rows.friction_coefficient.data(),
+      rows.friction_coefficient.data() + rows.friction_coefficient.size());
+}
+
+}  // namespace
+
 hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
                                       const contact::ContactRows* rows_or_null,
                                       const ContactModelHeader& header) {
@@ -389,58 +450,7 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   msg.rows_per_contact = 1;
   msg.num_friction_coefficients = 0;
   if (n == 0) return msg;
-  const contact::ContactRows& rows = *rows_or_null;
-  if (!contact::HasConsistentShape(rows)) {
-    throw std::invalid_argument("messages::ToMessage: ContactRows sizes disagree with J_v's " +
-                                std::to_string(n) + " rows or its friction layout");
-  }
-  // Only lower triangles travel, and of an uncoupled contact only its own block: an asymmetric
-  // W_body, or one not zero where the rows say it is, would arrive changed.
-  if (rows.W_body != rows.W_body.transpose())
-    throw std::invalid_argument("messages::ToMessage: ContactRows.W_body is not symmetric");
-  const int per = rows.rows_per_contact;
-  const int coupled = rows.num_coupled_rows();
-  for (int a = coupled; a < n; a += per) {
-    if (!(rows.W_body.block(a, 0, per, a).array() == 0.0).all())
-      throw std::invalid_argument("messages::ToMessage: ContactRows.W_body couples uncoupled row " +
-                                  std::to_string(a));
-  }
-  msg.J_v.assign(n, std::vector<double>(3));
-  msg.J_w.assign(n, std::vector<double>(3));
-  msg.num_coupled_rows = coupled;
-  msg.num_W_body_lower = static_cast<std::int32_t>(PackedRowStart(coupled));
-  msg.W_body_lower.resize(msg.num_W_body_lower);
-  msg.num_W_body_contact_lower =
-      static_cast<std::int32_t>((n - coupled) / per * PackedRowStart(per));
-  msg.W_body_contact_lower.resize(msg.num_W_body_contact_lower);
-  msg.rows_per_contact = static_cast<std::int8_t>(per);
-  msg.body_rhs.resize(n);
-  msg.lambda_frame_N.assign(n, 0.0);
-  const bool gaps = rows.gap_m.size() == n && rows.gap_target_m_s.size() == n &&
-                    rows.surface_velocity_m_s.size() == n;
-  msg.num_row_gaps = gaps ? n : 0;
-  msg.gap_m.assign(msg.num_row_gaps, 0.0);
-  msg.gap_target_m_s.assign(msg.num_row_gaps, 0.0);
-  msg.surface_velocity_m_s.assign(msg.num_row_gaps, 0.0);
-  for (int i = 0; i < n; ++i) {
-    for (int c = 0; c < 3; ++c) {
-      msg.J_v[i][c] = rows.J_v(i, c);
-      msg.J_w[i][c] = rows.J_w(i, c);
-    }
-    const int first = contact::FirstRowOfBlock(i, coupled, per);
-    for (int c = first; c <= i; ++c) PackedBodyEntry(msg, i, c) = rows.W_body(i, c);
-    msg.body_rhs[i] = rows.body_rhs[i];
-    if (rows.lambda_frame_N.size() == n) msg.lambda_frame_N[i] = rows.lambda_frame_N[i];
-    if (gaps) {
-      msg.gap_m[i] = rows.gap_m[i];
-      msg.gap_target_m_s[i] = rows.gap_target_m_s[i];
-      msg.surface_velocity_m_s[i] = rows.surface_velocity_m_s[i];
-    }
-  }
-  msg.num_friction_coefficients = static_cast<std::int32_t>(rows.friction_coefficient.size());
-  msg.friction_coefficient.assign(
-      rows.friction_coefficient.data(),
-      rows.friction_coefficient.data() + rows.friction_coefficient.size());
+  RowsToMessage(*rows_or_null, &msg);
   return msg;
 }
 
