@@ -132,10 +132,13 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
 // Same with W_body over all the frame's rows and `rows` the indices of the chosen ones (J and
 // body_rhs hold only the chosen rows, in that order), as VisualFrame::BuildLinearModel selects
 // the rows that travel. With a friction Jacobian (3 rows per contact, whole contacts chosen)
-// friction_coefficient gives the chosen contacts' μ, as MakeFrictionContactRows.
+// friction_coefficient gives the chosen contacts' μ, as MakeFrictionContactRows. Rows from
+// num_coupled_rows on (a whole number of contacts; default all coupled) travel uncoupled
+// (ContactRows::num_uncoupled_rows): W_body keeps only their own contact's block.
 ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_body_all,
                             const std::vector<int>& rows, const Eigen::VectorXd& body_rhs,
-                            const Eigen::VectorXd& friction_coefficient = Eigen::VectorXd());
+                            const Eigen::VectorXd& friction_coefficient = Eigen::VectorXd(),
+                            int num_coupled_rows = -1);
 
 // The rows of a friction Jacobian (rows_per_contact 3), every contact, with one μ per contact:
 // for HapticFrictionSolver. W_body (over the same rows) is symmetrised as above. Throws

@@ -7,9 +7,21 @@
 namespace hapsim::contact {
 
 Eigen::MatrixXd CalcToolDelassus(const ContactJacobian& J, const ToolStepSystem& tool) {
-  const Eigen::Matrix3d A_v_inv = tool.A_v.inverse();
-  const Eigen::Matrix3d M_inv_A_L_inv = tool.M_inv_W * tool.A_L.inverse();
-  return J.J_v * A_v_inv * J.J_v.transpose() + J.J_w * M_inv_A_L_inv * J.J_w.transpose();
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(J.num_rows(), J.num_rows());
+  AddToolDelassus(J, tool, &W);
+  return W;
+}
+
+// One rank-6 product [J_v J_ω] S [J_v J_ω]ᵀ, S = blockdiag(A_v⁻¹, M⁻¹A_L⁻¹): a single pass over W
+// (two rank-3 products and their sum made three, and two n × n temporaries: 0.9 ms of
+// block_press_friction's 720-row frame).
+void AddToolDelassus(const ContactJacobian& J, const ToolStepSystem& tool, Eigen::MatrixXd* W) {
+  const Eigen::Index n = J.num_rows();
+  Eigen::Matrix<double, Eigen::Dynamic, 6> J_tool(n, 6), J_tool_S(n, 6);
+  J_tool << J.J_v, J.J_w;
+  J_tool_S.leftCols<3>().noalias() = J.J_v * tool.A_v.inverse().transpose();
+  J_tool_S.rightCols<3>().noalias() = J.J_w * (tool.M_inv_W * tool.A_L.inverse()).transpose();
+  W->noalias() += J_tool * J_tool_S.transpose();
 }
 
 LinearContactModel MakeLinearContactModel(const ContactJacobian& J, const Eigen::MatrixXd& W,

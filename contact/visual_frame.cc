@@ -187,7 +187,8 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     W_body_ = stepper_->CalcCompliance(jacobian_.J_u);
   if (haptic_compliance_)
     W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
-  const Eigen::MatrixXd W = CalcToolDelassus(jacobian_, tool_system_) + W_body_;
+  Eigen::MatrixXd W = W_body_;
+  AddToolDelassus(jacobian_, tool_system_, &W);
   lambda_.setZero(jacobian_.num_rows());
   if (rows_per_contact_ == 3) {
     // μ of a contact with an object is that object's (its own or the scene's); the grabbed object
@@ -216,7 +217,15 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
   } else {
     du_contact_.resize(0);  // nothing was added to du_body_: nothing to take off next frame
   }
-  c_post_ = c_free + dt * W * lambda_;
+  c_post_ = c_free + dt * MultiplyByImpulses(W, lambda_);
+}
+
+Eigen::VectorXd VisualFrame::MultiplyByImpulses(const Eigen::MatrixXd& W,
+                                                const Eigen::VectorXd& lambda) {
+  Eigen::VectorXd product = Eigen::VectorXd::Zero(W.rows());
+  for (Eigen::Index c = 0; c < lambda.size(); ++c)
+    if (lambda[c] != 0.0) product.noalias() += lambda[c] * W.col(c);
+  return product;
 }
 
 Eigen::Vector3d VisualFrame::contact_force_N() const { return jacobian_.J_v.transpose() * lambda_; }

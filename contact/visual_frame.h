@@ -162,6 +162,10 @@ class VisualFrame {
   ContactJacobian CalcJacobian(const std::vector<Contact>& contacts,
                                const Eigen::Vector3d& x_tool_W_m) const;
   void SolveResponse(const ToolState& tool, const fem::State& body);
+  // W λ from λ's nonzero entries alone: of a frame's candidate contacts most carry no force
+  // (block_press_friction: ~70 active of ~210, with three rows each).
+  static Eigen::VectorXd MultiplyByImpulses(const Eigen::MatrixXd& W,
+                                            const Eigen::VectorXd& lambda);
   void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                         const ToolState& tool, const ToolState& haptic_tool,
                         const fem::State& body);

@@ -76,7 +76,7 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   // frame's contact force λ_vis holds back, u̇ − Δt_h A_u⁻¹ J_uᵀ λ_vis, so that J_u u̇_free =
   // J_u u̇ − Δt_h W_body λ_vis. A body resting under the tool (u̇ = 0) then yields only to a
   // change of force from λ_vis, not to the whole force each millisecond.
-  const Eigen::VectorXd held_m_s = options_.haptic_dt_s * (W_body * lambda_);
+  const Eigen::VectorXd held_m_s = options_.haptic_dt_s * MultiplyByImpulses(W_body, lambda_);
   Eigen::VectorXd body_rhs = b - J.J_u * body.v_m_s;
   for (size_t r = 0; r < active_rows.size(); ++r) body_rhs[r] += held_m_s[active_rows[r]];
   linear_model_ = MakeLinearContactModel(J, W, haptic, body_rhs);
@@ -155,17 +155,8 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   const Eigen::VectorXd mu_ordered =
       Eigen::Map<const Eigen::VectorXd>(mu.data(), static_cast<Eigen::Index>(mu.size()));
   const Eigen::MatrixXd& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
-  contact_rows_ = MakeContactRows(J, W_body, rows, rhs, mu_ordered);
-  const int n = contact_rows_.num_rows();
-  for (int r = num_coupled; r < n; ++r) {  // an uncoupled contact: its own block alone (zeros
-                                           // elsewhere, for dense readers)
-    const int own = FirstRowOfBlock(r, num_coupled, rows_per_contact_);
-    for (int c = 0; c < n; ++c) {
-      if (c >= own && c < own + rows_per_contact_) continue;
-      contact_rows_.W_body(r, c) = contact_rows_.W_body(c, r) = 0.0;
-    }
-  }
-  contact_rows_.num_uncoupled_rows = n - num_coupled;
+  // An uncoupled contact keeps its own block of W_body alone (zeros elsewhere, for dense readers).
+  contact_rows_ = MakeContactRows(J, W_body, rows, rhs, mu_ordered, num_coupled);
   contact_rows_.lambda_frame_N = lambda;
   contact_rows_.gap_m = gap_m;
   contact_rows_.gap_target_m_s = gap_target;

@@ -108,6 +108,41 @@ Eigen::MatrixXd CalcDenseCompliance(TimeStepper* stepper, const State& state,
 // At rest, and for a free body turned rigidly (A = R A₀ Rᵀ exactly, R the same at every node),
 // the warped compliance is exact: to float accuracy, since the columns of A₀⁻¹ come from the float
 // copy of its factor (measured 1.8e-7 relative; CHOLMOD's double solve gave < 1e-10).
+// Rows as the friction law makes them: per contact a normal and two tangents with the same
+// weights at the same 1–3 nodes (WarpedCompliance::Calc computes such a group's block at once),
+// a normal-only contact between them, a row that touches no node (a contact with a rigid
+// object), and two contacts in a row at one node (a group holds at most three rows).
+Eigen::SparseMatrix<double> MakeFrictionRows(const Model& model, int contacts, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> node(0, model.num_nodes() - 1);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Eigen::Triplet<double>> entries;
+  int row = 0;
+  std::vector<int> nodes;
+  for (int c = 0; c < contacts; ++c) {
+    const Eigen::Vector3d n = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
+    const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+    const bool same_nodes = c % 5 == 4;  // as the contact before
+    if (!same_nodes) {
+      nodes.assign(1 + c % 3, 0);
+      for (int& nd : nodes) nd = node(rng);
+      std::sort(nodes.begin(), nodes.end());
+      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    }
+    const int num_rows = c % 7 == 3 ? 1 : 3;
+    for (int r = 0; r < num_rows; ++r, ++row) {
+      const Eigen::Vector3d d = r == 0 ? n : r == 1 ? t1 : t2;
+      for (int nd : nodes)
+        for (int a = 0; a < 3; ++a)
+          entries.emplace_back(row, 3 * nd + a, d[a] / static_cast<double>(nodes.size()));
+    }
+    if (c == contacts / 2) ++row;  // a row on a rigid object: no body entries
+  }
+  Eigen::SparseMatrix<double> J(row, model.num_dofs());
+  J.setFromTriplets(entries.begin(), entries.end());
+  return J;
+}
+
 TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
   const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {4, 4, 2});
   Material material;
@@ -136,6 +171,31 @@ TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
     std::sort(nodes.begin(), nodes.end());
     return static_cast<int>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
   }());
+}
+
+// Friction rows, computed a contact's rows at a time, against the exact compliance at rest and
+// rigidly turned (no node fixed: the warping is then exact but for the float columns).
+TEST(WarpedCompliance, ExactForFrictionRowsAtRestAndUnderRigidRotation) {
+  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {4, 4, 2});
+  Material material;
+  material.youngs_modulus_Pa = 5e4;
+  const Model model = MakeModel(mesh, material, {});
+  TimeStepper stepper(model, FemOptions{}, 1.0 / 60.0, Eigen::VectorXd::Zero(model.num_dofs()));
+  WarpedCompliance warped(model, stepper);
+  const Eigen::SparseMatrix<double> J = MakeFrictionRows(model, 20, 8);
+  ASSERT_GT(J.rows(), 50);
+  State state = MakeRestState(model);
+  constexpr double kFloatColumns = 1e-6;
+  const Eigen::MatrixXd at_rest = CalcDenseCompliance(&stepper, state, J);
+  EXPECT_LT((warped.Calc(J, stepper.rotations()) - at_rest).norm(), kFloatColumns * at_rest.norm());
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(-1.1, Eigen::Vector3d(3, -1, 2).normalized()).toRotationMatrix();
+  for (int n = 0; n < model.num_nodes(); ++n)
+    state.x_m.segment<3>(3 * n) = R * model.mesh.rest_positions_m.col(n);
+  const Eigen::MatrixXd turned = CalcDenseCompliance(&stepper, state, J);
+  const Eigen::MatrixXd W = warped.Calc(J, stepper.rotations());
+  EXPECT_LT((W - turned).norm(), kFloatColumns * turned.norm());
+  EXPECT_EQ(W, W.transpose());
 }
 
 // Nodes met in a later frame: their columns of A₀⁻¹ are solved only at the rows of the nodes held
