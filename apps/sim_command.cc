@@ -224,6 +224,14 @@ void RunSim(const SimCommandOptions& options) {
       summary["peak_force_N"].get<double>(), summary["rms_force_N"].get<double>(),
       summary["max_contacts"].get<int>(), 1e3 * summary["max_penetration_m"].get<double>(),
       summary["frame_stage_median_ms"]["total"].get<double>());
+  // The rows a mode solves may outgrow haptic.lcp_max_rows at run time (more active contacts
+  // than the load could foresee): those steps render the linear model instead, and a user must
+  // learn it here rather than from a key of summary.json.
+  if (const long fallbacks = summary["lcp_fallback_steps"].get<long>(); fallbacks > 0)
+    std::fprintf(stderr,
+                 "hapsim sim: warning: %ld of %zu haptic steps rendered the linear model: their "
+                 "rows could not be solved (more than haptic.lcp_max_rows = %d, or singular)\n",
+                 fallbacks, record.haptic.size(), scene.haptic.lcp_max_rows);
   std::printf("  wrote %s/haptic.csv, %s/frames.csv, %s\n", out_dir.c_str(), out_dir.c_str(),
               summary_path.c_str());
 }

@@ -124,9 +124,11 @@
 //       max_damping_N_s_m: 2           # ≥ 0: b_max
 //       tool: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}   # as objects'
 //       body: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}   # the body's
-//     lcp_max_rows: 512                # ≥ 1: rows the 1 kHz lcp solver holds (≈ 16 n² bytes);
-//                                      # the frame sends at most this many (the far candidates
-//                                      # last); more active ones fall back to the linear model
+//     lcp_max_rows: 512                # ≥ 1, ≥ 3 with friction: rows the 1 kHz lcp solver
+//                                      # holds (≈ 16 n² bytes, 24 with friction, four solvers:
+//                                      # refused beyond this machine's memory); the frame sends
+//                                      # at most this many (the far candidates last); steps with
+//                                      # more active ones render the linear model (a warning)
 //     lcp_friction_sweeps: 5           # ≥ 1, contact.law friction only: the lcp friction
 //                                      # solve's sweeps per haptic step (its time bound;
 //                                      # contact/haptic_friction_solver.h)

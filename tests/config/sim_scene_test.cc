@@ -271,6 +271,12 @@ const BadCase kBadCases[] = {
      "haptic.lcp_reach_m_s", "must be >= 0"},
     {"ZeroLcpRows", "mode: coupling", "mode: coupling\n  lcp_max_rows: 0", 19,
      "haptic.lcp_max_rows", "must be >= 1"},
+    {"LcpRowsBelowOneFrictionContact", "mode: coupling", "mode: lcp\n  lcp_max_rows: 2", 19,
+     "haptic.lcp_max_rows", "2 rows hold no contact of the friction law (3 rows each): at least 3"},
+    // 24 · 4 · 2e9² bytes: beyond any machine's memory (the limit printed is this machine's).
+    {"LcpRowsBeyondMemory", "mode: coupling", "mode: hybrid\n  lcp_max_rows: 2000000000", 19,
+     "haptic.lcp_max_rows",
+     "2000000000 rows need 3.58e+11 GiB in the haptic process's four solvers"},
     // device
     {"UnknownDeviceKey", "  trajectory:", "  trajectories:", 20, "device.trajectories",
      "allowed keys here: trajectory"},
