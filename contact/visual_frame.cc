@@ -189,7 +189,10 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
   Eigen::MatrixXd W = W_body_;
   AddToolDelassus(jacobian_, tool_system_, &W);
-  lambda_.setZero(jacobian_.num_rows());
+  if (rows_per_contact_ == 3)
+    lambda_ = friction_start_.Start(contacts_);
+  else
+    lambda_.setZero(jacobian_.num_rows());  // the active-set solve starts from zero anyway
   if (rows_per_contact_ == 3) {
     // μ of a contact with an object is that object's (its own or the scene's); the grabbed object
     // pressing another takes the other's, as the tool touching it would. Kept for the lcp rows.
@@ -205,6 +208,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
   last_solve_ =
       SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve, &lambda_,
                            objects_have_own_friction_ ? &mu_per_contact_ : nullptr);
+  if (rows_per_contact_ == 3) friction_start_.Record(contacts_, lambda_);
   // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.
   dv_tool_ += tool_system_.A_v.inverse() * (dt * jacobian_.J_v.transpose() * lambda_);
   dL_tool_ += tool_system_.A_L.inverse() * (dt * jacobian_.J_w.transpose() * lambda_);

@@ -29,6 +29,7 @@
 #include "contact/collision_detection.h"
 #include "contact/collision_response.h"
 #include "contact/contact_jacobian.h"
+#include "contact/friction_warm_start.h"
 #include "contact/haptic_contact_rows.h"
 #include "contact/linear_contact_model.h"
 #include "contact/rigid_objects.h"
@@ -195,6 +196,7 @@ class VisualFrame {
   int rows_per_contact_;
   bool objects_have_own_friction_;             // friction law and an object with its own μ
   Eigen::VectorXd mu_per_contact_;             // friction law: μ of each contact this frame
+  FrictionWarmStart friction_start_;           // friction law: last frame's λ by contact
   std::unique_ptr<fem::TimeStepper> stepper_;  // with a body
   std::unique_ptr<fem::WarpedCompliance> warped_compliance_;  // with a body, kWarped only
   // ModelComplianceStep::kHaptic: a stepper at the haptic Δt (never stepped: it only holds the

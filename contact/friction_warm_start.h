@@ -1,0 +1,55 @@
+#pragma once
+// The frame friction solve's start from the impulses of the frame before (issue 25 item 2).
+//
+// A press changes the contact impulses slowly from one visual frame to the next, but the frame
+// detects its contacts anew, in a new order, with tangents chosen from the new normals. A cold
+// start (λ = 0) made SolveFrictionOnWorkingSet find the loaded contacts and their stick/slip
+// states again every frame: 46 sweeps and 7.6 Newton steps a solve on block_press_friction.
+// This carries a contact's impulse over when the new frame has a contact of the same identity:
+// the same body nodes (weights may differ), the same rigid object, the same side (on the tool or
+// not). The normal impulse is kept; the tangential one is kept as a world vector and projected
+// onto the new tangent plane (the normal may have turned), then written in the new tangents
+// (CalcTangents). Contacts with no body node (the tool on a rigid object) have no identity that
+// survives a frame and start at zero, as do identities found twice in one frame.
+//
+// The start only speeds the solve up: the solver clamps it to be admissible and stops on the same
+// residual, so the solution it returns is the cold start's to that tolerance (tested in
+// tests/contact/friction_warm_start_test.cc).
+
+#include <Eigen/Core>
+#include <array>
+#include <map>
+#include <vector>
+
+#include "contact/contact.h"
+
+namespace hapsim::contact {
+
+class FrictionWarmStart {
+ public:
+  // Keeps the contact forces λ (3 rows per contact: normal, t1, t2; N) the frame solved for
+  // `contacts`.
+  void Record(const std::vector<Contact>& contacts, const Eigen::VectorXd& lambda);
+
+  // λ to start this frame's solve with (3 rows per contact), from the recorded frame.
+  Eigen::VectorXd Start(const std::vector<Contact>& contacts);
+
+  // Contacts of the last Start that found a recorded impulse.
+  int num_carried() const { return num_carried_; }
+
+ private:
+  // Body nodes, the rigid object, on_tool.
+  using Identity = std::array<int, 5>;
+  static bool HasIdentity(const Contact& contact) { return contact.nodes[0] >= 0; }
+  static Identity IdentityOf(const Contact& contact);
+
+  struct Force {
+    double normal_N = 0.0;
+    Eigen::Vector3d tangential_W_N = Eigen::Vector3d::Zero();
+    bool ambiguous = false;  // the identity was found twice in the recorded frame
+  };
+  std::map<Identity, Force> recorded_;
+  int num_carried_ = 0;
+};
+
+}  // namespace hapsim::contact
