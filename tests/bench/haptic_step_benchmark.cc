@@ -13,6 +13,9 @@
 //  BM_HapticStep/mode:3  coupling  standard multirate: the coupling to the visual tool only
 //  BM_HapticStep/mode:4  lcp_cold  the first step of each frame without Prepare: copy, check and
 //                                  factorise inside the step
+//  BM_HapticStep/mode:5  hybrid    the default mode (device/haptic_mode.h): the frame's active
+//                                  rows held as equalities, the others unilateral, each free
+//                                  row's target moved with the tool every step; warm, as mode 1
 //
 // BM_HapticFrictionStep/mode:1, 2, 4: the same lcp steps on scenes/block_press_friction.yaml
 // (three rows per contact, the Coulomb solve at its haptic.lcp_friction_sweeps), or on the
@@ -86,9 +89,9 @@ void RunHapticStep(benchmark::State& bench, const std::string& scene_path) {
   const config::Scene& scene = f.scene;
   device::HapticStep step(scene.tool->model, scene.coupling, scene.gravity_m_s2,
                           1.0 / scene.haptic.rate_hz, f.tool_at_peak, scene.haptic.lcp_max_rows,
-                          config::LcpFrictionSweeps(scene));
+                          config::LcpFrictionSweeps(scene), /*hold_frame_contacts=*/mode == 5);
   step.SetContactModel(f.model[0]);
-  if (mode == 1 || mode == 2 || mode == 4) step.SetContactRows(&f.rows[0]);
+  if (mode == 1 || mode == 2 || mode == 4 || mode == 5) step.SetContactRows(&f.rows[0]);
   long calls = 0, fallbacks = 0;
   for (auto _ : bench) {
     if (mode == 2) {
@@ -122,7 +125,7 @@ void BM_HapticFrictionStep(benchmark::State& bench) {
                            : "scenes/block_press_friction.yaml");
 }
 
-BENCHMARK(BM_HapticStep)->DenseRange(0, 4)->ArgName("mode")->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HapticStep)->DenseRange(0, 5)->ArgName("mode")->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HapticFrictionStep)
     ->Arg(1)
     ->Arg(2)
