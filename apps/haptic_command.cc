@@ -413,10 +413,11 @@ void RunHaptic(const HapticCommandOptions& options) {
     std::printf("hapsim haptic: rejected %ld malformed or invalid messages (no force changed)\n",
                 gate.num_rejected());
   if (stats.lcp_fallbacks > 0)  // as `hapsim sim` warns (sim_command.cc)
-    std::fprintf(stderr,
-                 "hapsim haptic: warning: %ld of %ld steps rendered the linear model: their rows "
-                 "could not be solved (more than haptic.lcp_max_rows = %d, or singular)\n",
-                 stats.lcp_fallbacks, step, loop_options.lcp_max_rows);
+    std::fprintf(
+        stderr,
+        "hapsim haptic: warning: %ld of %ld steps rendered the linear model: their rows "
+        "could not be solved (more than haptic.lcp_max_rows = %d, singular, or rejected)\n",
+        stats.lcp_fallbacks, step, loop_options.lcp_max_rows);
   if (stats.passivity_alarm_step >= 0)
     std::fprintf(stderr,
                  "hapsim haptic: warning: the rendering generated energy from step %ld on "

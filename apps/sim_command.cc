@@ -228,10 +228,11 @@ void RunSim(const SimCommandOptions& options) {
   // than the load could foresee): those steps render the linear model instead, and a user must
   // learn it here rather than from a key of summary.json.
   if (const long fallbacks = summary["lcp_fallback_steps"].get<long>(); fallbacks > 0)
-    std::fprintf(stderr,
-                 "hapsim sim: warning: %ld of %zu haptic steps rendered the linear model: their "
-                 "rows could not be solved (more than haptic.lcp_max_rows = %d, or singular)\n",
-                 fallbacks, record.haptic.size(), scene.haptic.lcp_max_rows);
+    std::fprintf(
+        stderr,
+        "hapsim sim: warning: %ld of %zu haptic steps rendered the linear model: their "
+        "rows could not be solved (more than haptic.lcp_max_rows = %d, singular, or rejected)\n",
+        fallbacks, record.haptic.size(), scene.haptic.lcp_max_rows);
   std::printf("  wrote %s/haptic.csv, %s/frames.csv, %s\n", out_dir.c_str(), out_dir.c_str(),
               summary_path.c_str());
 }

@@ -325,8 +325,9 @@ void CheckRowBudget(const YamlMap& map, int max_rows, ContactLaw law) {
                                     "at least 3");
   constexpr double kSolvers = 4.0;
   const double bytes_per_row_squared = law == ContactLaw::kFriction ? 24.0 : 16.0;
-  const double physical_bytes =
-      static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const long pages = sysconf(_SC_PHYS_PAGES), page_bytes = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page_bytes <= 0) return;  // memory unknown: nothing to refuse on
+  const double physical_bytes = static_cast<double>(pages) * static_cast<double>(page_bytes);
   const double rows = static_cast<double>(max_rows);
   if (kSolvers * bytes_per_row_squared * rows * rows > physical_bytes) {
     const long limit = static_cast<long>(

@@ -30,8 +30,11 @@ void FrictionWarmStart::Record(const std::vector<Contact>& contacts,
 Eigen::VectorXd FrictionWarmStart::Start(const std::vector<Contact>& contacts) {
   Eigen::VectorXd lambda = Eigen::VectorXd::Zero(3 * static_cast<Eigen::Index>(contacts.size()));
   num_carried_ = 0;
+  std::map<Identity, int> count;  // a recorded force goes to one contact, never to two
+  for (const Contact& contact : contacts)
+    if (HasIdentity(contact)) ++count[IdentityOf(contact)];
   for (size_t i = 0; i < contacts.size(); ++i) {
-    if (!HasIdentity(contacts[i])) continue;
+    if (!HasIdentity(contacts[i]) || count[IdentityOf(contacts[i])] > 1) continue;
     const auto it = recorded_.find(IdentityOf(contacts[i]));
     if (it == recorded_.end() || it->second.ambiguous) continue;
     Eigen::Vector3d t1, t2;

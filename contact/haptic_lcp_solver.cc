@@ -53,7 +53,10 @@ Eigen::Matrix3d CalcSymmetricPositive(const Eigen::Matrix3d& S) {
 // row j and the span of the rows before it, in K's metric), a condition number past 1e10 whose
 // impulses are noise. An exact test (pivot > 0) left the verdict to rounding: a twin row passed
 // it under clang -O1 and was held with impulses of −4.9 N and +4.9 N + λ that cancel (the ASan
-// build's haptic_hybrid_test), and failed it under GCC -O2. 1e-10 is ~10⁶ ulps above rounding.
+// build's haptic_hybrid_test), and failed it under GCC -O2. A pivot's rounding grows with j (about
+// j ulps of the diagonal): 1e-10 stays ~10³ above it at 512 rows. Only the base factorisation
+// (Rebase) applies this test; a row entering through the border is checked by the border's LU,
+// and a near-twin admitted there is refused at the next rebase.
 bool FactorCholeskyInPlace(Eigen::Ref<Eigen::MatrixXd> K) {
   constexpr double kDependentPivot = 1e-10;
   const Eigen::Index n = K.rows();

@@ -56,7 +56,9 @@ namespace hapsim::contact {
 // Contracts: W_body symmetric (its lower triangle is read; an asymmetry above 1e-9 of its
 // largest entry is rejected) and positive semidefinite, A_v and A_L invertible, Δt > 0. A set
 // of rows whose W is singular (more independent constraints than the tool's 6 plus the body's
-// rank) has no unique solution; the solver then reports failure rather than guessing.
+// rank) has no unique solution; the solver then reports failure rather than guessing. Singular
+// here is to working precision: a base pivot at most 1e-10 of its diagonal (haptic_lcp_solver.cc
+// FactorCholeskyInPlace); held rows found so are solved unilaterally instead.
 //
 // Cost (tests/bench/haptic_lcp_benchmark.cc; 2.6 GHz EPYC, this SSE2 Release build, n = 25 /
 // 50 / 125 rows): a warm step 1.9 / 3.2 / 9.8 µs (no factorisation); the first step of a frame

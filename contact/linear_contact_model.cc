@@ -17,6 +17,8 @@ Eigen::MatrixXd CalcToolDelassus(const ContactJacobian& J, const ToolStepSystem&
 // block_press_friction's 720-row frame).
 void AddToolDelassus(const ContactJacobian& J, const ToolStepSystem& tool, Eigen::MatrixXd* W) {
   const Eigen::Index n = J.num_rows();
+  if (W->rows() != n || W->cols() != n)
+    throw std::invalid_argument("AddToolDelassus: W must be rows x rows of J");
   Eigen::Matrix<double, Eigen::Dynamic, 6> J_tool(n, 6), J_tool_S(n, 6);
   J_tool << J.J_v, J.J_w;
   J_tool_S.leftCols<3>().noalias() = J.J_v * tool.A_v.inverse().transpose();

@@ -52,7 +52,8 @@ void CalcDiscreteTimeWrench(const ToolStepSystem& tool, const ToolState& state,
 
 // Tool part of the Delassus matrix, J_v A_v⁻¹ J_vᵀ + J_ω M⁻¹ A_L⁻¹ J_ωᵀ (rows x rows).
 Eigen::MatrixXd CalcToolDelassus(const ContactJacobian& J, const ToolStepSystem& tool);
-// W += that part, in place (W: rows x rows), with no rows x rows temporary.
+// W += that part, in place (W: rows x rows), with no rows x rows temporary. Throws
+// std::invalid_argument if W is not rows x rows.
 void AddToolDelassus(const ContactJacobian& J, const ToolStepSystem& tool, Eigen::MatrixXd* W);
 
 }  // namespace hapsim::contact

@@ -189,21 +189,11 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
   Eigen::MatrixXd W = W_body_;
   AddToolDelassus(jacobian_, tool_system_, &W);
-  if (rows_per_contact_ == 3)
-    lambda_ = friction_start_.Start(contacts_);
-  else
-    lambda_.setZero(jacobian_.num_rows());  // the active-set solve starts from zero anyway
   if (rows_per_contact_ == 3) {
-    // μ of a contact with an object is that object's (its own or the scene's); the grabbed object
-    // pressing another takes the other's, as the tool touching it would. Kept for the lcp rows.
-    mu_per_contact_.setConstant(static_cast<Eigen::Index>(contacts_.size()),
-                                options_.response.solve.friction_coefficient);
-    for (size_t i = 0; i < contacts_.size(); ++i) {
-      const int object = contacts_[i].rigid_object;
-      if (object >= 0 && options_.rigid_objects[object].friction_coefficient)
-        mu_per_contact_[static_cast<Eigen::Index>(i)] =
-            *options_.rigid_objects[object].friction_coefficient;
-    }
+    SetFrictionCoefficients();
+    lambda_ = friction_start_.Start(contacts_);
+  } else {
+    lambda_.setZero(jacobian_.num_rows());  // the active-set solve starts from zero anyway
   }
   last_solve_ =
       SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve, &lambda_,
@@ -222,6 +212,19 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     du_contact_.resize(0);  // nothing was added to du_body_: nothing to take off next frame
   }
   c_post_ = c_free + dt * MultiplyByImpulses(W, lambda_);
+}
+
+void VisualFrame::SetFrictionCoefficients() {
+  // μ of a contact with an object is that object's (its own or the scene's); the grabbed object
+  // pressing another takes the other's, as the tool touching it would. Kept for the lcp rows.
+  mu_per_contact_.setConstant(static_cast<Eigen::Index>(contacts_.size()),
+                              options_.response.solve.friction_coefficient);
+  for (size_t i = 0; i < contacts_.size(); ++i) {
+    const int object = contacts_[i].rigid_object;
+    if (object >= 0 && options_.rigid_objects[object].friction_coefficient)
+      mu_per_contact_[static_cast<Eigen::Index>(i)] =
+          *options_.rigid_objects[object].friction_coefficient;
+  }
 }
 
 Eigen::VectorXd VisualFrame::MultiplyByImpulses(const Eigen::MatrixXd& W,

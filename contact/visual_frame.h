@@ -163,6 +163,8 @@ class VisualFrame {
   ContactJacobian CalcJacobian(const std::vector<Contact>& contacts,
                                const Eigen::Vector3d& x_tool_W_m) const;
   void SolveResponse(const ToolState& tool, const fem::State& body);
+  // Friction law: mu_per_contact_ for this frame's contacts_.
+  void SetFrictionCoefficients();
   // W λ from λ's nonzero entries alone: of a frame's candidate contacts most carry no force
   // (block_press_friction: ~70 active of ~210, with three rows each).
   static Eigen::VectorXd MultiplyByImpulses(const Eigen::MatrixXd& W,

@@ -1,6 +1,7 @@
 #include "fem/warped_compliance.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <stdexcept>
 
 #include "fem/polar_decomposition.h"
@@ -64,6 +65,8 @@ Eigen::Matrix3d WarpedCompliance::CalcNodeRotation(
   return CalcRotationOfDeformation(sum);
 }
 
+namespace {
+
 // Rows of J_u in groups: consecutive rows that touch the same nodes with their entries (a
 // contact's normal and two tangent rows, at most 3 rows a group). A group's rows share node
 // rotations and C₀ blocks, so W's block between groups g and h is one small product per pair of
@@ -72,78 +75,95 @@ Eigen::Matrix3d WarpedCompliance::CalcNodeRotation(
 //   W_gh = Σ_a Σ_b G_gaᵀ C₀_ab G_hb,   G_ga = R_aᵀ [j_ra]_(r ∈ g)  (3 × rows of g),
 //
 // which for friction rows is 9× fewer pairs than row by row (block_press_friction's 720 rows:
-// 2.4 → 1.3 ms a frame, mean over a `hapsim sim` run, 2026-11-27).
-Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
-                                       const std::vector<Eigen::Matrix3d>& element_rotations) {
-  struct Entry {
-    int node;
-    Eigen::Matrix3d G = Eigen::Matrix3d::Zero();  // column k: the group's row k at the node
-    int block = 0;  // 3 · the node's slot: its rows and columns in held_compliance_
-  };
-  struct Group {
-    Eigen::Index first_row = 0;
-    int num_rows = 0;
-    size_t first_entry = 0, num_entries = 0;
-  };
-  const Eigen::Index rows = J_u.rows();
+// 2.4 → 1.3–1.9 ms a frame, means over `hapsim sim` runs, 2026-11-27).
+struct GroupEntry {
+  int node;
+  Eigen::Matrix3d G = Eigen::Matrix3d::Zero();  // column k: the group's row k at the node
+  int block = 0;  // 3 · the node's slot: its rows and columns in held_compliance_
+};
+struct RowGroup {
+  Eigen::Index first_row = 0;
+  int num_rows = 0;
+  size_t first_entry = 0, num_entries = 0;  // in the GroupEntry list
+};
+
+// The groups of J_u's rows and their entries (G as J_u holds it: not yet rotated).
+void GroupRows(const Eigen::SparseMatrix<double>& J_u, std::vector<RowGroup>* groups,
+               std::vector<GroupEntry>* entries) {
   // J_uᵀ is column-major with sorted rows, so its column r lists row r's entries node by node.
   const Eigen::SparseMatrix<double> Jt = J_u.transpose();
-  std::vector<Entry> entries, row_entries;
-  std::vector<Group> groups;
-  std::vector<int> new_nodes;
-  for (Eigen::Index r = 0; r < rows; ++r) {
+  std::vector<GroupEntry> row_entries;
+  for (Eigen::Index r = 0; r < J_u.rows(); ++r) {
     row_entries.clear();
     for (Eigen::SparseMatrix<double>::InnerIterator it(Jt, r); it; ++it) {
       const int node = static_cast<int>(it.row() / 3);
       if (row_entries.empty() || row_entries.back().node != node) row_entries.push_back({node});
       row_entries.back().G(it.row() % 3, 0) = it.value();
-      if (slot_of_node_[node] == -1) {
-        slot_of_node_[node] = -2;  // queued for this frame's solve
-        new_nodes.push_back(node);
-      }
     }
-    const bool joins = !groups.empty() && groups.back().num_rows < 3 &&
-                       groups.back().num_entries == row_entries.size() &&
-                       std::equal(row_entries.begin(), row_entries.end(),
-                                  entries.begin() + groups.back().first_entry,
-                                  [](const Entry& a, const Entry& b) { return a.node == b.node; });
+    const bool joins =
+        !groups->empty() && groups->back().num_rows < 3 &&
+        groups->back().num_entries == row_entries.size() &&
+        std::equal(row_entries.begin(), row_entries.end(),
+                   entries->begin() + static_cast<std::ptrdiff_t>(groups->back().first_entry),
+                   [](const GroupEntry& a, const GroupEntry& b) { return a.node == b.node; });
     if (!joins) {
-      groups.push_back({r, 0, entries.size(), row_entries.size()});
-      for (const Entry& e : row_entries) entries.push_back({e.node});
+      groups->push_back({r, 0, entries->size(), row_entries.size()});
+      for (const GroupEntry& e : row_entries) entries->push_back({e.node});
     }
-    Group& group = groups.back();
+    RowGroup& group = groups->back();
     for (size_t k = 0; k < row_entries.size(); ++k)
-      entries[group.first_entry + k].G.col(group.num_rows) = row_entries[k].G.col(0);
+      (*entries)[group.first_entry + k].G.col(group.num_rows) = row_entries[k].G.col(0);
     ++group.num_rows;
   }
+}
+
+// W_gh above (its top-left num_rows(g) × num_rows(h) corner), from the rotated entries.
+Eigen::Matrix3d CalcGroupBlock(const RowGroup& g, const RowGroup& h,
+                               const std::vector<GroupEntry>& entries,
+                               const Eigen::MatrixXd& held_compliance) {
+  Eigen::Matrix3d W_gh = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < g.num_entries; ++i)
+    for (size_t k = 0; k < h.num_entries; ++k) {
+      const GroupEntry& a = entries[g.first_entry + i];
+      const GroupEntry& b = entries[h.first_entry + k];
+      const auto C_ab = held_compliance.block<3, 3>(a.block, b.block);
+      if (g.num_rows == 1 && h.num_rows == 1)  // normal rows alone: one number
+        W_gh(0, 0) += a.G.col(0).dot(C_ab * b.G.col(0));
+      else
+        W_gh.noalias() += a.G.transpose() * (C_ab * b.G);
+    }
+  if (&g == &h) W_gh = 0.5 * (W_gh + W_gh.transpose()).eval();  // C₀_aa is a float solve's
+  return W_gh;
+}
+
+}  // namespace
+
+Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
+                                       const std::vector<Eigen::Matrix3d>& element_rotations) {
+  std::vector<RowGroup> groups;
+  std::vector<GroupEntry> entries;
+  GroupRows(J_u, &groups, &entries);
+  std::vector<int> new_nodes;
+  for (const GroupEntry& entry : entries)
+    if (slot_of_node_[entry.node] == -1) {
+      slot_of_node_[entry.node] = -2;  // queued for this frame's solve
+      new_nodes.push_back(entry.node);
+    }
   try {
     SolveForNewNodes(new_nodes);
   } catch (...) {
     for (int node : new_nodes) slot_of_node_[node] = -1;  // not held: solved again next time
     throw;
   }
-  for (Entry& entry : entries) {
+  for (GroupEntry& entry : entries) {
     entry.G = CalcNodeRotation(entry.node, element_rotations).transpose() * entry.G;
     entry.block = 3 * slot_of_node_[entry.node];
   }
-  Eigen::MatrixXd W(rows, rows);
-  for (const Group& h : groups)
-    for (const Group* g = &h; g != groups.data() + groups.size(); ++g) {
-      Eigen::Matrix3d W_gh = Eigen::Matrix3d::Zero();
-      for (size_t i = 0; i < g->num_entries; ++i)
-        for (size_t k = 0; k < h.num_entries; ++k) {
-          const Entry& a = entries[g->first_entry + i];
-          const Entry& b = entries[h.first_entry + k];
-          const auto C_ab = held_compliance_.block<3, 3>(a.block, b.block);
-          if (g->num_rows == 1 && h.num_rows == 1)  // normal rows alone: one number
-            W_gh(0, 0) += a.G.col(0).dot(C_ab * b.G.col(0));
-          else
-            W_gh.noalias() += a.G.transpose() * (C_ab * b.G);
-        }
-      if (g == &h) W_gh = 0.5 * (W_gh + W_gh.transpose()).eval();  // C₀_aa is a float solve's
+  Eigen::MatrixXd W(J_u.rows(), J_u.rows());
+  for (const RowGroup& h : groups)
+    for (const RowGroup* g = &h; g != groups.data() + groups.size(); ++g)
       W.block(g->first_row, h.first_row, g->num_rows, h.num_rows) =
-          W_gh.topLeftCorner(g->num_rows, h.num_rows);
-    }
+          CalcGroupBlock(*g, h, entries, held_compliance_).topLeftCorner(g->num_rows, h.num_rows);
   // The upper triangle in one pass: writing each block's transpose as it comes strides across
   // all of W's columns (1.8 against 1.3 ms a frame on block_press_friction).
   W.triangularView<Eigen::StrictlyUpper>() = W.transpose();

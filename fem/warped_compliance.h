@@ -17,8 +17,9 @@
 // the new nodes' elimination-tree paths and whose backward sweep only on those of the nodes held;
 // the columns are then exact to ~2e-7 relative. They fill a dense C₀ between the held nodes
 // (9 H² doubles for H nodes, up to 4 times that with the capacity kept for new ones). A frame then
-// costs O(rows² · 9) small products instead of a forward solve with the current factor per row
-// (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method).
+// costs one 3 × 3 product per pair of contacts' nodes (a contact's up to three rows together)
+// instead of a forward solve with the current factor per row (fem/cholmod_factor.h
+// CalcInverseQuadraticForm, the exact method).
 //
 // Node rotation: the polar rotation of the sum of the incident elements' rotations (their
 // chordal mean). A node with a fixed dof keeps R = I (rotating would mix a fixed direction into

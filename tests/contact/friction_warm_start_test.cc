@@ -58,7 +58,7 @@ TEST(FrictionWarmStart, CarriesEachContactsForceToItsNewRowsAndTangents) {
   EXPECT_LT((WorldForce(after[2], started, 2) - (lambda[0] * turned + projected)).norm(), 1e-14);
 }
 
-TEST(FrictionWarmStart, ContactsWithoutBodyNodesOrFoundTwiceStartAtZero) {
+TEST(FrictionWarmStart, ContactsWithoutBodyNodesOrFoundTwiceInEitherFrameStartAtZero) {
   const std::vector<Contact> before = {MakeContact({-1, -1, -1}, {0, 0, 1}, 1),  // tool on object
                                        MakeContact({3, -1, -1}, {0, 0, 1}),
                                        MakeContact({3, -1, -1}, {1, 0, 0})};  // node 3 twice
@@ -67,6 +67,13 @@ TEST(FrictionWarmStart, ContactsWithoutBodyNodesOrFoundTwiceStartAtZero) {
   const Eigen::VectorXd started = start.Start(before);
   EXPECT_EQ(start.num_carried(), 0);
   EXPECT_TRUE(started.isZero());
+  // Found once, then twice: neither of the two gets the one force.
+  const std::vector<Contact> once = {MakeContact({6, -1, -1}, {0, 0, 1})};
+  start.Record(once, Eigen::Vector3d(2.0, 0.1, 0.0));
+  const std::vector<Contact> twice = {once[0], once[0]};
+  EXPECT_TRUE(start.Start(twice).isZero());
+  EXPECT_EQ(start.num_carried(), 0);
+  EXPECT_LT((start.Start(once) - Eigen::Vector3d(2.0, 0.1, 0.0)).norm(), 1e-15);
   EXPECT_THROW(start.Record(before, Eigen::VectorXd::Zero(8)), std::invalid_argument);
 }
 

@@ -105,9 +105,6 @@ Eigen::MatrixXd CalcDenseCompliance(TimeStepper* stepper, const State& state,
   return Jd * A.ldlt().solve(Jd.transpose());
 }
 
-// At rest, and for a free body turned rigidly (A = R A₀ Rᵀ exactly, R the same at every node),
-// the warped compliance is exact: to float accuracy, since the columns of A₀⁻¹ come from the float
-// copy of its factor (measured 1.8e-7 relative; CHOLMOD's double solve gave < 1e-10).
 // Rows as the friction law makes them: per contact a normal and two tangents with the same
 // weights at the same 1–3 nodes (WarpedCompliance::Calc computes such a group's block at once),
 // a normal-only contact between them, a row that touches no node (a contact with a rigid
@@ -143,6 +140,9 @@ Eigen::SparseMatrix<double> MakeFrictionRows(const Model& model, int contacts, u
   return J;
 }
 
+// At rest, and for a free body turned rigidly (A = R A₀ Rᵀ exactly, R the same at every node),
+// the warped compliance is exact: to float accuracy, since the columns of A₀⁻¹ come from the float
+// copy of its factor (measured 1.8e-7 relative; CHOLMOD's double solve gave < 1e-10).
 TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
   const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {4, 4, 2});
   Material material;
