@@ -276,6 +276,46 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver,
           {"force_after_stale_N", stats->force_after_stale_N}};
 }
 
+// The run's end on the console: timing, models, foreign and rejected messages, warnings.
+void PrintSummary(const nlohmann::json& summary, const LoopStats& stats,
+                  const messages::MessageGate& gate, long step,
+                  const device::HapticLoopOptions& loop_options) {
+  std::printf(
+      "hapsim haptic: %ld steps; period error p50 %.1f us, p99 %.1f us, max %.1f us; "
+      "%ld overruns; model latency (publish to first use) p50 %.2f ms, p99 %.2f ms "
+      "(publish to ready p99 %.2f ms); max force sent %.3f N\n",
+      step, summary["period_error"]["p50_us"].get<double>(),
+      summary["period_error"]["p99_us"].get<double>(),
+      summary["period_error"]["max_us"].get<double>(), stats.overruns,
+      summary["model_latency"]["p50_ms"].get<double>(),
+      summary["model_latency"]["p99_ms"].get<double>(),
+      summary["model_ready"]["p99_ms"].get<double>(), stats.max_force_sent_N);
+  if (gate.num_foreign() > 0)
+    std::printf(
+        "hapsim haptic: ignored %ld messages of other runs on this LCM URL (first: run %s)\n",
+        gate.num_foreign(), messages::FormatRunId(gate.first_foreign_run()).c_str());
+  if (gate.num_rejected() > 0)
+    std::printf("hapsim haptic: rejected %ld malformed or invalid messages (no force changed)\n",
+                gate.num_rejected());
+  if (stats.lcp_fallbacks > 0)  // as `hapsim sim` warns (sim_command.cc)
+    std::fprintf(
+        stderr,
+        "hapsim haptic: warning: %ld of %ld steps rendered the linear model: their rows "
+        "could not be solved (more than haptic.lcp_max_rows = %d, singular, or rejected)\n",
+        stats.lcp_fallbacks, step, loop_options.lcp_max_rows);
+  if (stats.passivity_alarm_step >= 0)
+    std::fprintf(stderr,
+                 "hapsim haptic: warning: the rendering generated energy from step %ld on "
+                 "(passivity observer; HAPTIC_STATE.passivity_energy_J)\n",
+                 stats.passivity_alarm_step);
+  if (!summary["fade_after_last_model_s"].is_null())
+    std::printf(
+        "hapsim haptic: models stopped at step %ld; fade-out after the last model %.1f ms "
+        "(stale threshold %.1f ms)\n",
+        stats.last_model_step, 1e3 * summary["fade_after_last_model_s"].get<double>(),
+        1e3 * loop_options.safety.model_stale_s);
+}
+
 void RunHaptic(const HapticCommandOptions& options) {
   std::int64_t run_id = 0;
   if (!messages::ParseRunId(options.run_id, &run_id))
@@ -395,40 +435,7 @@ void RunHaptic(const HapticCommandOptions& options) {
   receive_thread.Stop();
   const nlohmann::json summary = Summarize(&stats, &receiver, gate, step, loop_options.dt_s,
                                            loop_options.safety.model_stale_s);
-  std::printf(
-      "hapsim haptic: %ld steps; period error p50 %.1f us, p99 %.1f us, max %.1f us; "
-      "%ld overruns; model latency (publish to first use) p50 %.2f ms, p99 %.2f ms "
-      "(publish to ready p99 %.2f ms); max force sent %.3f N\n",
-      step, summary["period_error"]["p50_us"].get<double>(),
-      summary["period_error"]["p99_us"].get<double>(),
-      summary["period_error"]["max_us"].get<double>(), stats.overruns,
-      summary["model_latency"]["p50_ms"].get<double>(),
-      summary["model_latency"]["p99_ms"].get<double>(),
-      summary["model_ready"]["p99_ms"].get<double>(), stats.max_force_sent_N);
-  if (gate.num_foreign() > 0)
-    std::printf(
-        "hapsim haptic: ignored %ld messages of other runs on this LCM URL (first: run %s)\n",
-        gate.num_foreign(), messages::FormatRunId(gate.first_foreign_run()).c_str());
-  if (gate.num_rejected() > 0)
-    std::printf("hapsim haptic: rejected %ld malformed or invalid messages (no force changed)\n",
-                gate.num_rejected());
-  if (stats.lcp_fallbacks > 0)  // as `hapsim sim` warns (sim_command.cc)
-    std::fprintf(
-        stderr,
-        "hapsim haptic: warning: %ld of %ld steps rendered the linear model: their rows "
-        "could not be solved (more than haptic.lcp_max_rows = %d, singular, or rejected)\n",
-        stats.lcp_fallbacks, step, loop_options.lcp_max_rows);
-  if (stats.passivity_alarm_step >= 0)
-    std::fprintf(stderr,
-                 "hapsim haptic: warning: the rendering generated energy from step %ld on "
-                 "(passivity observer; HAPTIC_STATE.passivity_energy_J)\n",
-                 stats.passivity_alarm_step);
-  if (!summary["fade_after_last_model_s"].is_null())
-    std::printf(
-        "hapsim haptic: models stopped at step %ld; fade-out after the last model %.1f ms "
-        "(stale threshold %.1f ms)\n",
-        stats.last_model_step, 1e3 * summary["fade_after_last_model_s"].get<double>(),
-        1e3 * loop_options.safety.model_stale_s);
+  PrintSummary(summary, stats, gate, step, loop_options);
   if (!options.summary_path.empty())
     WriteFileAtomically(options.summary_path,
                         [&](std::ostream& out) { out << summary.dump(2) << '\n'; });

@@ -16,11 +16,14 @@
 namespace hapsim::fem {
 namespace {
 
-Model MakeBlock() {
-  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {4, 4, 2});
+// A 4 × 4 × 2 cm block of E = 50 kPa in `cells` lattice cells, its bottom fixed or not.
+Model MakeBlock(const Eigen::Vector3i& cells = {4, 4, 2}, bool fix_bottom = true) {
+  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, cells);
   Material material;
   material.youngs_modulus_Pa = 5e4;
-  return MakeModel(mesh, material, FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0.0));
+  return MakeModel(
+      mesh, material,
+      fix_bottom ? FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0.0) : std::vector<int>{});
 }
 
 // Rows like contact rows: a unit direction spread over three free nodes with barycentric weights.
@@ -144,10 +147,7 @@ Eigen::SparseMatrix<double> MakeFrictionRows(const Model& model, int contacts, u
 // the warped compliance is exact: to float accuracy, since the columns of A₀⁻¹ come from the float
 // copy of its factor (measured 1.8e-7 relative; CHOLMOD's double solve gave < 1e-10).
 TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
-  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {4, 4, 2});
-  Material material;
-  material.youngs_modulus_Pa = 5e4;
-  const Model model = MakeModel(mesh, material, {});  // no fixed node
+  const Model model = MakeBlock({4, 4, 2}, /*fix_bottom=*/false);
   TimeStepper stepper(model, FemOptions{}, 1.0 / 60.0, Eigen::VectorXd::Zero(model.num_dofs()));
   WarpedCompliance warped(model, stepper);
   const Eigen::SparseMatrix<double> J = MakeContactRows(model, 12, 5);
@@ -176,10 +176,7 @@ TEST(WarpedCompliance, ExactAtRestAndUnderRigidRotation) {
 // Friction rows, computed a contact's rows at a time, against the exact compliance at rest and
 // rigidly turned (no node fixed: the warping is then exact but for the float columns).
 TEST(WarpedCompliance, ExactForFrictionRowsAtRestAndUnderRigidRotation) {
-  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {4, 4, 2});
-  Material material;
-  material.youngs_modulus_Pa = 5e4;
-  const Model model = MakeModel(mesh, material, {});
+  const Model model = MakeBlock({4, 4, 2}, /*fix_bottom=*/false);
   TimeStepper stepper(model, FemOptions{}, 1.0 / 60.0, Eigen::VectorXd::Zero(model.num_dofs()));
   WarpedCompliance warped(model, stepper);
   const Eigen::SparseMatrix<double> J = MakeFrictionRows(model, 20, 8);
@@ -203,10 +200,7 @@ TEST(WarpedCompliance, ExactForFrictionRowsAtRestAndUnderRigidRotation) {
 // two columns. At rest the warped compliance is exact (to the float columns), frame after frame,
 // and stays so as the held blocks outgrow their first capacity (64 nodes) and are copied.
 TEST(WarpedCompliance, ExactWhenContactsMeetNewNodesFrameByFrame) {
-  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, {8, 8, 4});
-  Material material;
-  material.youngs_modulus_Pa = 5e4;
-  const Model model = MakeModel(mesh, material, {});
+  const Model model = MakeBlock({8, 8, 4}, /*fix_bottom=*/false);
   TimeStepper stepper(model, FemOptions{}, 1.0 / 60.0, Eigen::VectorXd::Zero(model.num_dofs()));
   WarpedCompliance warped(model, stepper);
   const State rest = MakeRestState(model);
