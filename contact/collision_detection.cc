@@ -199,12 +199,33 @@ void CollisionDetector::AddFeatureContacts(const Eigen::VectorXd& x_m,
   const Eigen::Index num_features = tool_features_.vertices_T_m.cols();
   if (num_features == 0 || candidate_triangles_.empty()) return;
   const double threshold_m = statistics_.threshold_m;
+  // A face that can give a contact has |φ| ≤ reach (φ ≤ τ, φ ≥ −max_feature_penetration), and
+  // ProjectOntoFace's cone keeps |v − q| ≤ √(1 + k²)·|φ|: the nearest face is either within
+  // that distance or makes no contact. A face whose bounding sphere lies farther is skipped
+  // without changing the result (block_press: ~40 rim points against ~500 candidate faces).
+  const double reach_m = std::sqrt(1.0 + kMaxLateralOverGap * kMaxLateralOverGap) *
+                         std::max(threshold_m, options_.max_feature_penetration_m);
+  candidate_spheres_.resize(candidate_triangles_.size());
+  for (size_t k = 0; k < candidate_triangles_.size(); ++k) {
+    const Eigen::Vector3i tri = surface_triangles_.col(candidate_triangles_[k]);
+    const Vector3d centre =
+        (x_m.segment<3>(3 * tri[0]) + x_m.segment<3>(3 * tri[1]) + x_m.segment<3>(3 * tri[2])) /
+        3.0;
+    double radius_m = 0.0;
+    for (int j = 0; j < 3; ++j)
+      radius_m = std::max(radius_m, (x_m.segment<3>(3 * tri[j]) - centre).norm());
+    candidate_spheres_[k] = {centre, (radius_m + reach_m) * (radius_m + reach_m)};
+  }
   for (Eigen::Index i = 0; i < num_features; ++i) {
     const Vector3d v_W = X_WT * tool_features_.vertices_T_m.col(i);
     const Vector3d axis_W = X_WT.linear() * tool_features_.vertex_normals_T.col(i);
     FaceProjection best, projection;
     int best_face = -1;
-    for (int f : candidate_triangles_) {
+    for (size_t k = 0; k < candidate_triangles_.size(); ++k) {
+      if ((v_W - candidate_spheres_[k].centre_W_m).squaredNorm() >
+          candidate_spheres_[k].reach_sq_m2)
+        continue;
+      const int f = candidate_triangles_[k];
       const Eigen::Vector3i tri = surface_triangles_.col(f);
       if (!ProjectOntoFace(v_W, x_m.segment<3>(3 * tri[0]), x_m.segment<3>(3 * tri[1]),
                            x_m.segment<3>(3 * tri[2]), &projection))

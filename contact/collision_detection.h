@@ -147,6 +147,13 @@ class CollisionDetector {
   DetectionStatistics statistics_;
   // Scratch, reused between calls.
   std::vector<int> candidate_triangles_;
+  // Per candidate face, for AddFeatureContacts: its centroid and (circumradius + reach)², beyond
+  // which no feature point can make a contact with it.
+  struct FaceSphere {
+    Eigen::Vector3d centre_W_m;
+    double reach_sq_m2 = 0.0;
+  };
+  std::vector<FaceSphere> candidate_spheres_;
   std::vector<int> node_visited_;     // frame stamp per body node
   std::vector<int> node_in_contact_;  // frame stamp per body node that made a node contact
   std::vector<char> merged_away_;     // per contact of the current call
@@ -164,6 +171,8 @@ class CollisionDetector {
   Eigen::VectorXd tool_edge_cone_cosines_;            // (E_tool)
   Matrix3Xd tool_edge_normals_W_;                     // scratch (3 x 3 E_tool), world
   Matrix3Xd tool_vertices_W_m_;                       // scratch (3 x V_tool), world, m
+  Matrix3Xd tool_edge_midpoints_W_m_;                 // scratch (3 x E_tool), world, m
+  Eigen::VectorXd tool_edge_half_lengths_m_;          // (E_tool): its bounding sphere's radius
 };
 
 }  // namespace hapsim::contact

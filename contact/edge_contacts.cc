@@ -214,6 +214,12 @@ void CollisionDetector::MakeEdgeTopology() {
   tool_edge_cone_cosines_.conservativeResize(kept);
   tool_edge_normals_W_.resize(3, 3 * kept);
   tool_vertices_W_m_.resize(3, tool_features_.vertices_T_m.cols());
+  tool_edge_midpoints_W_m_.resize(3, kept);
+  tool_edge_half_lengths_m_.resize(kept);
+  for (Eigen::Index j = 0; j < kept; ++j)
+    tool_edge_half_lengths_m_[j] = 0.5 * (tool_features_.vertices_T_m.col(tool_edges_(1, j)) -
+                                          tool_features_.vertices_T_m.col(tool_edges_(0, j)))
+                                             .norm();
 }
 
 void CollisionDetector::AddEdgeContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
@@ -223,6 +229,9 @@ void CollisionDetector::AddEdgeContacts(const Eigen::VectorXd& x_m, const Eigen:
   for (Eigen::Index i = 0; i < tool_vertices_W_m_.cols(); ++i)
     tool_vertices_W_m_.col(i) = X_WT * Vector3d(tool_features_.vertices_T_m.col(i));
   tool_edge_normals_W_.noalias() = X_WT.linear() * tool_edge_normals_T_;
+  for (Eigen::Index j = 0; j < num_tool_edges; ++j)
+    tool_edge_midpoints_W_m_.col(j) = 0.5 * (tool_vertices_W_m_.col(tool_edges_(0, j)) +
+                                             tool_vertices_W_m_.col(tool_edges_(1, j)));
   const double threshold_m = statistics_.threshold_m;
   // Pairs whose bounding spheres are farther apart than this cannot make a contact.
   const double reach_m = std::max(threshold_m, options_.max_feature_penetration_m);
@@ -246,13 +255,14 @@ void CollisionDetector::AddEdgeContacts(const Eigen::VectorXd& x_m, const Eigen:
       }
       body.a = x_m.segment<3>(3 * body.nodes[0]);
       body.b = x_m.segment<3>(3 * body.nodes[1]);
-      const double body_radius_m = 0.5 * (body.b - body.a).norm();
+      const Vector3d body_midpoint_W_m = 0.5 * (body.a + body.b);
+      const double body_reach_m = 0.5 * (body.b - body.a).norm() + reach_m;
       for (Eigen::Index j = 0; j < num_tool_edges; ++j) {
+        const double apart_m = tool_edge_half_lengths_m_[j] + body_reach_m;
+        if ((tool_edge_midpoints_W_m_.col(j) - body_midpoint_W_m).squaredNorm() > apart_m * apart_m)
+          continue;
         tool.p = tool_vertices_W_m_.col(tool_edges_(0, j));
         tool.q = tool_vertices_W_m_.col(tool_edges_(1, j));
-        if ((0.5 * (tool.p + tool.q - body.a - body.b)).norm() >
-            0.5 * (tool.q - tool.p).norm() + body_radius_m + reach_m)
-          continue;
         tool.axis = tool_edge_normals_W_.col(3 * j);
         tool.face_normals = {tool_edge_normals_W_.col(3 * j + 1),
                              tool_edge_normals_W_.col(3 * j + 2)};

@@ -12,6 +12,7 @@
 #include "fem/corotational.h"
 #include "fem/stiffness_assembly.h"
 #include "fem/time_stepper.h"
+#include "fem/warped_compliance.h"
 
 namespace hapsim {
 namespace {
@@ -102,12 +103,17 @@ std::vector<int> TopNodesFromTheCentre(const fem::Model& model) {
   return nodes;
 }
 
-// Rows of 125 contacts on the top nodes nearest the centre, normal −z (a flat tool pressing down).
-Eigen::SparseMatrix<double> MakeTopContactRows(const fem::Model& model, int num_contacts) {
+// Rows of contacts on the top nodes nearest the centre, 1 a contact (normal −z) or 3 (and the
+// tangents x, y): a flat tool pressing down, with friction for 3.
+Eigen::SparseMatrix<double> MakeTopContactRows(const fem::Model& model, int num_contacts,
+                                               int rows_per_contact) {
   const std::vector<int> top = TopNodesFromTheCentre(model);
   std::vector<Eigen::Triplet<double>> entries;
-  for (int i = 0; i < num_contacts; ++i) entries.emplace_back(i, 3 * top[i] + 2, -1.0);
-  Eigen::SparseMatrix<double> J(num_contacts, model.num_dofs());
+  for (int i = 0; i < num_contacts; ++i)
+    for (int k = 0; k < rows_per_contact; ++k)
+      entries.emplace_back(rows_per_contact * i + k, 3 * top[i] + (k == 0 ? 2 : k - 1),
+                           k == 0 ? -1.0 : 1.0);
+  Eigen::SparseMatrix<double> J(rows_per_contact * num_contacts, model.num_dofs());
   J.setFromTriplets(entries.begin(), entries.end());
   return J;
 }
@@ -120,7 +126,7 @@ void BM_ContactCompliance(benchmark::State& bench) {
                            f.body.external_force_N);
   Eigen::VectorXd dv;
   stepper.CalcFreeVelocityChange(f.state, &dv);  // assembles A and holds its factor
-  const Eigen::SparseMatrix<double> J = MakeTopContactRows(f.body.model, 125);
+  const Eigen::SparseMatrix<double> J = MakeTopContactRows(f.body.model, 125, 1);
   const Eigen::MatrixXd Jt = Eigen::MatrixXd(J.transpose());
   fem::CholmodFactor* factor = const_cast<fem::LinearSolver*>(stepper.solver())->factor();
   Eigen::MatrixXd W(125, 125);
@@ -134,6 +140,26 @@ void BM_ContactCompliance(benchmark::State& bench) {
         W.col(i) = J * x;
       }
     }
+    benchmark::DoNotOptimize(W.data());
+  }
+  SetCounters(bench, f);
+}
+
+// The warped compliance (fem/warped_compliance.h) of a frame whose contact nodes are all held:
+// arg 1 contacts on the top face (the small block has 169 top nodes), arg 2 rows a contact (1
+// frictionless, 3 with friction).
+void BM_WarpedCompliance(benchmark::State& bench) {
+  const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
+  fem::TimeStepper stepper(f.body.model, f.scene.body->options, f.scene.dt_s,
+                           f.body.external_force_N);
+  Eigen::VectorXd dv;
+  stepper.CalcFreeVelocityChange(f.state, &dv);  // the element rotations of the settled block
+  fem::WarpedCompliance compliance(f.body.model, stepper);
+  const Eigen::SparseMatrix<double> J = MakeTopContactRows(
+      f.body.model, static_cast<int>(bench.range(1)), static_cast<int>(bench.range(2)));
+  Eigen::MatrixXd W = compliance.Calc(J, stepper.rotations());  // solves the nodes' columns
+  for (auto _ : bench) {
+    W = compliance.Calc(J, stepper.rotations());
     benchmark::DoNotOptimize(W.data());
   }
   SetCounters(bench, f);
@@ -230,6 +256,11 @@ BENCHMARK(BM_SolveColumns)
     ->ArgsProduct({{2}, {2, 8}, {64, 32}, {0}})
     ->ArgsProduct({{2}, {2, 8}, {32}, {150, 450}})
     ->ArgNames({"block", "nodes", "bits", "at"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_WarpedCompliance)
+    ->ArgsProduct({{1}, {125}, {1, 3}})
+    ->ArgsProduct({{2}, {200}, {1, 3}})
+    ->ArgNames({"block", "contacts", "rows"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ContactCompliance)
     ->ArgsProduct({{1, 2}, {0, 1}})
