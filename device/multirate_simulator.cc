@@ -15,8 +15,12 @@ contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual,
   visual.export_contact_rows = UsesContactRows(o.mode);
   visual.model_compliance_step =
       ResolveModelComplianceStep(visual.model_compliance_step, o.mode, visual.dt_s);
-  // The ground truth takes no shortcut: the exact compliance, whatever the scene chose.
-  if (o.mode == HapticMode::kReference) visual.compliance = contact::ComplianceMethod::kExact;
+  // The ground truth takes no shortcut: the exact compliance, whatever the scene chose, and the
+  // contact correction to the scene's solver tolerance.
+  if (o.mode == HapticMode::kReference) {
+    visual.compliance = contact::ComplianceMethod::kExact;
+    visual.correction_relative_tolerance = 0.0;
+  }
   return visual;
 }
 

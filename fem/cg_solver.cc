@@ -68,7 +68,8 @@ void ConjugateGradientSolver::ApplyPreconditioner(const Eigen::VectorXd& r, Eige
 }
 
 SolveReport ConjugateGradientSolver::Solve(const Eigen::SparseMatrix<double>& A,
-                                           const Eigen::VectorXd& b, Eigen::VectorXd* x) {
+                                           const Eigen::VectorXd& b, double relative_tolerance,
+                                           Eigen::VectorXd* x) {
   const Eigen::Index n = b.size();
   if (x->size() != n) x->setZero(n);
   r_.resize(n), z_.resize(n), p_.resize(n), Ap_.resize(n);
@@ -80,7 +81,7 @@ SolveReport ConjugateGradientSolver::Solve(const Eigen::SparseMatrix<double>& A,
     report.converged = true;
     return report;
   }
-  const double target = options_.relative_tolerance * b_norm;
+  const double target = relative_tolerance * b_norm;
   MultiplySymmetric(A, *x, &Ap_);
   r_ = b - Ap_;
   double r_norm = r_.norm();

@@ -16,7 +16,7 @@ class ConjugateGradientSolver final : public LinearSolver {
     factor_.KeepCopy(options.factor_precision);
   }
   SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
-                    Eigen::VectorXd* x) override;
+                    double relative_tolerance, Eigen::VectorXd* x) override;
 
   int num_factorizations() const override { return num_factorizations_; }
   CholmodFactor* factor() override { return factor_.is_factored() ? &factor_ : nullptr; }

@@ -5,7 +5,7 @@
 namespace hapsim::fem {
 
 SolveReport CholmodSolver::Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
-                                 Eigen::VectorXd* x) {
+                                 double /*relative_tolerance*/, Eigen::VectorXd* x) {
   SolveReport report;
   report.iterations = 1;
   ++num_factorizations_;  // attempted: it costs the same whether or not A is definite

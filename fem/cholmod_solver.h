@@ -10,7 +10,7 @@ namespace hapsim::fem {
 class CholmodSolver final : public LinearSolver {
  public:
   SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
-                    Eigen::VectorXd* x) override;
+                    double relative_tolerance, Eigen::VectorXd* x) override;
   CholmodFactor* factor() override { return &factor_; }
   void AnalyzePattern(const Eigen::SparseMatrix<double>& A) override { factor_.Analyze(A); }
   int num_factorizations() const override { return num_factorizations_; }

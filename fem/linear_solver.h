@@ -21,10 +21,12 @@ class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
   // Solves A x = b for symmetric positive definite A, lower triangle stored (StiffnessAssembler).
-  // On entry *x is the initial guess (CG warm start; ignored by direct solvers). The sparsity
-  // pattern of A must stay the same between calls (it is analysed once).
+  // On entry *x is the initial guess (CG warm start; ignored by direct solvers). CG stops at
+  // ‖b − A x‖ ≤ relative_tolerance · ‖b‖ (the step passes SolverOptions::relative_tolerance; a
+  // direct solver ignores it). The sparsity pattern of A must stay the same between calls (it is
+  // analysed once).
   virtual SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
-                            Eigen::VectorXd* x) = 0;
+                            double relative_tolerance, Eigen::VectorXd* x) = 0;
 
   // The Cholesky factor the solver holds, or nullptr: CholmodSolver's is of the last A, CG with
   // a lagged Cholesky preconditioner holds one of an earlier A. Contact compliance uses it.

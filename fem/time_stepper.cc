@@ -1,5 +1,6 @@
 #include "fem/time_stepper.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "core/stopwatch.h"
@@ -45,12 +46,14 @@ StepStats TimeStepper::CalcFreeVelocityChange(const State& state, Eigen::VectorX
              : CalcExplicitVelocityChange(state, dv_m_s);
 }
 
-SolveReport TimeStepper::SolveWithSystemMatrix(const Eigen::VectorXd& rhs, Eigen::VectorXd* x) {
+SolveReport TimeStepper::SolveWithSystemMatrix(const Eigen::VectorXd& rhs,
+                                               double relative_tolerance, Eigen::VectorXd* x) {
   if (options_.integrator != IntegratorKind::kImplicitEuler)
     throw std::logic_error("SolveWithSystemMatrix needs the implicit integrator");
   scratch_rhs_ = rhs;
   for (int i : fixed_dofs_) scratch_rhs_[i] = 0.0;
-  return solver_->Solve(system_, scratch_rhs_, x);
+  return solver_->Solve(system_, scratch_rhs_,
+                        std::max(relative_tolerance, options_.solver.relative_tolerance), x);
 }
 
 Eigen::MatrixXd TimeStepper::CalcCompliance(const Eigen::SparseMatrix<double>& J) {
@@ -115,7 +118,8 @@ StepStats TimeStepper::CalcImplicitVelocityChange(const State& state, Eigen::Vec
   stats.assembly_s = stage.Lap();
 
   if (dv_m_s->size() != rhs_.size()) dv_m_s->setZero(rhs_.size());
-  stats.solve = solver_->Solve(system_, rhs_, dv_m_s);  // warm start: the caller's previous Δv
+  stats.solve = solver_->Solve(system_, rhs_, options_.solver.relative_tolerance,
+                               dv_m_s);  // warm start: the caller's previous Δv
   stats.solve_s = stage.Lap();
   stats.total_s = total.Elapsed();
   return stats;

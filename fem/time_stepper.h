@@ -45,8 +45,10 @@ class TimeStepper {
   // Δv_free of the collision-free update (implicit: assembles A and solves A Δv = Δt F̃).
   StepStats CalcFreeVelocityChange(const State& state, Eigen::VectorXd* dv_m_s);
   // x = A⁻¹ rhs with the A of the last CalcFreeVelocityChange (implicit integrator only); *x is
-  // the initial guess for CG.
-  SolveReport SolveWithSystemMatrix(const Eigen::VectorXd& rhs, Eigen::VectorXd* x);
+  // the initial guess for CG, which stops at relative_tolerance or the scene's solver tolerance,
+  // whichever is looser (0: the solver's).
+  SolveReport SolveWithSystemMatrix(const Eigen::VectorXd& rhs, double relative_tolerance,
+                                    Eigen::VectorXd* x);
   // J A⁻¹ Jᵀ (rows x rows) with the solver's Cholesky factor: exact for CHOLMOD; for CG with a
   // lagged Cholesky preconditioner, the factor of an earlier A (an approximation of the same
   // order as the preconditioner's error). Throws std::logic_error for block Jacobi or explicit.

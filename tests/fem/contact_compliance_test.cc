@@ -64,7 +64,7 @@ TEST(ContactCompliance, CholmodMatchesDenseInverse) {
 
   const Eigen::VectorXd rhs = Jd.transpose() * Eigen::VectorXd::Ones(12);
   Eigen::VectorXd x;
-  stepper.SolveWithSystemMatrix(rhs, &x);
+  stepper.SolveWithSystemMatrix(rhs, 0.0, &x);
   EXPECT_LT((x - A.ldlt().solve(rhs)).norm(), 1e-10 * x.norm());
 }
 
@@ -93,7 +93,7 @@ TEST(ContactCompliance, LaggedFactorApproximatesTheCurrentCompliance) {
   // An exact solve with the current A still goes through CG.
   const Eigen::VectorXd rhs = Jd.transpose() * Eigen::VectorXd::Ones(12);
   Eigen::VectorXd x;
-  stepper.SolveWithSystemMatrix(rhs, &x);
+  stepper.SolveWithSystemMatrix(rhs, 0.0, &x);
   EXPECT_LT((x - A.ldlt().solve(rhs)).norm(), 1e-5 * x.norm());
 }
 

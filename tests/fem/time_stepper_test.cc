@@ -531,6 +531,43 @@ TEST(TimeStepper, ConjugateGradientAgreesWithCholmod) {
   }
 }
 
+// The contact correction's solve stops at the tolerance it is given, or at the scene's where
+// that is looser: checked on the residual against the dense A, with block Jacobi (whose CG takes
+// many iterations, so the two stopping points differ).
+TEST(TimeStepper, SolveWithSystemMatrixStopsAtTheLooserTolerance) {
+  const Model model = MakeSmallCantilever(/*alpha_1_s=*/0.5, /*beta_s=*/1e-3);
+  const double scene_tolerance = 1e-8;
+  TimeStepper stepper(model,
+                      MakeOptions(IntegratorKind::kImplicitEuler, SolverKind::kConjugateGradient,
+                                  PreconditionerKind::kBlockJacobi, scene_tolerance),
+                      5e-3, CalcGravityForce(model, {0.0, 0.0, -kGravity_m_s2}));
+  Eigen::VectorXd dv;
+  stepper.CalcFreeVelocityChange(MakeDeflectedState(model, 0.3), &dv);
+  const Eigen::MatrixXd A = Eigen::MatrixXd(
+      Eigen::SparseMatrix<double>(stepper.system_matrix().selfadjointView<Eigen::Lower>()));
+  Random random(5);
+  const Eigen::VectorXd rhs = test::ZeroFixedDofs(model, random.Vector(model.num_dofs()));
+  const auto solve = [&](double tolerance, double* residual) {
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(model.num_dofs());
+    const SolveReport report = stepper.SolveWithSystemMatrix(rhs, tolerance, &x);
+    *residual = (rhs - A * x).norm() / rhs.norm();
+    return report.iterations;
+  };
+  double loose_residual, scene_residual, strict_residual;
+  const int loose_iterations = solve(1e-3, &loose_residual);
+  const int scene_iterations = solve(0.0, &scene_residual);
+  const int strict_iterations = solve(1e-12, &strict_residual);
+  std::printf("CG iterations: %d at 1e-3 (residual %.1e), %d at the scene's 1e-8 (%.1e)\n",
+              loose_iterations, loose_residual, scene_iterations, scene_residual);
+  EXPECT_LE(loose_residual, 1e-3);
+  EXPECT_GT(loose_residual, scene_tolerance);  // stopped early, not at the scene's tolerance
+  EXPECT_LT(loose_iterations, scene_iterations);
+  EXPECT_LE(scene_residual, scene_tolerance);
+  // Asked for more than the scene's accuracy: the scene's tolerance stops it.
+  EXPECT_EQ(strict_iterations, scene_iterations);
+  EXPECT_EQ(strict_residual, scene_residual);
+}
+
 // The step's formula written out densely, term by term (DESIGN.md §2), at a rotated, strained and
 // moving state with both Rayleigh terms: the stepper forms f_el − (β + Δt) K v as f_el at
 // x + (β + Δt) v and assembles K already scaled, and must still solve exactly this.
