@@ -134,12 +134,9 @@ nlohmann::json MeasureFrames(const config::Scene& scene, const std::optional<con
   std::vector<double> frame_s;
   int max_contacts = 0;
   if (scene.tool) {
-    contact::VisualFrameOptions options = config::MakeVisualFrameOptions(scene);
-    options.dt_s = scene.dt_s;
-    options.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
-    options.export_contact_rows = device::UsesContactRows(scene.haptic.mode);
-    options.model_compliance_step = device::ResolveModelComplianceStep(
-        options.model_compliance_step, scene.haptic.mode, options.dt_s);
+    const contact::VisualFrameOptions options =
+        device::SetUpFrameForMode(config::MakeVisualFrameOptions(scene), scene.haptic.mode,
+                                  scene.dt_s, 1.0 / scene.haptic.rate_hz);
     contact::VisualFrame frame = config::MakeVisualFrame(scene, body, options);
     fem::State state = body ? fem::MakeRestState(body->model) : fem::State{};
     ToolState tool = scene.tool->initial_state;

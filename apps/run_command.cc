@@ -214,12 +214,8 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
                const RunCommandOptions& options, const hapsim_lcm::run_info_t& info, lcm::LCM* lcm,
                Listener* listener, pid_t* child, int* child_code, std::string* child_end) {
   const std::optional<config::Body> body = config::MakeSceneBody(scene);
-  contact::VisualFrameOptions visual = config::MakeVisualFrameOptions(scene);
-  visual.dt_s = scene.dt_s;
-  visual.haptic_dt_s = 1.0 / scene.haptic.rate_hz;
-  visual.export_contact_rows = device::UsesContactRows(mode);
-  visual.model_compliance_step =
-      device::ResolveModelComplianceStep(visual.model_compliance_step, mode, visual.dt_s);
+  const contact::VisualFrameOptions visual = device::SetUpFrameForMode(
+      config::MakeVisualFrameOptions(scene), mode, scene.dt_s, 1.0 / scene.haptic.rate_hz);
   // coupling: there is no haptic tool; the model is linearised at the visual tool (and unused).
   // godobject: the visual tool is coupled to the device, to press the body (as in `hapsim sim`).
   const bool haptic_tool =

@@ -56,8 +56,8 @@ const char* ToString(ComplianceMethod method);
 //            body yields within one haptic step under a force held over it. Warped from a rest
 //            factor at Δt_h (fem/warped_compliance.h), whatever `compliance` the frame uses.
 //   kAuto    chosen by the haptic mode and the visual rate (device::ResolveModelComplianceStep,
-//            which every caller that knows the mode applies; the frame takes an unresolved one
-//            as kVisual)
+//            applied with the mode's other needs by device::SetUpFrameForMode; the frame takes
+//            an unresolved one as kVisual)
 // scripts/bench.sh measures both against the reference (docs/RESULTS.md).
 enum class ModelComplianceStep { kVisual, kHaptic, kAuto };
 const char* ToString(ModelComplianceStep step);
@@ -73,7 +73,8 @@ struct VisualFrameOptions {
   ComplianceMethod compliance = ComplianceMethod::kWarped;
   // CG's relative tolerance for the contact correction A_u⁻¹ Δt J_uᵀ λ, or the scene's solver
   // tolerance where that is looser; 0: the scene's. Looser than the free step's 1e-6 because
-  // W_body is itself ~1% off (warped) and the correction's error does not accumulate: on
+  // W_body is itself ~1% off (warped) and an error here is one frame's velocity error, which the
+  // next frame's constraint targets correct (docs/CONTACT.md "Response"): on
   // block_press 1e-4 saves one CG iteration in three (3.4 → 2.35 a frame) and leaves the device
   // force vs the reference unchanged to 4 digits (0.0400 N RMS), and a grabbed cube pressing a
   // free block still balances the plate's force to 2e-5 (tests/contact/moving_objects_test.cc).

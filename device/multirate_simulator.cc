@@ -1,6 +1,7 @@
 #include "device/multirate_simulator.h"
 
 #include <stdexcept>
+#include <utility>
 
 #include "core/stopwatch.h"
 
@@ -10,21 +11,26 @@ namespace {
 contact::VisualFrameOptions WithStep(contact::VisualFrameOptions visual,
                                      const MultirateOptions& o) {
   const int ratio = o.mode == HapticMode::kReference ? 1 : o.haptic_steps_per_frame;
-  visual.dt_s = ratio * o.haptic_dt_s;
-  visual.haptic_dt_s = o.haptic_dt_s;
-  visual.export_contact_rows = UsesContactRows(o.mode);
+  return SetUpFrameForMode(std::move(visual), o.mode, ratio * o.haptic_dt_s, o.haptic_dt_s);
+}
+
+}  // namespace
+
+contact::VisualFrameOptions SetUpFrameForMode(contact::VisualFrameOptions visual, HapticMode mode,
+                                              double visual_dt_s, double haptic_dt_s) {
+  visual.dt_s = visual_dt_s;
+  visual.haptic_dt_s = haptic_dt_s;
+  visual.export_contact_rows = UsesContactRows(mode);
   visual.model_compliance_step =
-      ResolveModelComplianceStep(visual.model_compliance_step, o.mode, visual.dt_s);
+      ResolveModelComplianceStep(visual.model_compliance_step, mode, visual_dt_s);
   // The ground truth takes no shortcut: the exact compliance, whatever the scene chose, and the
   // contact correction to the scene's solver tolerance.
-  if (o.mode == HapticMode::kReference) {
+  if (mode == HapticMode::kReference) {
     visual.compliance = contact::ComplianceMethod::kExact;
     visual.correction_relative_tolerance = 0.0;
   }
   return visual;
 }
-
-}  // namespace
 
 contact::ModelComplianceStep ResolveModelComplianceStep(contact::ModelComplianceStep step,
                                                         HapticMode mode, double visual_dt_s) {

@@ -51,6 +51,13 @@ constexpr double kHapticComplianceBelowHz = 100.0;
 contact::ModelComplianceStep ResolveModelComplianceStep(contact::ModelComplianceStep step,
                                                         HapticMode mode, double visual_dt_s);
 
+// The scene's frame options (config::MakeVisualFrameOptions) set for rendering `mode` with these
+// steps: the steps, the rows the haptic side needs, the model's compliance step resolved, and the
+// reference's exact compliance. The one place a mode reaches into the visual frame, for
+// MultirateSimulator, `hapsim run` and `hapsim inspect` alike.
+contact::VisualFrameOptions SetUpFrameForMode(contact::VisualFrameOptions visual, HapticMode mode,
+                                              double visual_dt_s, double haptic_dt_s);
+
 struct MultirateOptions {
   HapticMode mode = kDefaultHapticMode;
   double haptic_dt_s = 1e-3;

@@ -321,6 +321,27 @@ TEST(ResolveModelComplianceStep, ChoosesByModeAndVisualRate) {
             ModelComplianceStep::kHaptic);
 }
 
+// What a mode needs of the frame, set in one place for sim, run and inspect: the steps, the
+// candidate rows for the modes that solve them at 1 kHz, the resolved compliance step, and the
+// reference's exact compliance with the scene's own CG tolerance for the correction.
+TEST(SetUpFrameForMode, GivesEachModeWhatItNeeds) {
+  contact::VisualFrameOptions scene_options;
+  scene_options.model_compliance_step = contact::ModelComplianceStep::kAuto;
+  const auto hybrid = SetUpFrameForMode(scene_options, HapticMode::kHybrid, 0.03, 1e-3);
+  EXPECT_EQ(hybrid.dt_s, 0.03);
+  EXPECT_EQ(hybrid.haptic_dt_s, 1e-3);
+  EXPECT_TRUE(hybrid.export_contact_rows);
+  EXPECT_EQ(hybrid.model_compliance_step, contact::ModelComplianceStep::kHaptic);
+  EXPECT_EQ(hybrid.compliance, contact::ComplianceMethod::kWarped);
+  const auto linear = SetUpFrameForMode(scene_options, HapticMode::kLinear, 0.03, 1e-3);
+  EXPECT_FALSE(linear.export_contact_rows);
+  EXPECT_EQ(linear.model_compliance_step, contact::ModelComplianceStep::kVisual);
+  EXPECT_EQ(linear.correction_relative_tolerance, scene_options.correction_relative_tolerance);
+  const auto reference = SetUpFrameForMode(scene_options, HapticMode::kReference, 1e-3, 1e-3);
+  EXPECT_EQ(reference.compliance, contact::ComplianceMethod::kExact);
+  EXPECT_EQ(reference.correction_relative_tolerance, 0.0);
+}
+
 TEST(HapticStep, AllocatesNothing) {
   const Scene scene = MakeScene();
   HapticStep step(scene.tool, {1000, 2, 1, 0.005}, {0, 0, -9.81}, 1e-3, scene.start);
