@@ -4,16 +4,18 @@
 #   [CASES="..."] scripts/bench_speed.sh [BASE_REV]   (default 4eceff2: main before issue 13's
 #                                                      speed work)
 #
-# CASES: some of fem fem_step block_press block_press_large block_press_friction friction (all by
-# default), e.g. issue 25's: CASES="block_press block_press_large block_press_friction"
-# scripts/bench_speed.sh 2e7ba71.
+# CASES: some of fem fem_step block_press block_press_hybrid block_press_large block_press_friction
+# friction (all but block_press_hybrid by default, which needs a base with the hybrid mode, f688aed
+# or later), e.g. issue 25's: CASES="block_press block_press_hybrid block_press_large
+# block_press_friction" scripts/bench_speed.sh f688aed.
 # Builds BASE_REV in a worktree (only the targets used; Release, -j2), then runs the same
 # commands with both builds, the two of each pair one right after the other, on the same scene
 # files (those checked out):
 #   - `hapsim fem --bench` on the 3.6k- and 28.8k-tet blocks: 200 steps from rest, mean and
 #     median, and the probe trajectory's largest difference from CHOLMOD (relative);
 #   - fem_step_benchmark: the settled implicit step (CG + lagged Cholesky);
-#   - `hapsim sim --mode linear` on block_press and block_press_large, and `--mode lcp` on
+#   - `hapsim sim --mode linear` on block_press and block_press_large, `--mode hybrid` (the
+#     default) on block_press for block_press_hybrid, and `--mode lcp` on
 #     block_press_friction: the visual frame's median by contact count, and the device force's
 #     RMS difference from the 1 kHz reference (block_press, computed once with the current build)
 #     or between the two builds (the others, whose references take many minutes);
@@ -68,6 +70,9 @@ measure() {
         --benchmark_out="$out/$run/fem_step.json" --benchmark_out_format=json > /dev/null ;;
     block_press)
       "$b/apps/hapsim" sim scenes/block_press.yaml --mode linear --out "$out/$run/block_press" ;;
+    block_press_hybrid)  # the default mode; a base before issue 25 has none
+      "$b/apps/hapsim" sim scenes/block_press.yaml --mode hybrid \
+        --out "$out/$run/block_press_hybrid" ;;
     block_press_large)
       local large=scenes/block_press_large.yaml
       if [ "$run" = before ]; then large=$before_large; fi

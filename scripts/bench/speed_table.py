@@ -84,15 +84,15 @@ def frame_table(out):
     print("|---|---|---|---|---|---|---|")
     data = {}
     # block_press_friction over every frame: issue 25 states its target as the median frame.
-    for scene, min_contacts in (("block_press", 200), ("block_press_large", 300),
-                                ("block_press_friction", 0)):
+    for scene, min_contacts in (("block_press", 200), ("block_press_hybrid", 200),
+                                ("block_press_large", 300), ("block_press_friction", 0)):
         if not all(os.path.isdir(os.path.join(out, run, scene)) for run in RUNS):
             continue  # a case this run left out (CASES)
         m = {run: frame_medians(os.path.join(out, run, scene), min_contacts) for run in RUNS}
         forces = {run: read_forces(os.path.join(out, run, scene))[1] for run in RUNS}
         between = errors(forces["after"], forces["before"])["rms_N"]
         vs_ref = "–"
-        if scene == "block_press":
+        if scene in ("block_press", "block_press_hybrid"):
             vs_ref = (f"{errors(forces['after'], f_ref)['rms_N']:.4f} N "
                       f"({errors(forces['before'], f_ref)['rms_N']:.4f} N)")
         cell = lambda r: (f"{r['total_ms']:.2f} ms ({r['free_fem_ms']:.2f} / "  # noqa: E731
