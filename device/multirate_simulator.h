@@ -52,8 +52,9 @@ contact::ModelComplianceStep ResolveModelComplianceStep(contact::ModelCompliance
                                                         HapticMode mode, double visual_dt_s);
 
 // The scene's frame options (config::MakeVisualFrameOptions) set for rendering `mode` with these
-// steps: the steps, the rows the haptic side needs, the model's compliance step resolved, and the
-// reference's exact compliance. The one place a mode reaches into the visual frame, for
+// steps: the steps, the rows the haptic side needs, the model's compliance step resolved, and for
+// the reference the exact compliance and the scene's own CG tolerance for the contact correction.
+// The one place a mode reaches into the visual frame, for
 // MultirateSimulator, `hapsim run` and `hapsim inspect` alike.
 contact::VisualFrameOptions SetUpFrameForMode(contact::VisualFrameOptions visual, HapticMode mode,
                                               double visual_dt_s, double haptic_dt_s);

@@ -64,8 +64,11 @@ TEST(ContactCompliance, CholmodMatchesDenseInverse) {
 
   const Eigen::VectorXd rhs = Jd.transpose() * Eigen::VectorXd::Ones(12);
   Eigen::VectorXd x;
+  const int factorizations = stepper.solver()->num_factorizations();
   stepper.SolveWithSystemMatrix(rhs, 0.0, &x);
   EXPECT_LT((x - A.ldlt().solve(rhs)).norm(), 1e-10 * x.norm());
+  // With the factor the free step made of this A: no second factorisation in the frame.
+  EXPECT_EQ(stepper.solver()->num_factorizations(), factorizations);
 }
 
 TEST(ContactCompliance, LaggedFactorApproximatesTheCurrentCompliance) {
