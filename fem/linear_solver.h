@@ -27,6 +27,12 @@ class LinearSolver {
   // analysed once).
   virtual SolveReport Solve(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
                             double relative_tolerance, Eigen::VectorXd* x) = 0;
+  // Solve with the A of the last Solve, its values unchanged since: a direct solver reuses the
+  // factor it made then (the visual frame's contact correction after the free step).
+  virtual SolveReport SolveAgain(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& b,
+                                 double relative_tolerance, Eigen::VectorXd* x) {
+    return Solve(A, b, relative_tolerance, x);
+  }
 
   // The Cholesky factor the solver holds, or nullptr: CholmodSolver's is of the last A, CG with
   // a lagged Cholesky preconditioner holds one of an earlier A. Contact compliance uses it.

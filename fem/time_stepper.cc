@@ -52,18 +52,10 @@ SolveReport TimeStepper::SolveWithSystemMatrix(const Eigen::VectorXd& rhs,
     throw std::logic_error("SolveWithSystemMatrix needs the implicit integrator");
   scratch_rhs_ = rhs;
   for (int i : fixed_dofs_) scratch_rhs_[i] = 0.0;
-  // CHOLMOD's solver holds the factor of this very A from the free step: solve with it rather
-  // than factor A a second time in the frame.
-  CholmodFactor* factor = solver_->factor();
-  if (options_.solver.kind == SolverKind::kCholmod && factor != nullptr && factor->is_factored()) {
-    factor->Solve(scratch_rhs_, x);
-    SolveReport report;
-    report.iterations = 1;
-    report.converged = true;
-    return report;
-  }
-  return solver_->Solve(system_, scratch_rhs_,
-                        std::max(relative_tolerance, options_.solver.relative_tolerance), x);
+  // system_ is as the free step's solve left it: a direct solver reuses that factor rather than
+  // factoring A a second time in the frame.
+  return solver_->SolveAgain(system_, scratch_rhs_,
+                             std::max(relative_tolerance, options_.solver.relative_tolerance), x);
 }
 
 Eigen::MatrixXd TimeStepper::CalcCompliance(const Eigen::SparseMatrix<double>& J) {
