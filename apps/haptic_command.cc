@@ -103,6 +103,43 @@ struct LoopStats {
   double force_after_stale_N = 0.0;
 };
 
+// The step's period against Δt; the published quantiles are refreshed every 100 steps. No
+// allocation: the vector is reserved for the run.
+void RecordPeriod(long step, double period_s, double dt_s, LoopStats* stats) {
+  if (step == 0) return;  // no period before the first step
+  stats->period_error_s.push_back(std::abs(period_s - dt_s));
+  stats->period_histogram.Add(std::abs(period_s - dt_s));
+  if (step % 100 == 0) {
+    stats->period_p50_s = stats->period_histogram.Quantile(0.5);
+    stats->period_p99_s = stats->period_histogram.Quantile(0.99);
+  }
+}
+
+// What the step did: the model it took (if any) and its latency, the force sent, the alarms.
+void RecordStep(long step, std::int64_t step_start_utime, const device::ContactModelUpdate* update,
+                const device::HapticLoopOutput& out, double model_stale_s, LoopStats* stats) {
+  if (update != nullptr) {
+    stats->last_model_step = step;
+    if (stats->model_latency_s.size() < stats->model_latency_s.capacity()) {
+      stats->model_latency_s.push_back(
+          1e-6 * static_cast<double>(step_start_utime - update->published_utime));
+      stats->model_ready_s.push_back(
+          1e-6 * static_cast<double>(update->ready_utime - update->published_utime));
+    }
+  }
+  if (out.sent.force_W_N.squaredNorm() > 0.0) stats->last_nonzero_step = step;
+  if (out.model_age_s > model_stale_s)
+    stats->force_after_stale_N = std::max(stats->force_after_stale_N, out.sent.force_W_N.norm());
+  stats->zeroed_steps += out.sent.zeroed;
+  stats->passivity_alarms += out.passivity_alarm;
+  stats->lcp_fallbacks += out.lcp_fell_back;
+  stats->max_force_sent_N = std::max(stats->max_force_sent_N, out.sent.force_W_N.norm());
+  if (out.passivity_alarm) {  // once per run: the observer stays active
+    stats->passivity_alarm_step = step;
+    std::fprintf(stderr, "hapsim haptic: warning: passivity observer active at step %ld\n", step);
+  }
+}
+
 // What one step read from the device.
 struct DeviceReading {
   DeviceState state;
@@ -316,6 +353,23 @@ void PrintSummary(const nlohmann::json& summary, const LoopStats& stats,
         1e3 * loop_options.safety.model_stale_s);
 }
 
+// --device: the scripted trajectory, the simulated hand following it, or DEVICE_STATE messages
+// from another process (subscribed here).
+std::unique_ptr<device::DeviceBackend> MakeDeviceBackend(const std::string& device,
+                                                         const config::Scene& scene, double dt_s,
+                                                         messages::MessageGate* gate,
+                                                         lcm::LCM* lcm) {
+  if (device == "scripted")
+    return std::make_unique<device::ScriptedDevice>(ScriptedTrajectory(scene.trajectory));
+  if (device == "hand")
+    return std::make_unique<device::SimulatedHand>(ScriptedTrajectory(scene.trajectory), scene.hand,
+                                                   dt_s);
+  auto external = std::make_unique<ExternalDevice>(gate);
+  KeepQueued(
+      lcm->subscribe(messages::kDeviceStateChannel, &ExternalDevice::Handle, external.get()));
+  return external;
+}
+
 void RunHaptic(const HapticCommandOptions& options) {
   std::int64_t run_id = 0;
   if (!messages::ParseRunId(options.run_id, &run_id))
@@ -343,18 +397,8 @@ void RunHaptic(const HapticCommandOptions& options) {
   messages::MessageGate gate("hapsim haptic", run_id);
   ModelReceiver receiver(&mailbox, scene, loop_options, &gate);
   KeepQueued(lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver));
-  std::unique_ptr<device::DeviceBackend> backend;
-  if (options.device == "scripted") {
-    backend = std::make_unique<device::ScriptedDevice>(ScriptedTrajectory(scene.trajectory));
-  } else if (options.device == "hand") {
-    backend = std::make_unique<device::SimulatedHand>(ScriptedTrajectory(scene.trajectory),
-                                                      scene.hand, loop_options.dt_s);
-  } else {
-    auto external = std::make_unique<ExternalDevice>(&gate);
-    KeepQueued(
-        lcm.subscribe(messages::kDeviceStateChannel, &ExternalDevice::Handle, external.get()));
-    backend = std::move(external);
-  }
+  const std::unique_ptr<device::DeviceBackend> backend =
+      MakeDeviceBackend(options.device, scene, loop_options.dt_s, &gate, &lcm);
   const bool in_process_device = options.device != "external";
   InstallStopHandlers();
   ReceiveThread receive_thread(&lcm);
@@ -392,14 +436,7 @@ void RunHaptic(const HapticCommandOptions& options) {
     const std::int64_t step_start_utime = WallMicros();
     const double period_s = step == 0 ? loop_options.dt_s : 1e-9 * (start_ns - previous_start_ns);
     previous_start_ns = start_ns;
-    if (step > 0) {
-      stats.period_error_s.push_back(std::abs(period_s - loop_options.dt_s));
-      stats.period_histogram.Add(std::abs(period_s - loop_options.dt_s));
-      if (step % 100 == 0) {
-        stats.period_p50_s = stats.period_histogram.Quantile(0.5);
-        stats.period_p99_s = stats.period_histogram.Quantile(0.99);
-      }
-    }
+    RecordPeriod(step, period_s, loop_options.dt_s, &stats);
     DeviceReading device;
     device.in_process = in_process_device;
     device.state = backend->Read(step * loop_options.dt_s, &device.age_s, &device.sequence);
@@ -407,27 +444,8 @@ void RunHaptic(const HapticCommandOptions& options) {
         step == 0 && first_model != nullptr ? first_model : mailbox.TakeNewest();
     const device::HapticLoopOutput out = loop.Step(device.state, device.age_s, update);
     backend->Write(out.sent.force_W_N, out.sent.torque_W_N_m);
-    if (update != nullptr) {
-      stats.last_model_step = step;
-      if (stats.model_latency_s.size() < stats.model_latency_s.capacity()) {
-        stats.model_latency_s.push_back(
-            1e-6 * static_cast<double>(step_start_utime - update->published_utime));
-        stats.model_ready_s.push_back(
-            1e-6 * static_cast<double>(update->ready_utime - update->published_utime));
-      }
-    }
-    if (out.sent.force_W_N.squaredNorm() > 0.0) stats.last_nonzero_step = step;
-    if (out.model_age_s > loop_options.safety.model_stale_s)
-      stats.force_after_stale_N = std::max(stats.force_after_stale_N, out.sent.force_W_N.norm());
     stats.compute_s.push_back(1e-9 * (MonotonicNs() - start_ns));
-    stats.zeroed_steps += out.sent.zeroed;
-    stats.passivity_alarms += out.passivity_alarm;
-    stats.lcp_fallbacks += out.lcp_fell_back;
-    stats.max_force_sent_N = std::max(stats.max_force_sent_N, out.sent.force_W_N.norm());
-    if (out.passivity_alarm) {  // once per run: the observer stays active
-      stats.passivity_alarm_step = step;
-      std::fprintf(stderr, "hapsim haptic: warning: passivity observer active at step %ld\n", step);
-    }
+    RecordStep(step, step_start_utime, update, out, loop_options.safety.model_stale_s, &stats);
     PublishStep(&lcm, run_id, step, device, loop, out, stats, period_s, &step_messages);
     if (MonotonicNs() > deadline_ns + dt_ns) ++stats.overruns;
     deadline_ns += dt_ns;
