@@ -9,7 +9,10 @@
 namespace hapsim::fem {
 
 WarpedCompliance::WarpedCompliance(const Model& model, const TimeStepper& stepper)
-    : model_(model), node_tets_(model.num_nodes()), slot_of_node_(model.num_nodes(), -1) {
+    : model_(model),
+      node_tets_(model.num_nodes()),
+      slot_of_node_(model.num_nodes(), -1),
+      frame_index_of_node_(model.num_nodes(), -1) {
   factor_.KeepCopy(FactorPrecision::kSingle);
   if (!factor_.Factorize(stepper.MakeRestSystemMatrix()))
     throw std::runtime_error("WarpedCompliance: the rest system matrix is not positive definite");
@@ -17,7 +20,10 @@ WarpedCompliance::WarpedCompliance(const Model& model, const TimeStepper& steppe
     for (int k = 0; k < 4; ++k) node_tets_[model.mesh.tets(k, e)].push_back(e);
 }
 
-void WarpedCompliance::SolveForNewNodes(const std::vector<int>& nodes) {
+void WarpedCompliance::HoldColumnsOf(const std::vector<int>& frame_nodes) {
+  std::vector<int> nodes;  // the new ones
+  for (int node : frame_nodes)
+    if (slot_of_node_[node] == -1) nodes.push_back(node);
   if (nodes.empty()) return;
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(model_.num_dofs(), 3 * nodes.size());
   for (size_t k = 0; k < nodes.size(); ++k)
@@ -69,17 +75,15 @@ namespace {
 
 // Rows of J_u in groups: consecutive rows that touch the same nodes with their entries (a
 // contact's normal and two tangent rows, at most 3 rows a group). A group's rows share node
-// rotations and C₀ blocks, so W's block between groups g and h is one small product per pair of
-// their nodes,
+// rotations, so each of its nodes is one entry,
 //
-//   W_gh = Σ_a Σ_b G_gaᵀ C₀_ab G_hb,   G_ga = R_aᵀ [j_ra]_(r ∈ g)  (3 × rows of g),
+//   G_ga = R_aᵀ [j_ra]_(r ∈ g)  (3 × rows of g),   W_gh = Σ_a Σ_b G_gaᵀ C₀_ab G_hb,
 //
-// which for friction rows is 9× fewer pairs than row by row (block_press_friction's 720 rows:
-// 2.4 → 1.3–1.9 ms a frame, means over `hapsim sim` runs, 2026-11-27).
+// and the products below run over entries, not over rows (for friction rows, 3× fewer).
 struct GroupEntry {
   int node;
   Eigen::Matrix3d G = Eigen::Matrix3d::Zero();  // column k: the group's row k at the node
-  int block = 0;  // 3 · the node's slot: its rows and columns in held_compliance_
+  int block = 0;  // the node's first row and column in the C₀ that MultiplyByEntries reads
 };
 struct RowGroup {
   Eigen::Index first_row = 0;
@@ -117,23 +121,37 @@ void GroupRows(const Eigen::SparseMatrix<double>& J_u, std::vector<RowGroup>* gr
   }
 }
 
-// W_gh above (its top-left num_rows(g) × num_rows(h) corner), from the rotated entries.
-Eigen::Matrix3d CalcGroupBlock(const RowGroup& g, const RowGroup& h,
-                               const std::vector<GroupEntry>& entries,
-                               const Eigen::MatrixXd& held_compliance) {
-  Eigen::Matrix3d W_gh = Eigen::Matrix3d::Zero();
-  for (size_t i = 0; i < g.num_entries; ++i)
-    for (size_t k = 0; k < h.num_entries; ++k) {
-      const GroupEntry& a = entries[g.first_entry + i];
-      const GroupEntry& b = entries[h.first_entry + k];
-      const auto C_ab = held_compliance.block<3, 3>(a.block, b.block);
-      if (g.num_rows == 1 && h.num_rows == 1)  // normal rows alone: one number
-        W_gh(0, 0) += a.G.col(0).dot(C_ab * b.G.col(0));
-      else
-        W_gh.noalias() += a.G.transpose() * (C_ab * b.G);
+// W = U C Uᵀ, with U the rows' rotated entries (U's row r holds Rᵀ j_r at the frame's nodes)
+// and C the held C₀ between the frame's nodes, in two passes that run along columns: Q = C Uᵀ
+// (3 · nodes × rows), each entry adding 3 of C's columns times its G; then W(:, c) = U Q(:, c),
+// each row gathering its entries' 3 values from the column Q(:, c), which stays in cache. Only the
+// lower triangle is computed; C₀_aa is a float solve's, not exactly symmetric, so W mirrors it.
+Eigen::MatrixXd MultiplyByEntries(Eigen::Index num_rows, const std::vector<RowGroup>& groups,
+                                  const std::vector<GroupEntry>& entries,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& C) {
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(C.rows(), num_rows);
+  for (const RowGroup& h : groups)
+    for (size_t i = 0; i < h.num_entries; ++i) {
+      const GroupEntry& b = entries[h.first_entry + i];
+      Q.middleCols(h.first_row, h.num_rows).noalias() +=
+          C.middleCols<3>(b.block) * b.G.leftCols(h.num_rows);
     }
-  if (&g == &h) W_gh = 0.5 * (W_gh + W_gh.transpose()).eval();  // C₀_aa is a float solve's
-  return W_gh;
+  Eigen::MatrixXd W(num_rows, num_rows);
+  for (size_t h = 0; h < groups.size(); ++h)
+    for (Eigen::Index c = groups[h].first_row; c < groups[h].first_row + groups[h].num_rows; ++c) {
+      const auto q = Q.col(c);
+      for (size_t g = h; g < groups.size(); ++g) {
+        const RowGroup& group = groups[g];
+        Eigen::Vector3d w = Eigen::Vector3d::Zero();
+        for (size_t i = 0; i < group.num_entries; ++i) {
+          const GroupEntry& a = entries[group.first_entry + i];
+          w.noalias() += a.G.transpose() * q.segment<3>(a.block);
+        }
+        W.col(c).segment(group.first_row, group.num_rows) = w.head(group.num_rows);
+      }
+    }
+  W.triangularView<Eigen::StrictlyUpper>() = W.transpose();
+  return W;
 }
 
 }  // namespace
@@ -143,31 +161,47 @@ Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
   std::vector<RowGroup> groups;
   std::vector<GroupEntry> entries;
   GroupRows(J_u, &groups, &entries);
-  std::vector<int> new_nodes;
-  for (const GroupEntry& entry : entries)
-    if (slot_of_node_[entry.node] == -1) {
-      slot_of_node_[entry.node] = -2;  // queued for this frame's solve
-      new_nodes.push_back(entry.node);
-    }
-  try {
-    SolveForNewNodes(new_nodes);
-  } catch (...) {
-    for (int node : new_nodes) slot_of_node_[node] = -1;  // not held: solved again next time
-    throw;
-  }
+  // The frame's nodes in order of first appearance; each entry's block is its node's index × 3.
+  std::vector<int> frame_nodes;
   for (GroupEntry& entry : entries) {
-    entry.G = CalcNodeRotation(entry.node, element_rotations).transpose() * entry.G;
-    entry.block = 3 * slot_of_node_[entry.node];
+    int& index = frame_index_of_node_[entry.node];
+    if (index == -1) {
+      index = static_cast<int>(frame_nodes.size());
+      frame_nodes.push_back(entry.node);
+    }
+    entry.block = 3 * index;
   }
-  Eigen::MatrixXd W(J_u.rows(), J_u.rows());
-  for (const RowGroup& h : groups)
-    for (const RowGroup* g = &h; g != groups.data() + groups.size(); ++g)
-      W.block(g->first_row, h.first_row, g->num_rows, h.num_rows) =
-          CalcGroupBlock(*g, h, entries, held_compliance_).topLeftCorner(g->num_rows, h.num_rows);
-  // The upper triangle in one pass: writing each block's transpose as it comes strides across
-  // all of W's columns (1.8 against 1.3 ms a frame on block_press_friction).
-  W.triangularView<Eigen::StrictlyUpper>() = W.transpose();
-  return W;
+  for (int node : frame_nodes) frame_index_of_node_[node] = -1;
+  HoldColumnsOf(frame_nodes);
+  std::vector<Eigen::Matrix3d> rotations_T(frame_nodes.size());
+  for (size_t k = 0; k < frame_nodes.size(); ++k)
+    rotations_T[k] = CalcNodeRotation(frame_nodes[k], element_rotations).transpose();
+  for (GroupEntry& entry : entries) entry.G = rotations_T[entry.block / 3] * entry.G;
+  // The dense pass costs 3 · (C's nodes) a column per entry: C₀ is read in place while the held
+  // nodes are not many more than the frame's, and gathered for the frame's nodes once they are
+  // (a long session that has touched much of the surface).
+  const Eigen::Index held_dofs = 3 * static_cast<Eigen::Index>(node_of_slot_.size());
+  if (held_dofs > 2 * 3 * static_cast<Eigen::Index>(frame_nodes.size()))
+    return MultiplyByEntries(J_u.rows(), groups, entries, GatherHeld(frame_nodes));
+  for (GroupEntry& entry : entries) entry.block = 3 * slot_of_node_[frame_nodes[entry.block / 3]];
+  return MultiplyByEntries(J_u.rows(), groups, entries,
+                           held_compliance_.topLeftCorner(held_dofs, held_dofs));
+}
+
+Eigen::MatrixXd WarpedCompliance::GatherHeld(const std::vector<int>& nodes) const {
+  const Eigen::Index n = static_cast<Eigen::Index>(nodes.size());
+  std::vector<Eigen::Index> held_row(nodes.size());
+  for (size_t a = 0; a < nodes.size(); ++a) held_row[a] = 3 * slot_of_node_[nodes[a]];
+  // Column by column: each of C's columns gathers 3 consecutive entries per node from one held
+  // column, which the loads walk through in order when the frame's nodes are held in order.
+  Eigen::MatrixXd C(3 * n, 3 * n);
+  for (Eigen::Index b = 0; b < n; ++b)
+    for (int d = 0; d < 3; ++d) {
+      const double* from = held_compliance_.col(held_row[b] + d).data();
+      double* to = C.col(3 * b + d).data();
+      for (Eigen::Index a = 0; a < n; ++a) std::copy_n(from + held_row[a], 3, to + 3 * a);
+    }
+  return C;
 }
 
 }  // namespace hapsim::fem

@@ -105,14 +105,22 @@ std::vector<int> TopNodesFromTheCentre(const fem::Model& model) {
 
 // Rows of contacts on the top nodes nearest the centre, 1 a contact (normal −z) or 3 (and the
 // tangents x, y): a flat tool pressing down, with friction for 3.
+// Contact rows on the top face, from its centre out: rows_per_contact 1 (the normal) or 3 (with two
+// tangents); nodes_per_contact 1 (a body node against the tool) or 3 (a tool point on a face, each
+// contact sharing nodes with its neighbours: contact i touches top nodes i/2 to i/2 + 2, as
+// block_press's face contacts do, 1.6 nodes a row over 118 nodes at 212 rows).
 Eigen::SparseMatrix<double> MakeTopContactRows(const fem::Model& model, int num_contacts,
-                                               int rows_per_contact) {
+                                               int rows_per_contact, int nodes_per_contact = 1) {
   const std::vector<int> top = TopNodesFromTheCentre(model);
   std::vector<Eigen::Triplet<double>> entries;
   for (int i = 0; i < num_contacts; ++i)
-    for (int k = 0; k < rows_per_contact; ++k)
-      entries.emplace_back(rows_per_contact * i + k, 3 * top[i] + (k == 0 ? 2 : k - 1),
-                           k == 0 ? -1.0 : 1.0);
+    for (int n = 0; n < nodes_per_contact; ++n) {
+      const int node = nodes_per_contact == 1 ? top[i] : top[i / 2 + n];
+      const double weight = 1.0 / nodes_per_contact;
+      for (int k = 0; k < rows_per_contact; ++k)
+        entries.emplace_back(rows_per_contact * i + k, 3 * node + (k == 0 ? 2 : k - 1),
+                             k == 0 ? -weight : weight);
+    }
   Eigen::SparseMatrix<double> J(rows_per_contact * num_contacts, model.num_dofs());
   J.setFromTriplets(entries.begin(), entries.end());
   return J;
@@ -147,7 +155,7 @@ void BM_ContactCompliance(benchmark::State& bench) {
 
 // The warped compliance (fem/warped_compliance.h) of a frame whose contact nodes are all held:
 // arg 1 contacts on the top face (the small block has 169 top nodes), arg 2 rows a contact (1
-// frictionless, 3 with friction).
+// frictionless, 3 with friction), arg 3 nodes a contact (MakeTopContactRows).
 void BM_WarpedCompliance(benchmark::State& bench) {
   const Fixture& f = GetFixture(static_cast<int>(bench.range(0)));
   fem::TimeStepper stepper(f.body.model, f.scene.body->options, f.scene.dt_s,
@@ -155,8 +163,9 @@ void BM_WarpedCompliance(benchmark::State& bench) {
   Eigen::VectorXd dv;
   stepper.CalcFreeVelocityChange(f.state, &dv);  // the element rotations of the settled block
   fem::WarpedCompliance compliance(f.body.model, stepper);
-  const Eigen::SparseMatrix<double> J = MakeTopContactRows(
-      f.body.model, static_cast<int>(bench.range(1)), static_cast<int>(bench.range(2)));
+  const Eigen::SparseMatrix<double> J =
+      MakeTopContactRows(f.body.model, static_cast<int>(bench.range(1)),
+                         static_cast<int>(bench.range(2)), static_cast<int>(bench.range(3)));
   Eigen::MatrixXd W = compliance.Calc(J, stepper.rotations());  // solves the nodes' columns
   for (auto _ : bench) {
     W = compliance.Calc(J, stepper.rotations());
@@ -258,9 +267,10 @@ BENCHMARK(BM_SolveColumns)
     ->ArgNames({"block", "nodes", "bits", "at"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_WarpedCompliance)
-    ->ArgsProduct({{1}, {125}, {1, 3}})
-    ->ArgsProduct({{2}, {200}, {1, 3}})
-    ->ArgNames({"block", "contacts", "rows"})
+    ->ArgsProduct({{1}, {125}, {1, 3}, {1}})
+    ->ArgsProduct({{1}, {200}, {1, 3}, {3}})
+    ->ArgsProduct({{2}, {200}, {1, 3}, {1, 3}})
+    ->ArgNames({"block", "contacts", "rows", "nodes"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ContactCompliance)
     ->ArgsProduct({{1, 2}, {0, 1}})
