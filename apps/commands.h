@@ -14,6 +14,7 @@ void AddReplayCommand(CLI::App* app);
 void AddInspectCommand(CLI::App* app);
 void AddViewCommand(CLI::App* app);
 void AddTrainCommand(CLI::App* app);
+void AddMeshCommand(CLI::App* app);
 
 // Thrown by a command that ends without an error message of its own but with a non-zero exit
 // code (e.g. 130 after SIGINT); main() returns the code.

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   hapsim::apps::AddInspectCommand(&app);
   hapsim::apps::AddViewCommand(&app);
   hapsim::apps::AddTrainCommand(&app);
+  hapsim::apps::AddMeshCommand(&app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -18,6 +18,10 @@ std::vector<std::string> SceneInputFiles(const config::Scene& scene) {
   if (scene.body) bodies.push_back(&*scene.body);
   for (const config::DeformableObjectScene& more : scene.more_bodies) bodies.push_back(&more.body);
   for (const config::BodyScene* body : bodies) {
+    if (body->mesh.kind == config::MeshSource::Kind::kSurface) {  // meshed at load: its surface
+      files.push_back(fs::absolute(body->mesh.file).lexically_normal().string());
+      continue;
+    }
     if (body->mesh.kind != config::MeshSource::Kind::kFile) continue;
     const fs::path mesh = fs::absolute(body->mesh.file);
     std::string extension = mesh.extension().string();

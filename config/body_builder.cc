@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "config/surface_mesh_cache.h"
 #include "core/error.h"
 #include "fem/lattice_mesher.h"
 #include "fem/mesh_io.h"
@@ -15,6 +16,17 @@ constexpr double kBoxTolerance_m = 1e-9;
 
 [[noreturn]] void Fail(const SourceLocation& where, const std::string& message) {
   throw InputError(where.file, where.line, where.key, message);
+}
+
+fem::SurfaceMeshOptions MakeSurfaceMeshOptions(const MeshSource& source) {
+  fem::SurfaceMeshOptions options;
+  options.cell_size_m = source.cell_size_m;
+  if (source.refine_cell_size_m > 0.0) {
+    options.refine_near_m = {source.refine_near_m};
+    options.refine_cell_size_m = source.refine_cell_size_m;
+    options.refine_radius_m = source.refine_radius_m;
+  }
+  return options;
 }
 
 fem::TetMesh MakeMesh(const MeshSource& source) {
@@ -36,6 +48,8 @@ fem::TetMesh MakeMesh(const MeshSource& source) {
       }
       case MeshSource::Kind::kFile:
         return fem::ReadTetMesh(source.file);  // its own errors name the mesh file and line
+      case MeshSource::Kind::kSurface:         // its errors name the surface file
+        return MeshSurfaceFile(source.file, MakeSurfaceMeshOptions(source)).mesh;
     }
   } catch (const std::invalid_argument& error) {
     Fail(source.location, error.what());

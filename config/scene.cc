@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -92,14 +93,45 @@ void CheckLatticeFitsMemory(const YamlMap& map, const std::string& key,
                          " of memory");
 }
 
-MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
-  map.CheckKeys({"box", "ellipsoid", "file"});
-  const int num_sources = map.Has("box") + map.Has("ellipsoid") + map.Has("file");
-  if (num_sources != 1) {
-    map.Fail("must give exactly one of box, ellipsoid, file; got " + std::to_string(num_sources));
+// `surface` with its cell size and optional refinement (MeshSource::Kind::kSurface).
+void ReadSurfaceSource(const YamlMap& map, const std::string& base_dir, MeshSource* mesh) {
+  mesh->kind = MeshSource::Kind::kSurface;
+  const fs::path given = map.GetString("surface");
+  const fs::path path = given.is_absolute() ? given : fs::path(base_dir) / given;
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".obj" && extension != ".stl")
+    map.FailKey("surface", "must be a closed OBJ or STL surface, got '" + given.string() + "'");
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) map.FailKey("surface", "no such file: " + path.string());
+  mesh->file = path.string();
+  mesh->cell_size_m = map.GetDouble("cell_size_m", Above(0.0));
+  if (const std::optional<YamlMap> refine = map.FindMap("refine")) {
+    refine->CheckKeys({"near_m", "cell_size_m", "radius_m"});
+    mesh->refine_near_m = refine->GetVector3("near_m");
+    mesh->refine_cell_size_m = refine->GetDouble("cell_size_m", Above(0.0));
+    if (mesh->refine_cell_size_m > mesh->cell_size_m)
+      refine->FailKey("cell_size_m", "must not exceed the mesh's cell_size_m");
+    mesh->refine_radius_m = refine->GetDouble("radius_m", Above(0.0));
   }
+}
+
+MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
+  map.CheckKeys({"box", "ellipsoid", "file", "surface", "cell_size_m", "refine"});
+  const int num_sources =
+      map.Has("box") + map.Has("ellipsoid") + map.Has("file") + map.Has("surface");
+  if (num_sources != 1) {
+    map.Fail("must give exactly one of box, ellipsoid, file, surface; got " +
+             std::to_string(num_sources));
+  }
+  for (const char* key : {"cell_size_m", "refine"})
+    if (map.Has(key) && !map.Has("surface")) map.FailKey(key, "belongs to a surface mesh only");
   MeshSource mesh;
   mesh.location = LocationOf(map);
+  if (map.Has("surface")) {
+    ReadSurfaceSource(map, base_dir, &mesh);
+    return mesh;
+  }
   if (const std::optional<YamlMap> box = map.FindMap("box")) {
     box->CheckKeys({"min_m", "max_m", "cells", "graded"});
     mesh.kind = MeshSource::Kind::kBox;

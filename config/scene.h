@@ -13,13 +13,18 @@
 //     dt_s: 0.016666666666666666       # required, > 0 (the visual frame)
 //     num_steps: 200                   # required, ≥ 1
 //   body:                              # optional: the deformable body
-//     mesh:                            # exactly one of box / ellipsoid / file
+//     mesh:                            # exactly one of box / ellipsoid / file / surface
 //       box: {min_m: [x,y,z], max_m: [x,y,z], cells: [nx,ny,nz]}   # max > min, cells ≥ 1
 //         # optional in box: graded: {focus_m: [x,y,z], ratio: 5}: cells grow linearly with the
 //         # distance from focus_m (inside the box) to `ratio` (≥ 1) times at the farthest face
 //       ellipsoid: {center_m: [..], radii_m: [..], cell_size_m: h} # radii > 0, h > 0
 //       file: meshes/liver.msh         # .msh (Gmsh 2.2/4.1 ASCII) or .node (TetGen, + .ele),
 //                                      # relative to the scene file's folder
+//       surface: meshes/liver.obj      # a closed OBJ/STL surface in metres, filled with tets at
+//       cell_size_m: 0.008             # load (fem/surface_mesher.h; cached: config/
+//                                      # surface_mesh_cache.h); h > 0, with surface only
+//       refine: {near_m: [x,y,z], cell_size_m: 0.004, radius_m: 0.02}   # optional, with
+//                                      # surface: finer cells within radius_m of near_m
 //     material:
 //       youngs_modulus_Pa: 50000       # > 0
 //       poisson_ratio: 0.45            # in (-1, 0.5)
@@ -199,7 +204,7 @@ struct AxisAlignedBox {
 };
 
 struct MeshSource {
-  enum class Kind { kBox, kEllipsoid, kFile };
+  enum class Kind { kBox, kEllipsoid, kFile, kSurface };
   Kind kind = Kind::kBox;
   AxisAlignedBox box;                               // kBox
   Eigen::Vector3i cells = Eigen::Vector3i::Ones();  // kBox: lattice cells per axis
@@ -209,8 +214,12 @@ struct MeshSource {
   double grading_ratio = 1.0;
   Eigen::Vector3d center_m = Eigen::Vector3d::Zero();  // kEllipsoid
   Eigen::Vector3d radii_m = Eigen::Vector3d::Ones();   // kEllipsoid
-  double cell_size_m = 0.0;                            // kEllipsoid: lattice cell edge
-  std::string file;  // kFile: path resolved against the scene file's folder
+  double cell_size_m = 0.0;  // kEllipsoid: lattice cell edge; kSurface: the tets' edge
+  std::string file;          // kFile, kSurface: path resolved against the scene file's folder
+  // kSurface: finer cells near a point (fem::SurfaceMeshOptions); refine_cell_size_m 0: none.
+  Eigen::Vector3d refine_near_m = Eigen::Vector3d::Zero();
+  double refine_cell_size_m = 0.0;
+  double refine_radius_m = 0.0;
   SourceLocation location;
 };
 

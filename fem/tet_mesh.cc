@@ -27,6 +27,36 @@ double CalcTetQuality(const Matrix3Xd& p_m, const Eigen::Vector4i& tet) {
   return 6.0 * std::sqrt(2.0) * CalcSignedVolume(p_m, tet) / (rms_edge_m * rms_edge_m * rms_edge_m);
 }
 
+TetMeshQuality CalcTetMeshQuality(const TetMesh& mesh) {
+  TetMeshQuality quality;
+  quality.num_tets = static_cast<int>(mesh.tets.cols());
+  quality.min_dihedral_deg = 180.0;
+  quality.max_dihedral_deg = 0.0;
+  for (int e = 0; e < mesh.tets.cols(); ++e) {
+    const Eigen::Vector4i tet = mesh.tets.col(e);
+    quality.volume_m3 += CalcSignedVolume(mesh.rest_positions_m, tet);
+    // Outward normals of the faces opposite each vertex; the dihedral angle at the edge shared by
+    // the faces opposite a and b is π less the angle between their outward normals.
+    std::array<Eigen::Vector3d, 4> normal;
+    for (int a = 0; a < 4; ++a) {
+      const Eigen::Vector3d p0 = mesh.rest_positions_m.col(tet[(a + 1) % 4]);
+      const Eigen::Vector3d p1 = mesh.rest_positions_m.col(tet[(a + 2) % 4]);
+      const Eigen::Vector3d p2 = mesh.rest_positions_m.col(tet[(a + 3) % 4]);
+      Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+      if (n.dot(mesh.rest_positions_m.col(tet[a]) - p0) > 0.0) n = -n;  // away from vertex a
+      normal[a] = n.normalized();
+    }
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        const double cos_normals = std::clamp(normal[a].dot(normal[b]), -1.0, 1.0);
+        const double dihedral_deg = 180.0 - std::acos(cos_normals) * 180.0 / M_PI;
+        quality.min_dihedral_deg = std::min(quality.min_dihedral_deg, dihedral_deg);
+        quality.max_dihedral_deg = std::max(quality.max_dihedral_deg, dihedral_deg);
+      }
+  }
+  return quality;
+}
+
 std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet) {
   const int num_nodes = mesh.num_nodes();
   if (!mesh.rest_positions_m.allFinite()) return std::string("a node position is not finite");

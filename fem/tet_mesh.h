@@ -28,6 +28,17 @@ double CalcSignedVolume(const Matrix3Xd& p_m, const Eigen::Vector4i& tet);
 // Scale-free quality of a tet: 6√2 V / ℓ_rms³, 1 for a regular tet, ≤ 0 when inverted or flat.
 double CalcTetQuality(const Matrix3Xd& p_m, const Eigen::Vector4i& tet);
 
+// What a mesher's output is judged by (fem/surface_mesher.h, `hapsim mesh`): the extreme
+// dihedral angles over all tets (between the two faces at each of a tet's six edges; a regular
+// tet has 70.53° at every edge, a sliver near 0° and 180°) and the total volume.
+struct TetMeshQuality {
+  int num_tets = 0;
+  double min_dihedral_deg = 0.0;
+  double max_dihedral_deg = 0.0;
+  double volume_m3 = 0.0;
+};
+TetMeshQuality CalcTetMeshQuality(const TetMesh& mesh);
+
 // Tets whose quality is at most this are degenerate (flat to round-off, or a sliver no solver
 // can use). A lattice tet has quality ≈ 0.6–0.8; a mesh generator's worst slivers ≈ 1e-3.
 constexpr double kDegenerateTetQuality = 1e-6;

@@ -27,19 +27,21 @@ fi
 # the files a run reads, recorded in its log), clang and libclang-rt-14-dev (libFuzzer and the
 # sanitizer runtimes for scripts/fuzz.sh), OpenCV's viz (VTK), imgcodecs and videoio with libx11
 # (`hapsim view` and `hapsim train`: the 3D window, PNG screenshots, AVI videos), xvfb, xdotool
-# and x11-utils (headless windows in the tests, driven as a person would; xwininfo).
+# and x11-utils (headless windows in the tests, driven as a person would; xwininfo), the Gmsh API
+# (libgmsh-dev: organ surfaces filled with tets at load, fem/surface_mesher.h), CGAL (libcgal-dev, header-only: tests/bench/mesher_comparison.cc measures
+# its Mesh_3 against Gmsh; benchmarks only).
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas0-serial liblapack-dev
   libyaml-cpp-dev libcli11-dev libfcl-dev
   liblcm-dev liblcm-bin libssl-dev
-  nlohmann-json3-dev
+  nlohmann-json3-dev libgmsh-dev
   libopencv-viz-dev libopencv-imgcodecs-dev libopencv-videoio-dev libx11-dev
 )
 # The tests, fuzzers, benchmarks and charts only.
 if [ "$demo" -eq 0 ]; then
   packages+=(libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-yaml
-    clang libclang-rt-14-dev xvfb xdotool x11-utils)
+    clang libclang-rt-14-dev xvfb xdotool x11-utils libcgal-dev)
 fi
 
 missing=()

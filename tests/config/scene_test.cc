@@ -263,7 +263,8 @@ const BadCase kBadCases[] = {
     {"UnknownFactorPrecision", "factor_precision: double", "factor_precision: quarter", 18,
      "body.solver.factor_precision", "one of: single, double, half"},
     // Mesh sources.
-    {"NoMeshSource", kBoxLine, "{}", 8, "body.mesh", "exactly one of box, ellipsoid, file; got 0"},
+    {"NoMeshSource", kBoxLine, "{}", 8, "body.mesh",
+     "exactly one of box, ellipsoid, file, surface; got 0"},
     {"TwoMeshSources", "cells: [12, 12, 5]}", "cells: [12, 12, 5]}\n    file: a.msh", 8,
      "body.mesh", "got 2"},
     {"MissingMeshFile", kBoxLine, "file: no_such_mesh.msh", 9, "body.mesh.file", "no such file"},

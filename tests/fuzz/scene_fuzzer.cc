@@ -116,6 +116,8 @@ bool SmallEnoughToBuild(const config::MeshSource& mesh) {
     }
     case config::MeshSource::Kind::kFile:
       return true;  // the files above, or whatever else a seed names: the readers bound them
+    case config::MeshSource::Kind::kSurface:
+      return false;  // a Gmsh run in a child process per input: the surface_mesher target's
   }
   return false;
 }

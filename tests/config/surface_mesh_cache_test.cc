@@ -1,0 +1,132 @@
+// A body from `mesh: {surface: ..., cell_size_m: ...}`: meshed once, then read from the cache bit
+// for bit; a broken cache entry meshed again; another cell size or an edited surface a new entry;
+// the scene's own errors at the line and key.
+#include "config/surface_mesh_cache.h"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "config/body_builder.h"
+#include "config/scene.h"
+#include "core/error.h"
+#include "core/shape_mesh.h"
+#include "fem/mesh_io.h"
+
+namespace hapsim::config {
+namespace {
+namespace fs = std::filesystem;
+
+// A fresh cache folder and a sphere surface file (r = 30 mm) in a temporary folder.
+class SurfaceMeshCacheTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    folder_ = fs::temp_directory_path() /
+              ("hapsim_surface_cache_" + std::to_string(::getpid()) + "_" +
+               ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(folder_);
+    fs::create_directories(folder_ / "cache");
+    ::setenv("HAPSIM_MESH_CACHE", (folder_ / "cache").c_str(), 1);
+    WriteSphere(0.03, folder_ / "organ.obj");
+  }
+  void TearDown() override {
+    ::unsetenv("HAPSIM_MESH_CACHE");
+    fs::remove_all(folder_);
+  }
+  static void WriteSphere(double radius_m, const fs::path& path) {
+    ToolShape sphere;
+    sphere.kind = ToolShape::Kind::kSphere;
+    sphere.radius_m = radius_m;
+    const TriangleMesh surface = MakeShapeMesh(sphere, 32);
+    std::ofstream out(path);
+    out.precision(17);
+    for (Eigen::Index v = 0; v < surface.vertices_m.cols(); ++v)
+      out << "v " << surface.vertices_m(0, v) << ' ' << surface.vertices_m(1, v) << ' '
+          << surface.vertices_m(2, v) << '\n';
+    for (Eigen::Index t = 0; t < surface.triangles.cols(); ++t)
+      out << "f " << surface.triangles(0, t) + 1 << ' ' << surface.triangles(1, t) + 1 << ' '
+          << surface.triangles(2, t) + 1 << '\n';
+  }
+  std::string Surface() const { return (folder_ / "organ.obj").string(); }
+  fs::path folder_;
+};
+
+TEST_F(SurfaceMeshCacheTest, MeshesOnceThenReadsTheSameMeshBack) {
+  const fem::SurfaceMeshOptions options{0.01, {}, 0.0, 0.0};
+  const SurfaceMeshResult first = MeshSurfaceFile(Surface(), options);
+  EXPECT_FALSE(first.from_cache);
+  ASSERT_TRUE(fs::is_regular_file(first.cache_file));
+  const SurfaceMeshResult second = MeshSurfaceFile(Surface(), options);
+  EXPECT_TRUE(second.from_cache);
+  EXPECT_EQ(second.cache_file, first.cache_file);
+  EXPECT_EQ(second.mesh.rest_positions_m, first.mesh.rest_positions_m);  // bit for bit
+  EXPECT_EQ(second.mesh.tets, first.mesh.tets);
+  // Another cell size is another entry; so is an edited surface.
+  const SurfaceMeshResult coarser = MeshSurfaceFile(Surface(), {0.015, {}, 0.0, 0.0});
+  EXPECT_FALSE(coarser.from_cache);
+  EXPECT_NE(coarser.cache_file, first.cache_file);
+  WriteSphere(0.031, folder_ / "organ.obj");
+  const SurfaceMeshResult edited = MeshSurfaceFile(Surface(), options);
+  EXPECT_FALSE(edited.from_cache);
+  EXPECT_NE(edited.cache_file, first.cache_file);
+}
+
+TEST_F(SurfaceMeshCacheTest, MeshesABrokenEntryAgain) {
+  const fem::SurfaceMeshOptions options{0.01, {}, 0.0, 0.0};
+  const SurfaceMeshResult first = MeshSurfaceFile(Surface(), options);
+  std::ofstream(first.cache_file) << "$MeshFormat\n4.1 0 8\n";  // cut short
+  const SurfaceMeshResult again = MeshSurfaceFile(Surface(), options);
+  EXPECT_FALSE(again.from_cache);
+  EXPECT_EQ(again.mesh.tets, first.mesh.tets);
+  EXPECT_EQ(fem::ReadGmshMesh(first.cache_file).tets, first.mesh.tets);  // rewritten whole
+}
+
+TEST_F(SurfaceMeshCacheTest, SceneBodyFromASurface) {
+  const std::string yaml = R"(name: surface_body
+time: {dt_s: 0.01, num_steps: 1}
+body:
+  mesh: {surface: organ.obj, cell_size_m: 0.01}
+  material: {youngs_modulus_Pa: 5000, poisson_ratio: 0.45, density_kg_m3: 1000}
+)";
+  const Scene scene = ParseScene(yaml, "surface_body.yaml", folder_.string());
+  ASSERT_EQ(scene.body->mesh.kind, MeshSource::Kind::kSurface);
+  const Body body = MakeBody(*scene.body, scene.gravity_m_s2);
+  // Its mass is ρ times the tets' volume, within 5 % of the sphere's at this coarse size.
+  const double sphere_m3 = 4.0 / 3.0 * M_PI * 0.03 * 0.03 * 0.03;
+  EXPECT_NEAR(body.model.node_mass_kg.sum() / (1000.0 * sphere_m3), 1.0, 0.05);
+}
+
+TEST_F(SurfaceMeshCacheTest, SceneErrorsNameLineAndKey) {
+  const auto expect_error = [&](const std::string& mesh_line, const std::string& key,
+                                const std::string& words) {
+    const std::string yaml =
+        "name: s\ntime: {dt_s: 0.01, num_steps: 1}\nbody:\n  mesh: " + mesh_line +
+        "\n  material: {youngs_modulus_Pa: 1, poisson_ratio: 0.3, "
+        "density_kg_m3: 1}\n";
+    try {
+      ParseScene(yaml, "s.yaml", folder_.string());
+      ADD_FAILURE() << "no error for " << mesh_line;
+    } catch (const InputError& error) {
+      EXPECT_EQ(error.file(), "s.yaml");
+      EXPECT_EQ(error.line(), 4) << error.what();
+      EXPECT_EQ(error.key(), key) << error.what();
+      EXPECT_NE(std::string(error.what()).find(words), std::string::npos) << error.what();
+    }
+  };
+  expect_error("{surface: organ.obj}", "body.mesh.cell_size_m", "missing");
+  expect_error("{surface: organ.obj, cell_size_m: 0}", "body.mesh.cell_size_m", "> 0");
+  expect_error("{surface: none.obj, cell_size_m: 0.01}", "body.mesh.surface", "no such file");
+  expect_error("{surface: organ.msh, cell_size_m: 0.01}", "body.mesh.surface", "OBJ or STL");
+  expect_error("{box: {min_m: [0,0,0], max_m: [1,1,1], cells: [1,1,1]}, cell_size_m: 0.01}",
+               "body.mesh.cell_size_m", "surface mesh only");
+  expect_error(
+      "{surface: organ.obj, cell_size_m: 0.01, refine: {near_m: [0,0,0], cell_size_m: 0.02, "
+      "radius_m: 0.01}}",
+      "body.mesh.refine.cell_size_m", "must not exceed");
+}
+
+}  // namespace
+}  // namespace hapsim::config
