@@ -16,6 +16,7 @@
 #include "apps/commands.h"
 #include "config/surface_mesh_cache.h"
 #include "core/error.h"
+#include "core/mesh_transform.h"
 #include "core/triangle_mesh_io.h"
 #include "fem/mesh_io.h"
 #include "fem/surface_mesher.h"
@@ -29,6 +30,7 @@ struct MeshCommandOptions {
   fem::SurfaceMeshOptions meshing;
   std::vector<double> refine_near_m;  // x y z, or empty
   int gmsh_version = 4;
+  std::string units = "m";  // of the surface file
 };
 
 std::string LowerExtension(const std::string& path) {
@@ -62,13 +64,17 @@ void RunMeshCommand(MeshCommandOptions options) {
                        "needs --refine-cell-size-m and --refine-radius-m too");
   }
   const auto start = std::chrono::steady_clock::now();
+  MeshTransform transform;
+  transform.scale = options.units == "mm" ? 0.001 : options.units == "cm" ? 0.01 : 1.0;
   const config::SurfaceMeshResult result =
-      config::MeshSurfaceFile(options.surface_path, options.meshing);
+      config::MeshSurfaceFile(options.surface_path, options.meshing, transform);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   WriteMesh(result.mesh, options);
   const fem::TetMeshQuality quality = fem::CalcTetMeshQuality(result.mesh);
-  const double surface_volume_m3 = fem::CalcEnclosedVolume(ReadTriangleMesh(options.surface_path));
+  TriangleMesh surface = ReadTriangleMesh(options.surface_path);
+  transform.Apply(&surface.vertices_m);
+  const double surface_volume_m3 = fem::CalcEnclosedVolume(surface);
   std::printf(
       "%s: %d tets, %d nodes, dihedral angles %.1f° to %.1f°, volume %.6g m³ (%+.2f %% of "
       "the surface's)\n",
@@ -89,7 +95,7 @@ void AddMeshCommand(CLI::App* app) {
       "Fills a closed OBJ/STL surface with tets (Gmsh), as a scene's `mesh: {surface: FILE, "
       "cell_size_m: H}` does at load, and writes them for other tools (.msh, .node/.ele, .vtk). "
       "Prints the tet count, the extreme dihedral angles and the volume against the surface's.");
-  command->add_option("surface", options->surface_path, "Closed OBJ or STL surface, in metres")
+  command->add_option("surface", options->surface_path, "Closed OBJ or STL surface")
       ->required()
       ->check(CLI::ExistingFile);
   command->add_option("--cell-size-m", options->meshing.cell_size_m, "Edge length of the tets, m")
@@ -98,6 +104,11 @@ void AddMeshCommand(CLI::App* app) {
       ->add_option("--out", options->out_path,
                    "Output: FILE.msh (Gmsh), FILE.node (TetGen, with FILE.ele) or FILE.vtk")
       ->required();
+  command
+      ->add_option("--units", options->units,
+                   "Units of the surface file (m, cm or mm); the tets are written in metres")
+      ->check(CLI::IsMember({"m", "cm", "mm"}))
+      ->capture_default_str();
   command
       ->add_option("--gmsh-version", options->gmsh_version, "Gmsh file version, 4 (4.1) or 2 (2.2)")
       ->check(CLI::IsMember({2, 4}))

@@ -46,10 +46,13 @@ fem::TetMesh MakeMesh(const MeshSource& source) {
                                         source.center_m - half_m, source.center_m + half_m,
                                         source.cell_size_m);
       }
-      case MeshSource::Kind::kFile:
-        return fem::ReadTetMesh(source.file);  // its own errors name the mesh file and line
+      case MeshSource::Kind::kFile: {
+        fem::TetMesh mesh = fem::ReadTetMesh(source.file);  // its errors name the file and line
+        source.transform.Apply(&mesh.rest_positions_m);
+        return mesh;
+      }
       case MeshSource::Kind::kSurface:         // its errors name the surface file
-        return MeshSurfaceFile(source.file, MakeSurfaceMeshOptions(source)).mesh;
+        return MeshSurfaceFile(source.file, MakeSurfaceMeshOptions(source), source.transform).mesh;
     }
   } catch (const std::invalid_argument& error) {
     Fail(source.location, error.what());

@@ -117,7 +117,8 @@ void ReadSurfaceSource(const YamlMap& map, const std::string& base_dir, MeshSour
 }
 
 MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
-  map.CheckKeys({"box", "ellipsoid", "file", "surface", "cell_size_m", "refine"});
+  map.CheckKeys(
+      {"box", "ellipsoid", "file", "surface", "cell_size_m", "refine", "units", "transform"});
   const int num_sources =
       map.Has("box") + map.Has("ellipsoid") + map.Has("file") + map.Has("surface");
   if (num_sources != 1) {
@@ -126,8 +127,12 @@ MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
   }
   for (const char* key : {"cell_size_m", "refine"})
     if (map.Has(key) && !map.Has("surface")) map.FailKey(key, "belongs to a surface mesh only");
+  for (const char* key : {"units", "transform"})
+    if (map.Has(key) && !map.Has("surface") && !map.Has("file"))
+      map.FailKey(key, "belongs to a mesh file or surface (box and ellipsoid are in metres)");
   MeshSource mesh;
   mesh.location = LocationOf(map);
+  mesh.transform = ReadMeshTransform(map);
   if (map.Has("surface")) {
     ReadSurfaceSource(map, base_dir, &mesh);
     return mesh;

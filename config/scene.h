@@ -25,6 +25,10 @@
 //                                      # surface_mesh_cache.h); h > 0, with surface only
 //       refine: {near_m: [x,y,z], cell_size_m: 0.004, radius_m: 0.02}   # optional, with
 //                                      # surface: finer cells within radius_m of near_m
+//       units: mm                      # optional, with file or surface: mm | cm | m (default)
+//       transform: {scale: 1, rotation_vector_rad: [..], translation_m: [..]}   # optional, with
+//                                      # file or surface: p' = R (units · scale · p) + t, scale > 0
+//                                      # (cell_size_m and refine are in metres, after it)
 //     material:
 //       youngs_modulus_Pa: 50000       # > 0
 //       poisson_ratio: 0.45            # in (-1, 0.5)
@@ -173,6 +177,7 @@
 #include "contact/contact_solver.h"
 #include "contact/god_object.h"
 #include "contact/visual_frame.h"
+#include "core/mesh_transform.h"
 #include "core/rigid_tool.h"
 #include "core/scripted_trajectory.h"
 #include "core/virtual_coupling.h"
@@ -216,6 +221,8 @@ struct MeshSource {
   Eigen::Vector3d radii_m = Eigen::Vector3d::Ones();   // kEllipsoid
   double cell_size_m = 0.0;  // kEllipsoid: lattice cell edge; kSurface: the tets' edge
   std::string file;          // kFile, kSurface: path resolved against the scene file's folder
+  // kFile, kSurface: the file's units, rotation and placement (config/simulation_sections.h)
+  MeshTransform transform;
   // kSurface: finer cells near a point (fem::SurfaceMeshOptions); refine_cell_size_m 0: none.
   Eigen::Vector3d refine_near_m = Eigen::Vector3d::Zero();
   double refine_cell_size_m = 0.0;

@@ -58,6 +58,23 @@ std::optional<Enum> Parse(const Enum (&values)[N], const std::string& name) {
 
 SourceLocation LocationOf(const YamlMap& map) { return {map.file(), map.line(), map.path()}; }
 
+}  // namespace
+
+MeshTransform ReadMeshTransform(const YamlMap& mesh) {
+  MeshTransform transform;
+  transform.scale = mesh.GetEnumOr<double>("units", {{"m", 1.0}, {"cm", 0.01}, {"mm", 0.001}}, 1.0);
+  if (const std::optional<YamlMap> given = mesh.FindMap("transform")) {
+    given->CheckKeys({"scale", "rotation_vector_rad", "translation_m"});
+    transform.scale *= given->GetDoubleOr("scale", 1.0, Above(0.0));
+    if (given->Has("rotation_vector_rad"))
+      transform.rotation_vector_rad = given->GetVector3("rotation_vector_rad");
+    if (given->Has("translation_m")) transform.translation_m = given->GetVector3("translation_m");
+  }
+  return transform;
+}
+
+namespace {
+
 // Resolves tool.shape.mesh.file against base_dir and checks its extension and that it exists.
 std::string ResolveToolMeshFile(const YamlMap& mesh, const std::string& base_dir) {
   const fs::path given = mesh.GetString("file");
@@ -105,10 +122,11 @@ ToolShape ReadToolShape(const YamlMap& map, const std::string& base_dir, std::st
     shape.half_extents_m = box->GetVector3("half_extents_m", Above(0.0));
   } else {
     const YamlMap mesh = map.GetMap("mesh");
-    mesh.CheckKeys({"file"});
+    mesh.CheckKeys({"file", "units", "transform"});
     shape.kind = ToolShape::Kind::kMesh;
     *mesh_file = ResolveToolMeshFile(mesh, base_dir);
     shape.mesh = ReadTriangleMesh(*mesh_file);
+    ReadMeshTransform(mesh).Apply(&shape.mesh.vertices_m);
   }
   return shape;
 }

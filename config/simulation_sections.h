@@ -7,6 +7,7 @@
 
 #include "config/scene.h"
 #include "config/yaml_reader.h"
+#include "core/mesh_transform.h"
 
 namespace hapsim::config {
 
@@ -14,6 +15,11 @@ namespace hapsim::config {
 // checks between sections: everything but `tool` needs a tool; a tool needs coupling and device;
 // haptic.rate_hz · time.dt_s must be a whole number ≥ 1 (`time` is the checked time section).
 // Throws InputError naming file, line and key; errors in a tool mesh file name that file.
+// A mesh file's `units: mm | cm | m` (default m) and `transform: {scale: s, rotation_vector_rad:
+// [..], translation_m: [..]}` (s > 0, default 1; default no rotation or translation) in `mesh`,
+// composed as core/mesh_transform.h says (the units' factor times s).
+MeshTransform ReadMeshTransform(const YamlMap& mesh);
+
 // One `rigid` entry of `objects` (config/scene.h), named `name`.
 RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
                                  const std::string& base_dir);

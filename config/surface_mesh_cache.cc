@@ -25,9 +25,15 @@ std::string ReadBytes(const std::string& path) {
 }
 
 // What the mesh depends on, as text: every option at full precision, and the mesher's version.
-std::string DescribeOptions(const fem::SurfaceMeshOptions& options) {
+std::string DescribeOptions(const fem::SurfaceMeshOptions& options,
+                            const MeshTransform& transform) {
   char line[256];
   std::string text = fem::SurfaceMesherVersion() + "\n";
+  const Eigen::Vector3d& r = transform.rotation_vector_rad;
+  const Eigen::Vector3d& t = transform.translation_m;
+  std::snprintf(line, sizeof line, "transform %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                transform.scale, r.x(), r.y(), r.z(), t.x(), t.y(), t.z());
+  text += line;
   std::snprintf(line, sizeof line, "cell_size_m %.17g\n", options.cell_size_m);
   text += line;
   for (const Eigen::Vector3d& p : options.refine_near_m) {
@@ -50,12 +56,15 @@ std::string SurfaceMeshCacheFolder() {
 }
 
 SurfaceMeshResult MeshSurfaceFile(const std::string& surface_file,
-                                  const fem::SurfaceMeshOptions& options) {
-  const TriangleMesh surface = ReadTriangleMesh(surface_file);  // checks closed and oriented
+                                  const fem::SurfaceMeshOptions& options,
+                                  const MeshTransform& transform) {
+  TriangleMesh surface = ReadTriangleMesh(surface_file);  // checks closed and oriented
+  transform.Apply(&surface.vertices_m);
   SurfaceMeshResult result;
   const std::string folder = SurfaceMeshCacheFolder();
   if (!folder.empty()) {
-    const std::string key = Sha256Hex(DescribeOptions(options) + ReadBytes(surface_file));
+    const std::string key =
+        Sha256Hex(DescribeOptions(options, transform) + ReadBytes(surface_file));
     result.cache_file = (fs::path(folder) / (key + ".msh")).string();
     std::error_code error;
     if (fs::is_regular_file(result.cache_file, error)) {

@@ -68,6 +68,15 @@ TEST_F(SurfaceMeshCacheTest, MeshesOnceThenReadsTheSameMeshBack) {
   const SurfaceMeshResult coarser = MeshSurfaceFile(Surface(), {0.015, {}, 0.0, 0.0});
   EXPECT_FALSE(coarser.from_cache);
   EXPECT_NE(coarser.cache_file, first.cache_file);
+  // A transform is part of the key too, and applies before meshing (cell size in metres after it):
+  // twice the size, 8 times the volume, to the meshes' few % of faceting.
+  MeshTransform doubled;
+  doubled.scale = 2.0;
+  const SurfaceMeshResult big = MeshSurfaceFile(Surface(), {0.02, {}, 0.0, 0.0}, doubled);
+  EXPECT_FALSE(big.from_cache);
+  EXPECT_NEAR(
+      fem::CalcTetMeshQuality(big.mesh).volume_m3 / fem::CalcTetMeshQuality(first.mesh).volume_m3,
+      8.0, 0.4);
   WriteSphere(0.031, folder_ / "organ.obj");
   const SurfaceMeshResult edited = MeshSurfaceFile(Surface(), options);
   EXPECT_FALSE(edited.from_cache);
