@@ -1,25 +1,33 @@
-// Gmsh MSH ASCII reader, versions 2.x and 4.1. Format reference: the Gmsh manual, "MSH file
-// format" (4.1) and "Legacy formats / MSH file format version 2".
+// Gmsh MSH reader: ASCII 2.x and 4.1 read here, line by line, with errors at their line; the other
+// versions (1, 4.0, binary 2.x and 4.x) by Gmsh's own reader (libgmsh, in a child process). Format
+// reference: the Gmsh manual, "MSH file format" (4.1) and "Legacy formats / MSH file format
+// version 2".
 
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
+#include "fem/gmsh_library.h"
 #include "fem/mesh_io.h"
 #include "fem/mesh_text_reader.h"
 
 namespace hapsim::fem {
 namespace {
 
+using internal::GmshVolumeMesh;
+using internal::MakeTetMeshFromGmsh;
 using internal::MeshTextReader;
 using internal::RawNode;
 using internal::RawTet;
+using internal::ReadTetsWithGmsh;
+using internal::RunGmshInChildProcess;
 using Tokens = std::vector<std::string>;
 
 constexpr int kGmshTet4 = 4;  // Gmsh element type of the linear 4-node tetrahedron
 
-enum class MshVersion { k2, k41 };
+// kLibrary: a format this reader leaves to Gmsh's own (MSH 1, binary, 4.0).
+enum class MshVersion { k2, k41, kLibrary };
 
 // A section being read: its name without '$' and the line of its header.
 struct Section {
@@ -147,12 +155,14 @@ std::string OrdinalOf(int i, int count, int count_line) {
          std::to_string(count_line) + ")";
 }
 
-// Reads $MeshFormat (which must open the file) through $EndMeshFormat and returns the version.
-// Throws for anything but ASCII 2.x or 4.1.
+// Reads $MeshFormat (which must open the file) through $EndMeshFormat and returns the version:
+// ASCII 2.x and 4.1 are read here; MSH 1 (which opens with $NOD), 4.0 and binary 2.x and 4.x by
+// Gmsh's own reader (kLibrary). Throws for anything else.
 MshVersion ReadMeshFormat(MeshTextReader* reader) {
   Tokens tokens;
   if (!reader->NextTokens(&tokens, false))
     reader->Fail("$MeshFormat", "the file is empty; expected a Gmsh MSH file");
+  if (tokens[0] == "$NOD" || tokens[0] == "$NOE") return MshVersion::kLibrary;  // MSH 1
   if (tokens[0] != "$MeshFormat")
     reader->Fail("$MeshFormat",
                  "not a Gmsh MSH file: expected '$MeshFormat' first, found '" + tokens[0] + "'");
@@ -162,17 +172,10 @@ MshVersion ReadMeshFormat(MeshTextReader* reader) {
   const double version = reader->ParseReal(tokens[0], "$MeshFormat", "the version");
   const long long file_type = reader->ParseInteger(tokens[1], "$MeshFormat", "the file type");
   reader->ParseInteger(tokens[2], "$MeshFormat", "the data size");
-  if (version == 4.0)
-    reader->Fail("$MeshFormat",
-                 "MSH version 4.0 is not supported (its layout differs from 4.1); "
-                 "save as 4.1 or 2.2 (gmsh -format msh41)");
-  if (version != 4.1 && !(version >= 2.0 && version < 3.0))
-    reader->Fail("$MeshFormat",
-                 "unsupported MSH version " + tokens[0] + "; supported: 2.2 and 4.1 (ASCII)");
-  if (file_type == 1)
-    reader->Fail("$MeshFormat",
-                 "binary MSH files are not supported; save as ASCII "
-                 "(gmsh option -bin off, or Mesh.Binary = 0)");
+  if (version != 4.1 && version != 4.0 && !(version >= 2.0 && version < 3.0))
+    reader->Fail("$MeshFormat", "unsupported MSH version " + tokens[0] +
+                                    "; supported: 1, 2.x and 4.x (ASCII or binary)");
+  if (file_type == 1 || version == 4.0) return MshVersion::kLibrary;
   if (file_type != 0)
     reader->Fail("$MeshFormat", "file type must be 0 (ASCII), found " + tokens[1]);
   ExpectSectionEnd(reader, section, "the version line");
@@ -382,11 +385,25 @@ void ReadSection(MeshTextReader* reader, MshVersion version, const Section& sect
   }
 }
 
+// Gmsh's own reader, in a child process (a file it cannot handle may crash or hang it).
+TetMesh ReadWithGmshLibrary(const std::string& path) {
+  constexpr double kTimeout_s = 300.0;
+  const GmshVolumeMesh made =
+      RunGmshInChildProcess([&] { return ReadTetsWithGmsh(path); }, kTimeout_s);
+  if (!made.error.empty()) throw InputError(path, 0, "", "Gmsh's reader refused it: " + made.error);
+  if (made.tet_tags.empty())
+    throw InputError(path, 0, "$Elements",
+                     "no 4-node tetrahedra (type 4): is this a surface mesh? (generate a volume "
+                     "mesh: gmsh -3)");
+  return MakeTetMeshFromGmsh(made, path, "");
+}
+
 }  // namespace
 
 TetMesh ReadGmshMesh(const std::string& path) {
   MeshTextReader reader(path);
   const MshVersion version = ReadMeshFormat(&reader);
+  if (version == MshVersion::kLibrary) return ReadWithGmshLibrary(path);
   GmshContent content;
   Tokens tokens;
   while (reader.NextTokens(&tokens, false)) {

@@ -1,5 +1,6 @@
 #pragma once
-// Tetrahedral mesh files: readers for Gmsh MSH (ASCII 2.2 and 4.1) and TetGen (.node + .ele),
+// Tetrahedral mesh files: readers for Gmsh MSH (every version: ASCII 2.x and 4.1 here, line by
+// line; MSH 1, 4.0 and binary 2.x / 4.x by Gmsh's own reader) and TetGen (.node + .ele),
 // writers for those and for legacy VTK (ParaView). Units are taken as they stand: coordinates in
 // files are read and written as metres.
 //
@@ -32,10 +33,13 @@
 
 namespace hapsim::fem {
 
-// Reads a Gmsh MSH ASCII file, version 2.x (2.0–2.2) or 4.1, detected from $MeshFormat.
-// Unknown sections ($PhysicalNames, $Entities, $NodeData, ...) are skipped.
-// Throws InputError: file missing/unreadable (line 0); missing or unsupported $MeshFormat
-// (including 4.0 and binary files); counts that disagree with the entries; premature end of file;
+// Reads a Gmsh MSH file of any version, detected from its first section. ASCII 2.x (2.0–2.2) and
+// 4.1 are parsed here, with errors at their line; unknown sections ($PhysicalNames, $Entities,
+// $NodeData, ...) are skipped. MSH 1 ($NOD / $ELM), 4.0 and binary files are read by Gmsh's own
+// reader (libgmsh) in a child process, so a file that crashes or hangs it ends in an error, which
+// names the file at line 0. Throws InputError: file missing/unreadable (line 0); a first section
+// that is neither $MeshFormat nor $NOD, or another version (3.x); counts that disagree with the
+// entries; premature end of file;
 // non-numeric tokens; NaN/Inf coordinates; duplicate node tags; an element naming a missing node
 // tag; unsupported volume elements; no tetrahedra; degenerate or inverted tets.
 TetMesh ReadGmshMesh(const std::string& path);

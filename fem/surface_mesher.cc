@@ -11,8 +11,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "fem/gmsh_volume_mesher.h"
-#include "fem/mesh_text_reader.h"
+#include "fem/gmsh_library.h"
 
 namespace hapsim::fem {
 namespace {
@@ -132,27 +131,17 @@ TetMesh MeshClosedSurface(const TriangleMesh& surface, const SurfaceMeshOptions&
                      "would give about " + std::to_string(static_cast<long long>(expected_tets)) +
                          " tets, more than " + std::to_string(limits.max_tets) +
                          ": choose larger cells");
-  const internal::GmshVolumeMesh made =
-      internal::MeshVolumeInChildProcess(SubdivideSmallSurface(surface), options, limits.timeout_s);
+  const internal::GmshVolumeMesh made = internal::RunGmshInChildProcess(
+      [&, subdivided = SubdivideSmallSurface(surface)] {
+        return internal::MeshVolumeWithGmsh(subdivided, options);
+      },
+      limits.timeout_s);
   if (!made.error.empty())
     throw InputError(
         label, 0, "surface",
         "the mesher could not fill it (does it intersect itself?): Gmsh: " + made.error);
   if (made.tet_tags.empty()) throw InputError(label, 0, "surface", "the mesher made no tets");
-  std::vector<internal::RawNode> nodes(made.node_tags.size());
-  for (size_t i = 0; i < nodes.size(); ++i)
-    nodes[i] = {static_cast<long long>(made.node_tags[i]),
-                Eigen::Vector3d(made.coordinates_m[3 * i], made.coordinates_m[3 * i + 1],
-                                made.coordinates_m[3 * i + 2]),
-                0};
-  std::vector<internal::RawTet> tets(made.tet_tags.size());
-  for (size_t e = 0; e < tets.size(); ++e) {
-    tets[e].tag = static_cast<long long>(made.tet_tags[e]);
-    for (int k = 0; k < 4; ++k)
-      tets[e].nodes[k] = static_cast<long long>(made.tet_nodes[4 * e + k]);
-    tets[e].line = 0;
-  }
-  return internal::MakeCheckedTetMesh(nodes, label, "surface", tets, label, "surface");
+  return internal::MakeTetMeshFromGmsh(made, label, "surface");
 }
 
 }  // namespace hapsim::fem

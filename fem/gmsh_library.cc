@@ -1,4 +1,4 @@
-#include "fem/gmsh_volume_mesher.h"
+#include "fem/gmsh_library.h"
 
 #include <fcntl.h>
 #include <gmsh.h>
@@ -16,6 +16,8 @@
 #include <cstring>
 #include <numeric>
 #include <stdexcept>
+
+#include "fem/mesh_text_reader.h"
 
 namespace hapsim::fem::internal {
 namespace {
@@ -134,7 +136,7 @@ bool Decode(const std::string& bytes, GmshVolumeMesh* mesh) {
          mesh->tet_nodes.size() == 4 * mesh->tet_tags.size();
 }
 
-[[noreturn]] void RunChild(int fd, const TriangleMesh& surface, const SurfaceMeshOptions& options) {
+[[noreturn]] void RunChild(int fd, const std::function<GmshVolumeMesh()>& work) {
   prctl(PR_SET_PDEATHSIG, SIGKILL);  // not left running if hapsim dies
   // A Gmsh crash ends this process as the signal's default does, for the parent to report: not in
   // a handler the parent installed (a sanitizer's, libFuzzer's) that would take it for its own.
@@ -151,7 +153,7 @@ bool Decode(const std::string& bytes, GmshVolumeMesh* mesh) {
       close(null_fd);
     }
   }
-  const std::string bytes = Encode(MeshVolumeWithGmsh(surface, options));
+  const std::string bytes = Encode(work());
   for (size_t at = 0; at < bytes.size();) {
     const ssize_t written = write(fd, bytes.data() + at, bytes.size() - at);
     if (written < 0 && errno == EINTR) continue;
@@ -184,8 +186,8 @@ bool ReadUntil(int fd, std::chrono::steady_clock::time_point deadline, std::stri
 
 std::string GmshVersion() { return std::string("Gmsh API ") + GMSH_API_VERSION; }
 
-GmshVolumeMesh MeshVolumeInChildProcess(const TriangleMesh& surface,
-                                        const SurfaceMeshOptions& options, double timeout_s) {
+GmshVolumeMesh RunGmshInChildProcess(const std::function<GmshVolumeMesh()>& work,
+                                     double timeout_s) {
   int fds[2];
   if (pipe(fds) != 0)
     throw std::runtime_error(std::string("mesher: pipe: ") + std::strerror(errno));
@@ -197,7 +199,7 @@ GmshVolumeMesh MeshVolumeInChildProcess(const TriangleMesh& surface,
   }
   if (pid == 0) {
     close(fds[0]);
-    RunChild(fds[1], surface, options);
+    RunChild(fds[1], work);
   }
   close(fds[1]);
   std::string bytes;
@@ -245,6 +247,54 @@ GmshVolumeMesh MeshVolumeWithGmsh(const TriangleMesh& surface, const SurfaceMesh
     gmsh::model::mesh::getNodes(result.node_tags, result.coordinates_m, parametric, -1, -1,
                                 /*includeBoundary=*/false, /*returnParametricCoord=*/false);
     constexpr int kGmshTet = 4;
+    gmsh::model::mesh::getElementsByType(kGmshTet, result.tet_tags, result.tet_nodes);
+  } catch (...) {
+    result = GmshVolumeMesh{};
+    result.error = GmshSession::LastError();
+  }
+  return result;
+}
+
+TetMesh MakeTetMeshFromGmsh(const GmshVolumeMesh& made, const std::string& label,
+                            const std::string& key) {
+  std::vector<RawNode> nodes(made.node_tags.size());
+  for (size_t i = 0; i < nodes.size(); ++i)
+    nodes[i] = {static_cast<long long>(made.node_tags[i]),
+                Eigen::Vector3d(made.coordinates_m[3 * i], made.coordinates_m[3 * i + 1],
+                                made.coordinates_m[3 * i + 2]),
+                0};
+  std::vector<RawTet> tets(made.tet_tags.size());
+  for (size_t e = 0; e < tets.size(); ++e) {
+    tets[e].tag = static_cast<long long>(made.tet_tags[e]);
+    for (int k = 0; k < 4; ++k)
+      tets[e].nodes[k] = static_cast<long long>(made.tet_nodes[4 * e + k]);
+    tets[e].line = 0;
+  }
+  return MakeCheckedTetMesh(nodes, label, key, tets, label, key);
+}
+
+GmshVolumeMesh ReadTetsWithGmsh(const std::string& path) {
+  GmshSession session;
+  GmshVolumeMesh result;
+  try {
+    gmsh::open(path);
+    std::vector<int> volume_types;
+    gmsh::model::mesh::getElementTypes(volume_types, 3);
+    constexpr int kGmshTet = 4;
+    for (int type : volume_types)
+      if (type != kGmshTet) {
+        std::string name;
+        int dim = 0, order = 0, num_nodes = 0, num_primary = 0;
+        std::vector<double> local;
+        gmsh::model::mesh::getElementProperties(type, name, dim, order, num_nodes, local,
+                                                num_primary);
+        result.error = "it holds " + name + " elements (Gmsh type " + std::to_string(type) +
+                       "); hapsim takes linear tetrahedra (type 4) only";
+        return result;
+      }
+    std::vector<double> parametric;
+    gmsh::model::mesh::getNodes(result.node_tags, result.coordinates_m, parametric, -1, -1,
+                                /*includeBoundary=*/false, /*returnParametricCoord=*/false);
     gmsh::model::mesh::getElementsByType(kGmshTet, result.tet_tags, result.tet_nodes);
   } catch (...) {
     result = GmshVolumeMesh{};

@@ -1,0 +1,49 @@
+#pragma once
+// What hapsim asks of Gmsh's library (libgmsh-dev), for fem/surface_mesher.h and the MSH reader
+// (fem/gmsh_reader.cc): a closed surface remeshed at a cell size and its volume filled, and a
+// mesh file of any MSH version read. Internal. Gmsh can hang or crash on input it cannot handle,
+// so the callers run these in a child process (RunGmshInChildProcess), after their own checks.
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/tool_shape.h"
+#include "fem/surface_mesher.h"
+#include "fem/tet_mesh.h"
+
+namespace hapsim::fem::internal {
+
+// What Gmsh made: node tags and coordinates (x y z per node), tet tags and their 4 node tags each.
+// On failure `error` holds Gmsh's message and the tets are empty.
+struct GmshVolumeMesh {
+  std::vector<std::size_t> node_tags;
+  std::vector<double> coordinates_m;
+  std::vector<std::size_t> tet_tags;
+  std::vector<std::size_t> tet_nodes;
+  std::string error;
+};
+
+// The nodes and tets Gmsh gave as a checked TetMesh (the readers' conventions, fem/mesh_io.h);
+// problems are InputError(label, 0, key, ...). Precondition: no error, some tets.
+TetMesh MakeTetMeshFromGmsh(const GmshVolumeMesh& made, const std::string& label,
+                            const std::string& key);
+
+// `surface` closed, outward-oriented and in one piece; `options` checked.
+GmshVolumeMesh MeshVolumeWithGmsh(const TriangleMesh& surface, const SurfaceMeshOptions& options);
+
+// The linear tets of a mesh file in any format Gmsh reads (MSH 1, binary 2.2 and 4.x, 4.0), as
+// Gmsh's own reader gives them. Volume elements other than linear tets come back as `error`.
+GmshVolumeMesh ReadTetsWithGmsh(const std::string& path);
+
+// `work` (MeshVolumeWithGmsh, ReadTetsWithGmsh) in a child process (fork), its result sent back
+// through a pipe: a Gmsh that hangs is killed after timeout_s, and one that crashes takes only
+// the child. Either comes back as `error` ("did not finish within ...", "crashed (...)"). Throws
+// std::runtime_error only when no child can be started (pipe or fork failing).
+GmshVolumeMesh RunGmshInChildProcess(const std::function<GmshVolumeMesh()>& work, double timeout_s);
+
+// "Gmsh <version of the library>".
+std::string GmshVersion();
+
+}  // namespace hapsim::fem::internal
