@@ -30,12 +30,22 @@ struct GmshVolumeMesh {
 TetMesh MakeTetMeshFromGmsh(const GmshVolumeMesh& made, const std::string& label,
                             const std::string& key);
 
-// `surface` closed, outward-oriented and in one piece; `options` checked.
+// `surface` closed, outward-oriented and in one piece; `options` checked. In the child process
+// only: it loads the plugin (below).
 GmshVolumeMesh MeshVolumeWithGmsh(const TriangleMesh& surface, const SurfaceMeshOptions& options);
 
 // The linear tets of a mesh file in any format Gmsh reads (MSH 1, binary 2.2 and 4.x, 4.0), as
-// Gmsh's own reader gives them. Volume elements other than linear tets come back as `error`.
+// Gmsh's own reader gives them. Volume elements other than linear tets come back as `error`. In
+// the child process only, as MeshVolumeWithGmsh.
 GmshVolumeMesh ReadTetsWithGmsh(const std::string& path);
+
+// The two above as fem/gmsh_plugin.cc implements them, in a shared module (hapsim_gmsh) loaded
+// with dlopen by the first call, so that only a child process ever loads libgmsh (~0.2 s). Its
+// path is the build's (HAPSIM_GMSH_PLUGIN), or $HAPSIM_GMSH_PLUGIN if set.
+struct GmshPlugin {
+  GmshVolumeMesh (*mesh_volume)(const TriangleMesh& surface, const SurfaceMeshOptions& options);
+  GmshVolumeMesh (*read_tets)(const std::string& path);
+};
 
 // `work` (MeshVolumeWithGmsh, ReadTetsWithGmsh) in a child process (fork), its result sent back
 // through a pipe: a Gmsh that hangs is killed after timeout_s, and one that crashes takes only
