@@ -50,7 +50,11 @@ struct GmshPlugin {
 // `work` (MeshVolumeWithGmsh, ReadTetsWithGmsh) in a child process (fork), its result sent back
 // through a pipe: a Gmsh that hangs is killed after timeout_s, and one that crashes takes only
 // the child. Either comes back as `error` ("did not finish within ...", "crashed (...)"). Throws
-// std::runtime_error only when no child can be started (pipe or fork failing).
+// std::runtime_error only when no child can be started (pipe or fork failing). The child of a
+// process with threads holds only the calling one, and dlopen there could wait on a lock another
+// thread held at the fork. hapsim loads scenes before it starts threads of its own (the viewer
+// builds its body after creating its off-screen renderer, not yet drawing); a child that waits
+// anyway is killed at the deadline like any other.
 GmshVolumeMesh RunGmshInChildProcess(const std::function<GmshVolumeMesh()>& work, double timeout_s);
 
 // "Gmsh <version of the library>".
