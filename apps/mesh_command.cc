@@ -17,7 +17,6 @@
 #include "config/surface_mesh_cache.h"
 #include "core/error.h"
 #include "core/mesh_transform.h"
-#include "core/triangle_mesh_io.h"
 #include "fem/mesh_io.h"
 #include "fem/surface_mesher.h"
 
@@ -72,16 +71,13 @@ void RunMeshCommand(MeshCommandOptions options) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   WriteMesh(result.mesh, options);
   const fem::TetMeshQuality quality = fem::CalcTetMeshQuality(result.mesh);
-  TriangleMesh surface = ReadTriangleMesh(options.surface_path);
-  transform.Apply(&surface.vertices_m);
-  const double surface_volume_m3 = fem::CalcEnclosedVolume(surface);
   std::printf(
       "%s: %d tets, %d nodes, dihedral angles %.1f° to %.1f°, volume %.6g m³ (%+.2f %% of "
       "the surface's)\n",
       options.out_path.c_str(), quality.num_tets,
       static_cast<int>(result.mesh.rest_positions_m.cols()), quality.min_dihedral_deg,
       quality.max_dihedral_deg, quality.volume_m3,
-      100.0 * (quality.volume_m3 / surface_volume_m3 - 1.0));
+      100.0 * (quality.volume_m3 / result.surface_volume_m3 - 1.0));
   std::printf("  %s in %.2f s%s%s\n", result.from_cache ? "read from the cache" : "meshed", seconds,
               result.cache_file.empty() ? "" : ": ", result.cache_file.c_str());
 }

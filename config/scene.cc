@@ -7,7 +7,6 @@
 
 #include <unistd.h>
 
-#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -96,15 +95,7 @@ void CheckLatticeFitsMemory(const YamlMap& map, const std::string& key,
 // `surface` with its cell size and optional refinement (MeshSource::Kind::kSurface).
 void ReadSurfaceSource(const YamlMap& map, const std::string& base_dir, MeshSource* mesh) {
   mesh->kind = MeshSource::Kind::kSurface;
-  const fs::path given = map.GetString("surface");
-  const fs::path path = given.is_absolute() ? given : fs::path(base_dir) / given;
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (extension != ".obj" && extension != ".stl")
-    map.FailKey("surface", "must be a closed OBJ or STL surface, got '" + given.string() + "'");
-  std::error_code error;
-  if (!fs::is_regular_file(path, error)) map.FailKey("surface", "no such file: " + path.string());
-  mesh->file = path.string();
+  mesh->file = ResolveSurfaceFile(map, "surface", base_dir);
   mesh->cell_size_m = map.GetDouble("cell_size_m", Above(0.0));
   if (const std::optional<YamlMap> refine = map.FindMap("refine")) {
     refine->CheckKeys({"near_m", "cell_size_m", "radius_m"});

@@ -73,22 +73,22 @@ MeshTransform ReadMeshTransform(const YamlMap& mesh) {
   return transform;
 }
 
-namespace {
-
-// Resolves tool.shape.mesh.file against base_dir and checks its extension and that it exists.
-std::string ResolveToolMeshFile(const YamlMap& mesh, const std::string& base_dir) {
-  const fs::path given = mesh.GetString("file");
+std::string ResolveSurfaceFile(const YamlMap& map, const std::string& key,
+                               const std::string& base_dir) {
+  const fs::path given = map.GetString(key);
   const fs::path path = given.is_absolute() ? given : fs::path(base_dir) / given;
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (extension != ".obj" && extension != ".stl") {
-    mesh.FailKey("file", "must be a Wavefront .obj or an .stl file, got '" + given.string() + "'");
+    map.FailKey(key, "must be a Wavefront .obj or an .stl file, got '" + given.string() + "'");
   }
   std::error_code error;
-  if (!fs::is_regular_file(path, error)) mesh.FailKey("file", "no such file: " + path.string());
+  if (!fs::is_regular_file(path, error)) map.FailKey(key, "no such file: " + path.string());
   return path.string();
 }
+
+namespace {
 
 // The one shape of tool.shape. A mesh is read here (errors in it name the mesh file and line).
 ToolShape ReadToolShape(const YamlMap& map, const std::string& base_dir, std::string* mesh_file) {
@@ -124,7 +124,7 @@ ToolShape ReadToolShape(const YamlMap& map, const std::string& base_dir, std::st
     const YamlMap mesh = map.GetMap("mesh");
     mesh.CheckKeys({"file", "units", "transform"});
     shape.kind = ToolShape::Kind::kMesh;
-    *mesh_file = ResolveToolMeshFile(mesh, base_dir);
+    *mesh_file = ResolveSurfaceFile(mesh, "file", base_dir);
     shape.mesh = ReadTriangleMesh(*mesh_file);
     ReadMeshTransform(mesh).Apply(&shape.mesh.vertices_m);
   }

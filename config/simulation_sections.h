@@ -20,6 +20,12 @@ namespace hapsim::config {
 // composed as core/mesh_transform.h says (the units' factor times s).
 MeshTransform ReadMeshTransform(const YamlMap& mesh);
 
+// The OBJ/STL file named by `key` of `map`, resolved against base_dir; fails at the key unless
+// its extension is .obj or .stl (any case) and the file exists. For tool and object meshes and
+// a body's `surface`.
+std::string ResolveSurfaceFile(const YamlMap& map, const std::string& key,
+                               const std::string& base_dir);
+
 // One `rigid` entry of `objects` (config/scene.h), named `name`.
 RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
                                  const std::string& base_dir);

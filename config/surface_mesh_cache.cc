@@ -3,26 +3,17 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <system_error>
 
 #include "core/content_hash.h"
 #include "core/error.h"
+#include "core/tool_shape.h"
 #include "core/triangle_mesh_io.h"
 #include "fem/mesh_io.h"
 
 namespace hapsim::config {
 namespace fs = std::filesystem;
 namespace {
-
-std::string ReadBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, "", "cannot read the file");
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
 
 // What the mesh depends on, as text: every option at full precision, and the mesher's version.
 std::string DescribeOptions(const fem::SurfaceMeshOptions& options,
@@ -61,10 +52,11 @@ SurfaceMeshResult MeshSurfaceFile(const std::string& surface_file,
   TriangleMesh surface = ReadTriangleMesh(surface_file);  // checks closed and oriented
   transform.Apply(&surface.vertices_m);
   SurfaceMeshResult result;
+  result.surface_volume_m3 = CalcSignedVolume_m3(surface);
   const std::string folder = SurfaceMeshCacheFolder();
   if (!folder.empty()) {
     const std::string key =
-        Sha256Hex(DescribeOptions(options, transform) + ReadBytes(surface_file));
+        Sha256Hex(DescribeOptions(options, transform) + Sha256OfFile(surface_file));
     result.cache_file = (fs::path(folder) / (key + ".msh")).string();
     std::error_code error;
     if (fs::is_regular_file(result.cache_file, error)) {

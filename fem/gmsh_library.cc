@@ -116,42 +116,35 @@ bool ReadUntil(int fd, std::chrono::steady_clock::time_point deadline, std::stri
   }
 }
 
-// The plugin, loaded once (in the child: a fork has its own copy of this state).
-const GmshPlugin* LoadPlugin(std::string* error) {
+// Loads the plugin and runs `call` with it, or says why it could not be loaded. Called in the
+// child process, each time: the parent never loads it, so each fork starts without it.
+template <typename Call>
+GmshVolumeMesh WithPlugin(const Call& call) {
   const char* given = std::getenv("HAPSIM_GMSH_PLUGIN");
   const std::string path = given && *given ? given : HAPSIM_GMSH_PLUGIN;
+  GmshVolumeMesh failed;
   void* module = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (module == nullptr) {
-    *error = std::string("cannot load Gmsh (") + dlerror() + ")";
-    return nullptr;
+    failed.error = std::string("cannot load Gmsh (") + dlerror() + ")";
+    return failed;
   }
   using Entry = const GmshPlugin* (*)();
   const auto entry = reinterpret_cast<Entry>(dlsym(module, "HapsimGmshPlugin"));
   if (entry == nullptr) {
-    *error = "the Gmsh plugin " + path + " has no entry point";
-    return nullptr;
+    failed.error = "the Gmsh plugin " + path + " has no entry point";
+    return failed;
   }
-  return entry();
-}
-
-GmshVolumeMesh FailedToLoad(const std::string& error) {
-  GmshVolumeMesh result;
-  result.error = error;
-  return result;
+  return call(*entry());
 }
 
 }  // namespace
 
 GmshVolumeMesh MeshVolumeWithGmsh(const TriangleMesh& surface, const SurfaceMeshOptions& options) {
-  std::string error;
-  const GmshPlugin* plugin = LoadPlugin(&error);
-  return plugin ? plugin->mesh_volume(surface, options) : FailedToLoad(error);
+  return WithPlugin([&](const GmshPlugin& gmsh) { return gmsh.mesh_volume(surface, options); });
 }
 
 GmshVolumeMesh ReadTetsWithGmsh(const std::string& path) {
-  std::string error;
-  const GmshPlugin* plugin = LoadPlugin(&error);
-  return plugin ? plugin->read_tets(path) : FailedToLoad(error);
+  return WithPlugin([&](const GmshPlugin& gmsh) { return gmsh.read_tets(path); });
 }
 
 std::string GmshVersion() { return std::string("Gmsh API ") + GMSH_API_VERSION; }

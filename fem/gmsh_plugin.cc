@@ -106,7 +106,7 @@ GmshVolumeMesh MeshVolume(const TriangleMesh& surface, const SurfaceMeshOptions&
     gmsh::model::mesh::getElementsByType(kGmshTet, result.tet_tags, result.tet_nodes);
   } catch (...) {
     result = GmshVolumeMesh{};
-    result.error = GmshSession::LastError();
+    result.error = "Gmsh: " + GmshSession::LastError() + " (does the surface cross itself?)";
   }
   return result;
 }
@@ -136,7 +136,7 @@ GmshVolumeMesh ReadTets(const std::string& path) {
     gmsh::model::mesh::getElementsByType(kGmshTet, result.tet_tags, result.tet_nodes);
   } catch (...) {
     result = GmshVolumeMesh{};
-    result.error = GmshSession::LastError();
+    result.error = "Gmsh: " + GmshSession::LastError();
   }
   return result;
 }

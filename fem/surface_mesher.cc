@@ -96,17 +96,6 @@ std::string SurfaceMesherVersion() {
   return "hapsim surface mesher 1, " + internal::GmshVersion();
 }
 
-double CalcEnclosedVolume(const TriangleMesh& surface) {
-  double volume_m3 = 0.0;
-  for (Eigen::Index t = 0; t < surface.triangles.cols(); ++t) {
-    const Eigen::Vector3d a = surface.vertices_m.col(surface.triangles(0, t));
-    const Eigen::Vector3d b = surface.vertices_m.col(surface.triangles(1, t));
-    const Eigen::Vector3d c = surface.vertices_m.col(surface.triangles(2, t));
-    volume_m3 += a.dot(b.cross(c)) / 6.0;
-  }
-  return volume_m3;
-}
-
 // Gmsh over CGAL's Mesh_3, measured on a sphere and the liver surface at the same cell size
 // (tests/bench/mesher_comparison.cc, docs/SCENES.md): CGAL was 1.6–3.7× faster (liver at 8 mm:
 // 0.09 against 0.32 s) with 10–20 % fewer tets, but Gmsh's volume was the closer to the surface's
@@ -117,7 +106,7 @@ double CalcEnclosedVolume(const TriangleMesh& surface) {
 TetMesh MeshClosedSurface(const TriangleMesh& surface, const SurfaceMeshOptions& options,
                           const std::string& label, const SurfaceMeshLimits& limits) {
   CheckOptions(options, label);
-  const double volume_m3 = CalcEnclosedVolume(surface);
+  const double volume_m3 = CalcSignedVolume_m3(surface);
   if (!(volume_m3 > 0.0)) throw InputError(label, 0, "surface", "encloses no volume");
   if (const int pieces = CountPieces(surface); pieces > 1)
     throw InputError(label, 0, "surface",
@@ -138,9 +127,7 @@ TetMesh MeshClosedSurface(const TriangleMesh& surface, const SurfaceMeshOptions&
       },
       limits.timeout_s);
   if (!made.error.empty())
-    throw InputError(
-        label, 0, "surface",
-        "the mesher could not fill it (does it intersect itself?): Gmsh: " + made.error);
+    throw InputError(label, 0, "surface", "the mesher could not fill it: " + made.error);
   if (made.tet_tags.empty()) throw InputError(label, 0, "surface", "the mesher made no tets");
   return internal::MakeTetMeshFromGmsh(made, label, "surface");
 }

@@ -51,7 +51,4 @@ TetMesh MeshClosedSurface(const TriangleMesh& surface, const SurfaceMeshOptions&
 // Names the mesher and its library version (for caches keyed by what made a mesh).
 std::string SurfaceMesherVersion();
 
-// The volume a closed, outward-oriented triangle surface encloses (divergence theorem), m³.
-double CalcEnclosedVolume(const TriangleMesh& surface);
-
 }  // namespace hapsim::fem

@@ -83,7 +83,7 @@ fem::TetMesh MeshWithCgal(const TriangleMesh& surface, double h_m) {
 }
 
 void Compare(const std::string& name, const TriangleMesh& surface, double h_m) {
-  const double surface_volume_m3 = fem::CalcEnclosedVolume(surface);
+  const double surface_volume_m3 = CalcSignedVolume_m3(surface);
   const std::vector<std::pair<std::string, std::function<fem::TetMesh()>>> meshers = {
       {"Gmsh",
        [&] {

@@ -1,7 +1,7 @@
 #pragma once
-// What the scene tests (scene_test.cc, sim_scene_test.cc) share: edit a scene's text, catch the
-// InputError a bad scene throws and check that it names the file, line and key, and keep files
-// in a temporary folder.
+// What the scene tests (scene_test.cc, sim_scene_test.cc, the mesh-file ones) share: edit a
+// scene's text, catch the InputError a bad scene throws and check that it names the file, line
+// and key, and keep files (surfaces as OBJ text) in a temporary folder.
 
 #include <gtest/gtest.h>
 
@@ -9,9 +9,11 @@
 #include <fstream>
 #include <optional>
 #include <ostream>
+#include <sstream>
 #include <string>
 
 #include "config/scene.h"
+#include "core/eigen_types.h"
 #include "core/error.h"
 
 namespace hapsim::config::test {
@@ -38,11 +40,12 @@ inline std::optional<InputError> ParseError(const std::string& yaml, const std::
   return std::nullopt;
 }
 
-// Parsing `yaml` as `label` throws an InputError at `line` with `key`, whose message contains
-// `message_part`.
+// Parsing `yaml` as `label` (its files resolved against base_dir) throws an InputError at `line`
+// with `key`, whose message contains `message_part`.
 inline void ExpectError(const std::string& yaml, const std::string& label, int line,
-                        const std::string& key, const std::string& message_part) {
-  const std::optional<InputError> error = ParseError(yaml, label);
+                        const std::string& key, const std::string& message_part,
+                        const std::string& base_dir = "") {
+  const std::optional<InputError> error = ParseError(yaml, label, base_dir);
   ASSERT_TRUE(error.has_value()) << "parsed without error:\n" << yaml;
   EXPECT_EQ(error->file(), label);
   EXPECT_EQ(error->line(), line) << error->what();
@@ -62,6 +65,18 @@ struct BadCase {
 };
 
 inline std::ostream& operator<<(std::ostream& out, const BadCase& c) { return out << c.name; }
+
+// A closed surface as Wavefront OBJ text, coordinates to 17 digits (read back exactly).
+inline std::string ObjText(const Matrix3Xd& vertices_m, const Matrix3Xi& triangles) {
+  std::ostringstream out;
+  out.precision(17);
+  for (Eigen::Index v = 0; v < vertices_m.cols(); ++v)
+    out << "v " << vertices_m(0, v) << ' ' << vertices_m(1, v) << ' ' << vertices_m(2, v) << '\n';
+  for (Eigen::Index t = 0; t < triangles.cols(); ++t)
+    out << "f " << triangles(0, t) + 1 << ' ' << triangles(1, t) + 1 << ' ' << triangles(2, t) + 1
+        << '\n';
+  return out.str();
+}
 
 // A folder under the test temp dir; removed on destruction.
 class TempFolder {

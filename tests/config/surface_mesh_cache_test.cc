@@ -7,7 +7,6 @@
 #include <stdlib.h>
 
 #include <filesystem>
-#include <fstream>
 #include <string>
 
 #include "config/body_builder.h"
@@ -15,43 +14,35 @@
 #include "core/error.h"
 #include "core/shape_mesh.h"
 #include "fem/mesh_io.h"
+#include "tests/config/scene_test_support.h"
 
 namespace hapsim::config {
 namespace {
 namespace fs = std::filesystem;
+using test::ExpectError;
+using test::ObjText;
+using test::TempFolder;
 
 // A fresh cache folder and a sphere surface file (r = 30 mm) in a temporary folder.
 class SurfaceMeshCacheTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    folder_ = fs::temp_directory_path() /
-              ("hapsim_surface_cache_" + std::to_string(::getpid()) + "_" +
-               ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(folder_);
-    fs::create_directories(folder_ / "cache");
-    ::setenv("HAPSIM_MESH_CACHE", (folder_ / "cache").c_str(), 1);
-    WriteSphere(0.03, folder_ / "organ.obj");
+    fs::create_directories(Cache());
+    ::setenv("HAPSIM_MESH_CACHE", Cache().c_str(), 1);
+    WriteSphere(0.03);
   }
-  void TearDown() override {
-    ::unsetenv("HAPSIM_MESH_CACHE");
-    fs::remove_all(folder_);
-  }
-  static void WriteSphere(double radius_m, const fs::path& path) {
+  void TearDown() override { ::unsetenv("HAPSIM_MESH_CACHE"); }
+  void WriteSphere(double radius_m) const {
     ToolShape sphere;
     sphere.kind = ToolShape::Kind::kSphere;
     sphere.radius_m = radius_m;
     const TriangleMesh surface = MakeShapeMesh(sphere, 32);
-    std::ofstream out(path);
-    out.precision(17);
-    for (Eigen::Index v = 0; v < surface.vertices_m.cols(); ++v)
-      out << "v " << surface.vertices_m(0, v) << ' ' << surface.vertices_m(1, v) << ' '
-          << surface.vertices_m(2, v) << '\n';
-    for (Eigen::Index t = 0; t < surface.triangles.cols(); ++t)
-      out << "f " << surface.triangles(0, t) + 1 << ' ' << surface.triangles(1, t) + 1 << ' '
-          << surface.triangles(2, t) + 1 << '\n';
+    folder_.Write("organ.obj", ObjText(surface.vertices_m, surface.triangles));
   }
-  std::string Surface() const { return (folder_ / "organ.obj").string(); }
-  fs::path folder_;
+  std::string Surface() const { return (fs::path(folder_.path()) / "organ.obj").string(); }
+  std::string Cache() const { return (fs::path(folder_.path()) / "cache").string(); }
+  const TempFolder folder_{std::string("surface_cache_") +
+                           ::testing::UnitTest::GetInstance()->current_test_info()->name()};
 };
 
 TEST_F(SurfaceMeshCacheTest, MeshesOnceThenReadsTheSameMeshBack) {
@@ -77,7 +68,7 @@ TEST_F(SurfaceMeshCacheTest, MeshesOnceThenReadsTheSameMeshBack) {
   EXPECT_NEAR(
       fem::CalcTetMeshQuality(big.mesh).volume_m3 / fem::CalcTetMeshQuality(first.mesh).volume_m3,
       8.0, 0.4);
-  WriteSphere(0.031, folder_ / "organ.obj");
+  WriteSphere(0.031);
   const SurfaceMeshResult edited = MeshSurfaceFile(Surface(), options);
   EXPECT_FALSE(edited.from_cache);
   EXPECT_NE(edited.cache_file, first.cache_file);
@@ -100,7 +91,7 @@ body:
   mesh: {surface: organ.obj, cell_size_m: 0.01}
   material: {youngs_modulus_Pa: 5000, poisson_ratio: 0.45, density_kg_m3: 1000}
 )";
-  const Scene scene = ParseScene(yaml, "surface_body.yaml", folder_.string());
+  const Scene scene = ParseScene(yaml, "surface_body.yaml", folder_.path());
   ASSERT_EQ(scene.body->mesh.kind, MeshSource::Kind::kSurface);
   const Body body = MakeBody(*scene.body, scene.gravity_m_s2);
   // Its mass is ρ times the tets' volume, within 5 % of the sphere's at this coarse size.
@@ -111,24 +102,14 @@ body:
 TEST_F(SurfaceMeshCacheTest, SceneErrorsNameLineAndKey) {
   const auto expect_error = [&](const std::string& mesh_line, const std::string& key,
                                 const std::string& words) {
-    const std::string yaml =
-        "name: s\ntime: {dt_s: 0.01, num_steps: 1}\nbody:\n  mesh: " + mesh_line +
-        "\n  material: {youngs_modulus_Pa: 1, poisson_ratio: 0.3, "
-        "density_kg_m3: 1}\n";
-    try {
-      ParseScene(yaml, "s.yaml", folder_.string());
-      ADD_FAILURE() << "no error for " << mesh_line;
-    } catch (const InputError& error) {
-      EXPECT_EQ(error.file(), "s.yaml");
-      EXPECT_EQ(error.line(), 4) << error.what();
-      EXPECT_EQ(error.key(), key) << error.what();
-      EXPECT_NE(std::string(error.what()).find(words), std::string::npos) << error.what();
-    }
+    ExpectError("name: s\ntime: {dt_s: 0.01, num_steps: 1}\nbody:\n  mesh: " + mesh_line +
+                    "\n  material: {youngs_modulus_Pa: 1, poisson_ratio: 0.3, density_kg_m3: 1}\n",
+                "s.yaml", 4, key, words, folder_.path());
   };
   expect_error("{surface: organ.obj}", "body.mesh.cell_size_m", "missing");
   expect_error("{surface: organ.obj, cell_size_m: 0}", "body.mesh.cell_size_m", "> 0");
   expect_error("{surface: none.obj, cell_size_m: 0.01}", "body.mesh.surface", "no such file");
-  expect_error("{surface: organ.msh, cell_size_m: 0.01}", "body.mesh.surface", "OBJ or STL");
+  expect_error("{surface: organ.msh, cell_size_m: 0.01}", "body.mesh.surface", ".obj or an .stl");
   expect_error("{box: {min_m: [0,0,0], max_m: [1,1,1], cells: [1,1,1]}, cell_size_m: 0.01}",
                "body.mesh.cell_size_m", "surface mesh only");
   expect_error(

@@ -121,8 +121,8 @@ TEST(SurfaceMesher, RefusesBadOptionsAndSurfaces) {
   Eigen::Index top;
   pierced.vertices_m.row(2).maxCoeff(&top);
   pierced.vertices_m.col(top) = Eigen::Vector3d(0.0, 0.0, -1.5 * kRadius_m);
-  ASSERT_GT(CalcEnclosedVolume(pierced), 0.0);
-  ExpectRefused(pierced, {0.01, {}, 0.0, 0.0}, "surface", "intersect itself");
+  ASSERT_GT(CalcSignedVolume_m3(pierced), 0.0);
+  ExpectRefused(pierced, {0.01, {}, 0.0, 0.0}, "surface", "cross itself");
 }
 
 // Flat-faced surfaces of a few triangles (a box's 12; Gmsh's partitioner alone loops forever on a
@@ -139,7 +139,7 @@ TEST(SurfaceMesher, FillsAFewFlatTrianglesExactly) {
   tetrahedron.vertices_m << 0, 0.01, 0, 0, 0, 0, 0.01, 0, 0, 0, 0, 0.01;
   tetrahedron.triangles.resize(3, 4);
   tetrahedron.triangles << 0, 0, 0, 1, 2, 3, 1, 2, 1, 2, 3, 3;  // outward: (0 2 1) … (1 2 3)
-  ASSERT_NEAR(CalcEnclosedVolume(tetrahedron), 1e-6 / 6.0, 1e-18);
+  ASSERT_NEAR(CalcSignedVolume_m3(tetrahedron), 1e-6 / 6.0, 1e-18);
   const TetMesh filled = MeshClosedSurface(tetrahedron, {0.002, {}, 0.0, 0.0}, "tetrahedron");
   EXPECT_NEAR(CalcTetMeshQuality(filled).volume_m3, 1e-6 / 6.0, 1e-12 * 1e-6);
 }
@@ -155,14 +155,6 @@ TEST(SurfaceMesher, StopsAMesherPastItsTime) {
     EXPECT_NE(std::string(error.what()).find("did not finish within"), std::string::npos)
         << error.what();
   }
-}
-
-// The enclosed volume against a closed form (the facets' own volume: a box is exact).
-TEST(SurfaceMesher, EnclosedVolumeOfABox) {
-  ToolShape box;
-  box.kind = ToolShape::Kind::kBox;
-  box.half_extents_m = Eigen::Vector3d(0.01, 0.02, 0.03);
-  EXPECT_NEAR(CalcEnclosedVolume(MakeShapeMesh(box)), 0.02 * 0.04 * 0.06, 1e-18);
 }
 
 }  // namespace

@@ -119,6 +119,28 @@ TEST(LatticeMesher, EllipsoidVolumeConvergesToAnalytic) {
   EXPECT_LT(errors.back(), 0.005);
 }
 
+// Dihedral angles against closed forms: the five-tet cut of a cube is a regular tet (every angle
+// arccos(1/3) = 70.53°) and four corner tets (90° at the three edges of the right corner,
+// arccos(1/√3) = 54.74° at the other three); their volumes add up to the cube's.
+TEST(TetMesh, QualityOfACubesFiveTets) {
+  const TetMeshQuality cube = CalcTetMeshQuality(MakeBoxTetMesh({0, 0, 0}, {2, 2, 2}, {1, 1, 1}));
+  EXPECT_EQ(cube.num_tets, 5);
+  EXPECT_NEAR(cube.volume_m3, 8.0, 1e-14);
+  EXPECT_NEAR(cube.min_dihedral_deg, std::acos(1.0 / std::sqrt(3.0)) * 180.0 / M_PI, 1e-9);
+  EXPECT_NEAR(cube.max_dihedral_deg, 90.0, 1e-9);
+  TetMesh regular;
+  regular.rest_positions_m.resize(3, 4);
+  regular.rest_positions_m << 1, 1, -1, -1, 1, -1, 1, -1, 1, -1, -1, 1;
+  regular.tets.resize(4, 1);
+  regular.tets << 0, 1, 2, 3;
+  if (CalcSignedVolume(regular.rest_positions_m, regular.tets.col(0)) < 0.0)
+    std::swap(regular.tets(2, 0), regular.tets(3, 0));
+  const TetMeshQuality q = CalcTetMeshQuality(regular);
+  EXPECT_NEAR(q.min_dihedral_deg, std::acos(1.0 / 3.0) * 180.0 / M_PI, 1e-9);
+  EXPECT_NEAR(q.max_dihedral_deg, std::acos(1.0 / 3.0) * 180.0 / M_PI, 1e-9);
+  EXPECT_NEAR(q.volume_m3, 8.0 / 3.0, 1e-14);  // edge 2√2: V = a³/(6√2)
+}
+
 TEST(TetMesh, DetectsBadRestMeshes) {
   TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {1, 1, 1}, {1, 1, 1});
   int bad = -1;
