@@ -21,8 +21,9 @@
 // rotated), Q = C₀ Uᵀ and W = U Q, instead of a forward solve with the current factor per row
 // (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method). They read C₀ by whole
 // columns; a 3 × 3 product per pair of entries read it at scattered blocks and stalled on cache
-// misses (block_press in the linear mode, frames with ≥ 200 contacts, 212 rows over 118 nodes:
-// 0.73 → 0.57 ms; block_press_friction 2.24 against 2.37 ms, within the host's noise).
+// misses (a temporary stage timer, block_press in the linear mode, frames with ≥ 200 contacts, 212
+// rows over 118 nodes: 0.73 → 0.57 ms; block_press_friction 2.24 against 2.37 ms, within the
+// host's noise; docs/BENCHMARKS.md "fourth pass").
 //
 // Node rotation: the polar rotation of the sum of the incident elements' rotations (their
 // chordal mean). A node with a fixed dof keeps R = I (rotating would mix a fixed direction into
