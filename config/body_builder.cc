@@ -4,6 +4,7 @@
 
 #include "config/surface_mesh_cache.h"
 #include "core/error.h"
+#include "core/triangle_mesh_io.h"
 #include "fem/lattice_mesher.h"
 #include "fem/mesh_io.h"
 #include "fem/time_stepper.h"
@@ -60,6 +61,19 @@ fem::TetMesh MakeMesh(const MeshSource& source) {
   Fail(source.location, "unknown mesh source");
 }
 
+// A surface file bound to the tets of `mesh`; errors name the scene key and the surface file.
+fem::EmbeddedSurface EmbedSurfaceFile(const EmbeddedSurfaceSource& source,
+                                      const fem::TetMesh& mesh) {
+  TriangleMesh surface = ReadTriangleMesh(source.file);  // its errors name the file and line
+  source.transform.Apply(&surface.vertices_m);
+  try {
+    return fem::EmbedSurface(mesh, surface.vertices_m, surface.triangles,
+                             fem::CalcDefaultMaxOutsideDistance(mesh));
+  } catch (const std::invalid_argument& error) {
+    Fail(source.location, source.file + ": " + error.what());
+  }
+}
+
 }  // namespace
 
 Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
@@ -74,6 +88,10 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
   }
   Body body;
   body.model = fem::MakeModel(std::move(mesh), scene.material, fixed_nodes);
+  if (scene.collision_surface)
+    body.model.collision_surface = EmbedSurfaceFile(*scene.collision_surface, body.model.mesh);
+  if (scene.visual_surface)
+    body.visual_surface = EmbedSurfaceFile(*scene.visual_surface, body.model.mesh);
   body.parts = {{0, body.model.num_nodes(), 0, body.model.num_tets()}};
   body.external_force_N = fem::CalcGravityForce(body.model, gravity_m_s2);
   for (const NodalLoad& load : scene.loads) {
@@ -106,8 +124,14 @@ std::optional<Body> MakeSceneBody(const Scene& scene) {
   Body merged;
   merged.model = fem::MergeModels(models);  // damping checked equal when the scene was read
   merged.external_force_N.resize(merged.model.num_dofs());
+  std::vector<fem::EmbeddedSurface> visual_surfaces;
+  std::vector<Matrix3Xi> boundaries;
+  std::vector<int> first_nodes;
   int node = 0, tet = 0;
   for (const Body& body : bodies) {
+    visual_surfaces.push_back(body.visual_surface);
+    boundaries.push_back(body.model.surface_triangles);
+    first_nodes.push_back(node);
     merged.external_force_N.segment(3 * node, body.model.num_dofs()) = body.external_force_N;
     for (BoundProbe probe : body.probes) {
       probe.binding.tet += tet;
@@ -117,6 +141,7 @@ std::optional<Body> MakeSceneBody(const Scene& scene) {
     node += body.model.num_nodes();
     tet += body.model.num_tets();
   }
+  merged.visual_surface = fem::MergeEmbeddedSurfaces(visual_surfaces, boundaries, first_nodes);
   return merged;
 }
 

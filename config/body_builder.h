@@ -20,7 +20,9 @@ struct BoundProbe {
 };
 
 struct Body {
-  fem::Model model;
+  fem::Model model;  // with its collision surface, if the scene gives one
+  // The surface the viewer draws, carried by the tets; empty: the model's boundary.
+  fem::EmbeddedSurface visual_surface;
   Eigen::VectorXd external_force_N;  // (3N) gravity on lumped masses + nodal loads
   std::vector<BoundProbe> probes;
   // Where each deformable object lies in the model, in scene order (one part for one object).

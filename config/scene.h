@@ -29,6 +29,15 @@
 //       transform: {scale: 1, rotation_vector_rad: [..], translation_m: [..]}   # optional, with
 //                                      # file or surface: p' = R (units · scale · p) + t, scale > 0
 //                                      # (cell_size_m and refine are in metres, after it)
+//     collision: {file: meshes/liver_fine.obj}   # optional: a closed OBJ/STL surface carried by
+//                                      # the tets (fem/surface_embedding.h), on which the tool's
+//                                      # contacts are found instead of the tets' own boundary;
+//                                      # units and transform as the mesh's (not inherited). A
+//                                      # vertex farther than half the tets' mean edge from every
+//                                      # tet is an error. Contacts with rigid objects and the
+//                                      # godobject mode stay on the boundary.
+//     visual: {file: meshes/liver_fine.obj}      # optional: a closed surface the viewer draws,
+//                                      # carried the same way; default: the tets' boundary
 //     material:
 //       youngs_modulus_Pa: 50000       # > 0
 //       poisson_ratio: 0.45            # in (-1, 0.5)
@@ -242,8 +251,17 @@ struct Probe {
   SourceLocation location;
 };
 
+// A surface the body's tets carry (fem/surface_embedding.h): `collision` or `visual`.
+struct EmbeddedSurfaceSource {
+  std::string file;         // closed OBJ/STL, path resolved against the scene file's folder
+  MeshTransform transform;  // its units, rotation and placement, as a mesh file's
+  SourceLocation location;
+};
+
 struct BodyScene {
   MeshSource mesh;
+  std::optional<EmbeddedSurfaceSource> collision_surface;  // contacts found on it; else boundary
+  std::optional<EmbeddedSurfaceSource> visual_surface;     // the viewer draws it; else boundary
   fem::Material material;
   fem::FemOptions options;
   std::optional<AxisAlignedBox> fixed;

@@ -6,6 +6,7 @@
 #include <fcl/geometry/shape/sphere.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -63,18 +64,28 @@ void CheckOptions(const DetectionOptions& options) {
     throw std::invalid_argument("DetectionOptions: feature_merge_distance_m must be >= 0");
 }
 
+// The stacked rest positions of the surface the pipeline runs on: the nodes, or the embedded
+// collision surface's points.
+Eigen::VectorXd CalcSurfaceRestPositions(const fem::Model& body) {
+  if (body.collision_surface.empty()) return body.rest_positions_m;
+  Eigen::VectorXd points_m;
+  fem::CalcEmbeddedPositions(body.collision_surface, body.rest_positions_m, &points_m);
+  return points_m;
+}
+
 }  // namespace
 
 CollisionDetector::CollisionDetector(const fem::Model& body, const ToolShape& tool,
                                      const DetectionOptions& options, SurfaceBvhKind bvh_kind)
     : options_(options),
       num_body_nodes_(body.num_nodes()),
-      surface_triangles_(body.surface_triangles),
+      embedded_(body.collision_surface),
+      surface_triangles_(embedded_.empty() ? body.surface_triangles : embedded_.triangles),
       tool_distance_(tool),
       tool_features_(MakeToolFeatures(tool)),
-      bvh_(body, bvh_kind),
-      node_visited_(body.num_nodes(), 0),
-      node_in_contact_(body.num_nodes(), 0) {
+      bvh_(surface_triangles_, CalcSurfaceRestPositions(body), bvh_kind),
+      node_visited_(embedded_.empty() ? body.num_nodes() : embedded_.num_points(), 0),
+      node_in_contact_(node_visited_.size(), 0) {
   CheckOptions(options_);
   if (tool.kind == ToolShape::Kind::kMesh)
     for (Eigen::Index i = 0; i < tool.mesh.vertices_m.cols(); ++i)
@@ -92,21 +103,28 @@ void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
                                 std::to_string(expected) + " entries");
   contacts->clear();
   statistics_ = DetectionStatistics();
-  if (options_.continuous)
-    statistics_.sweep_bound_m = CalcSweepBound(x_start_m, X_WT_start, x_end_m, X_WT_end);
+  // The surface's positions: the nodes themselves, or the embedded points, computed here or, when
+  // the tree is not refitted, at the refit (the same positions, by the caller's contract).
+  const Eigen::VectorXd& s_start_m = (refit_tree || embedded_.empty())
+                                         ? SurfacePositions(x_start_m, &points_start_m_)
+                                         : points_start_m_;
+  if (options_.continuous) {
+    const Eigen::VectorXd& s_end_m = SurfacePositions(x_end_m, &points_end_m_);
+    statistics_.sweep_bound_m = CalcSweepBound(s_start_m, X_WT_start, s_end_m, X_WT_end);
+  }
   statistics_.threshold_m = options_.margin_m + statistics_.sweep_bound_m;
 
-  if (refit_tree) bvh_.Refit(x_start_m);
+  if (refit_tree) bvh_.Refit(s_start_m);
   FindCandidateTriangles(X_WT_start, statistics_.threshold_m + kBroadPhasePad_m);
   statistics_.num_candidate_triangles = static_cast<int>(candidate_triangles_.size());
 
   AdvanceFrameStamp();
-  AddNodeContacts(x_start_m, X_WT_start, contacts);
+  AddNodeContacts(s_start_m, X_WT_start, contacts);
   const int first_feature_contact = static_cast<int>(contacts->size());
-  if (options_.feature_contacts) AddFeatureContacts(x_start_m, X_WT_start, contacts);
-  AddSphereFaceContacts(x_start_m, X_WT_start, contacts);
+  if (options_.feature_contacts) AddFeatureContacts(s_start_m, X_WT_start, contacts);
+  AddSphereFaceContacts(s_start_m, X_WT_start, contacts);
   const int first_edge_contact = static_cast<int>(contacts->size());
-  if (options_.edge_contacts) AddEdgeContacts(x_start_m, X_WT_start, contacts);
+  if (options_.edge_contacts) AddEdgeContacts(s_start_m, X_WT_start, contacts);
   statistics_.num_node_contacts = first_feature_contact;
   statistics_.num_feature_contacts = first_edge_contact - first_feature_contact;
   statistics_.num_contacts_before_merge = static_cast<int>(contacts->size());
@@ -114,6 +132,47 @@ void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
   // Edge contacts come after the feature contacts and are merged the same way.
   MergeDuplicates(first_feature_contact, contacts);
   statistics_.num_contacts_after_merge = static_cast<int>(contacts->size());
+  if (!embedded_.empty()) ExpandEmbeddedContacts(contacts);
+}
+
+void CollisionDetector::Refit(const Eigen::VectorXd& x_m) {
+  const Eigen::Index expected = 3 * static_cast<Eigen::Index>(num_body_nodes_);
+  if (x_m.size() != expected)
+    throw std::invalid_argument("CollisionDetector::Refit: positions must have " +
+                                std::to_string(expected) + " entries");
+  bvh_.Refit(SurfacePositions(x_m, &points_start_m_));
+}
+
+const Eigen::VectorXd& CollisionDetector::SurfacePositions(const Eigen::VectorXd& x_m,
+                                                           Eigen::VectorXd* scratch) const {
+  if (embedded_.empty()) return x_m;
+  fem::CalcEmbeddedPositions(embedded_, x_m, scratch);
+  return *scratch;
+}
+
+void CollisionDetector::ExpandEmbeddedContacts(std::vector<Contact>* contacts) const {
+  for (Contact& contact : *contacts) {
+    // Σ_k w_k x_{p_k} = Σ_k w_k Σ_a b_{k,a} x_{n_{k,a}}: one slot per distinct node.
+    std::array<int, kMaxContactNodes> nodes;
+    std::array<double, kMaxContactNodes> weights{};
+    nodes.fill(-1);
+    int count = 0;
+    for (int k = 0; k < 3 && contact.nodes[k] >= 0; ++k) {
+      const int point = contact.nodes[k];
+      for (int a = 0; a < 4; ++a) {
+        const double w = contact.weights[k] * embedded_.weights(a, point);
+        if (w == 0.0) continue;
+        const int node = embedded_.nodes(a, point);
+        int slot = 0;
+        while (slot < count && nodes[slot] != node) ++slot;
+        if (slot == count) nodes[count++] = node;
+        weights[slot] += w;
+      }
+    }
+    contact.nodes = nodes;
+    contact.weights = weights;
+    contact.embedded = true;
+  }
 }
 
 double CollisionDetector::CalcSweepBound(const Eigen::VectorXd& x_start_m,
@@ -186,8 +245,7 @@ void CollisionDetector::AddNodeContacts(const Eigen::VectorXd& x_m, const Eigen:
       contact.p_body_W_m = p_W;
       contact.n_W = X_WT.linear() * distance.normal_T;
       contact.gap_m = distance.distance_m;
-      contact.nodes = {node, -1, -1};
-      contact.weights = {1.0, 0.0, 0.0};
+      contact.SetBodyNodes({node}, {1.0});
       contacts->push_back(contact);
       node_in_contact_[node] = frame_stamp_;  // for the edge stage's flush test
     }

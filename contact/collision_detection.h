@@ -41,6 +41,12 @@
 // within 1e-6 rad of parallel make no edge contact (the end point contacts of stages 3 and 4
 // hold them); a capsule between nodes still sinks by up to the sagitta over one face.
 //
+// Embedded collision surface: when the body has one (fem::Model::collision_surface), the pipeline
+// runs on its points (x_S = B x, fem/surface_embedding.h) in place of the boundary's nodes, and
+// each contact's one to three surface points are then replaced by their tets' nodes, weights
+// multiplied (≤ 12 nodes, Contact::embedded): the Jacobian row is H = B N, so everything that
+// consumes contacts works unchanged. "Node" below then reads "surface point".
+//
 // Speculative contacts: with `continuous`, the sweep bound is |Δx_tool| + θ·R_tool + max|Δx_node|
 // (θ the rotation angle between the two poses, R_tool the tool's bounding radius), an upper
 // bound on how far any tool or surface point can move within the frame. Contacts are reported
@@ -108,7 +114,7 @@ class CollisionDetector {
               const Eigen::VectorXd& x_end_m, const Eigen::Isometry3d& X_WT_end,
               std::vector<Contact>* contacts, bool refit_tree = true);
   // Refits the surface tree to x_m (3N), for Detect with refit_tree = false.
-  void Refit(const Eigen::VectorXd& x_m) { bvh_.Refit(x_m); }
+  void Refit(const Eigen::VectorXd& x_m);
   // The gap up to which contacts are reported from now on (≥ 0, else std::invalid_argument): a
   // 1 kHz search whose margin changes every step (penalty's ε = v Δt).
   void SetMargin(double margin_m);
@@ -119,6 +125,11 @@ class CollisionDetector {
   const ToolFeatures& tool_features() const { return tool_features_; }
 
  private:
+  // The positions the pipeline runs on: x_m itself, or the embedded surface's points (*scratch).
+  const Eigen::VectorXd& SurfacePositions(const Eigen::VectorXd& x_m,
+                                          Eigen::VectorXd* scratch) const;
+  // Embedded surface: each contact's surface points replaced by their tets' nodes.
+  void ExpandEmbeddedContacts(std::vector<Contact>* contacts) const;
   double CalcSweepBound(const Eigen::VectorXd& x_start_m, const Eigen::Isometry3d& X_WT_start,
                         const Eigen::VectorXd& x_end_m, const Eigen::Isometry3d& X_WT_end) const;
   void FindCandidateTriangles(const Eigen::Isometry3d& X_WT, double inflation_m);
@@ -139,7 +150,9 @@ class CollisionDetector {
 
   DetectionOptions options_;
   int num_body_nodes_ = 0;
-  Matrix3Xi surface_triangles_;
+  fem::EmbeddedSurface embedded_;  // the body's collision surface; empty: its boundary
+  Matrix3Xi surface_triangles_;    // the boundary's faces (node indices) or the embedded surface's
+  Eigen::VectorXd points_start_m_, points_end_m_;  // embedded: the points, (3P) world, m
   ToolDistanceField tool_distance_;
   ToolFeatures tool_features_;
   Eigen::AlignedBox3d mesh_box_T_m_;  // kMesh: bounding box of the tool mesh in T

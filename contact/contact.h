@@ -7,7 +7,10 @@
 // from the tool surface to the body point, gap = (p_body − p_tool)·n, negative when they
 // interpenetrate. The body point is a combination of up to three nodes with barycentric weights
 // (one node with weight 1 for a node-versus-tool contact; a face's three nodes for a tool feature
-// point against a face; a body edge's two nodes for a tool edge against a body edge).
+// point against a face; a body edge's two nodes for a tool edge against a body edge). On a
+// collision surface embedded in the tets (fem/surface_embedding.h) the same one, two or three
+// surface points are each carried by their tet's four nodes: up to twelve nodes, with the
+// products of the two weights (`embedded`).
 // A contact that touches no tool (a body node on a rigid object) has on_tool = false: its rows
 // have no tool terms, and "tool" below then means the rigid object (p_tool_W_m is the object's
 // point, n_W points out of the object). A contact with a rigid object has no body nodes on that
@@ -16,20 +19,37 @@
 // with the body.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <initializer_list>
 
 namespace hapsim::contact {
+
+// The most nodes a body point combines: a face's three points, each on its tet's four nodes.
+inline constexpr int kMaxContactNodes = 12;
 
 struct Contact {
   Eigen::Vector3d p_tool_W_m = Eigen::Vector3d::Zero();  // point on the tool surface, world, m
   Eigen::Vector3d p_body_W_m = Eigen::Vector3d::Zero();  // point on the body, world, m
   Eigen::Vector3d n_W = Eigen::Vector3d::UnitZ();        // unit normal out of the tool
   double gap_m = 0.0;                                    // signed gap along n_W, m
-  std::array<int, 3> nodes = {-1, -1, -1};               // body nodes; -1 = unused slot
-  std::array<double, 3> weights = {0.0, 0.0, 0.0};       // barycentric weights, sum 1
+  // Body nodes and their weights (sum 1), in slots [0, k); the slots after are −1 and 0. Set
+  // them with SetBodyNodes, which clears the rest: a brace list assigned to the array would fill
+  // the slots it does not name with node 0.
+  std::array<int, kMaxContactNodes> nodes = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
+  std::array<double, kMaxContactNodes> weights = {};
+  bool embedded = false;  // the body point lies on an embedded collision surface
   bool on_tool = true;    // false: a body node against a rigid object
   int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none
+
+  void SetBodyNodes(std::initializer_list<int> body_nodes,
+                    std::initializer_list<double> body_weights) {
+    nodes.fill(-1);
+    weights.fill(0.0);
+    std::copy(body_nodes.begin(), body_nodes.end(), nodes.begin());
+    std::copy(body_weights.begin(), body_weights.end(), weights.begin());
+  }
 };
 
 // What a contact touches (sim_frame_t.contact_kind).

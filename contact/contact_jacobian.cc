@@ -38,7 +38,7 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
                                        : Eigen::RowVector3d::Zero();
       J.J_w.row(row) = contact.on_tool ? Eigen::RowVector3d(-r_W_m.cross(directions[d]).transpose())
                                        : Eigen::RowVector3d::Zero();
-      for (int k = 0; k < 3; ++k) {
+      for (int k = 0; k < kMaxContactNodes; ++k) {
         if (contact.nodes[k] < 0 || contact.weights[k] == 0.0) continue;
         for (int a = 0; a < 3; ++a) {
           const int dof = 3 * contact.nodes[k] + a;

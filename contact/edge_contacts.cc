@@ -154,8 +154,7 @@ bool CalcEdgeContact(const ToolEdge& tool, const BodyEdge& body, Contact* contac
   contact->p_body_W_m = closest.point2;
   contact->n_W = n;
   contact->gap_m = (closest.point2 - closest.point1).dot(n);
-  contact->nodes = {body.nodes[0], body.nodes[1], -1};
-  contact->weights = {1.0 - closest.t, closest.t, 0.0};
+  contact->SetBodyNodes({body.nodes[0], body.nodes[1]}, {1.0 - closest.t, closest.t});
   return true;
 }
 

@@ -239,8 +239,7 @@ void RigidObjectContacts::AddBodyContacts(const std::vector<int>& surface_nodes,
       contact.p_tool_W_m = placed.object.X_WO * d.closest_T_m;
       contact.p_body_W_m = x_W;
       contact.gap_m = d.distance_m;
-      contact.nodes = {node, -1, -1};
-      contact.weights = {1.0, 0.0, 0.0};
+      contact.SetBodyNodes({node}, {1.0});
       contacts->push_back(contact);
     }
   }

@@ -92,21 +92,23 @@ struct SurfaceBvh::Impl {
   int num_triangles = 0;
 };
 
-SurfaceBvh::SurfaceBvh(const fem::Model& body, SurfaceBvhKind kind)
-    : kind_(kind), num_body_nodes_(body.num_nodes()), impl_(std::make_unique<Impl>()) {
-  const Matrix3Xi& faces = body.surface_triangles;
+SurfaceBvh::SurfaceBvh(const Matrix3Xi& faces, const Eigen::VectorXd& rest_positions_m,
+                       SurfaceBvhKind kind)
+    : kind_(kind),
+      num_body_nodes_(static_cast<int>(rest_positions_m.size() / 3)),
+      impl_(std::make_unique<Impl>()) {
   if (faces.cols() == 0) throw std::invalid_argument("SurfaceBvh: body has no surface triangles");
-  std::vector<int> local_index(body.num_nodes(), -1);
+  std::vector<int> local_index(num_body_nodes_, -1);
   for (Eigen::Index f = 0; f < faces.cols(); ++f)
     for (int k = 0; k < 3; ++k) local_index.at(faces(k, f)) = 0;
-  for (int n = 0; n < body.num_nodes(); ++n)
+  for (int n = 0; n < num_body_nodes_; ++n)
     if (local_index[n] == 0) {
       local_index[n] = static_cast<int>(surface_nodes_.size());
       surface_nodes_.push_back(n);
     }
   std::vector<fcl::Vector3d> vertices;
   vertices.reserve(surface_nodes_.size());
-  for (int n : surface_nodes_) vertices.push_back(body.rest_positions_m.segment<3>(3 * n));
+  for (int n : surface_nodes_) vertices.push_back(rest_positions_m.segment<3>(3 * n));
   std::vector<fcl::Triangle> triangles;
   triangles.reserve(faces.cols());
   for (Eigen::Index f = 0; f < faces.cols(); ++f)

@@ -43,9 +43,13 @@ enum class SurfaceBvhKind { kAabb, kObbrss };
 
 class SurfaceBvh {
  public:
-  // Builds the tree over body.surface_triangles at body.rest_positions_m.
-  // Throws std::invalid_argument if the body has no surface triangles.
-  explicit SurfaceBvh(const fem::Model& body, SurfaceBvhKind kind = SurfaceBvhKind::kAabb);
+  // Builds the tree over `triangles` (3 x F, indices of points) at the points' stacked rest
+  // positions rest_positions_m (3P, m). Throws std::invalid_argument if there are no triangles.
+  SurfaceBvh(const Matrix3Xi& triangles, const Eigen::VectorXd& rest_positions_m,
+             SurfaceBvhKind kind = SurfaceBvhKind::kAabb);
+  // Over the body's boundary, body.surface_triangles at body.rest_positions_m.
+  explicit SurfaceBvh(const fem::Model& body, SurfaceBvhKind kind = SurfaceBvhKind::kAabb)
+      : SurfaceBvh(body.surface_triangles, body.rest_positions_m, kind) {}
   ~SurfaceBvh();
   SurfaceBvh(const SurfaceBvh&) = delete;
   SurfaceBvh& operator=(const SurfaceBvh&) = delete;

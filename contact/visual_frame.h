@@ -188,7 +188,8 @@ class VisualFrame {
   void MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start, const ToolState& visual_tool,
                                 const ToolState& haptic_tool, std::vector<Contact>* moved,
                                 Eigen::VectorXd* b) const;
-  // Returns the number of nodes moved; *max_penetration_m receives the deepest one found.
+  // Returns the number of nodes (embedded surface points) moved; *max_penetration_m receives the
+  // deepest one found.
   // *max_object_penetration_m receives the deepest body node inside a rigid object.
   int RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,
                     double* max_object_penetration_m) const;

@@ -82,6 +82,19 @@ Model MergeModels(const std::vector<Model>& models) {
     tet += model.num_tets();
     face += static_cast<int>(model.surface_triangles.cols());
   }
+  // Contacts are found on every object alike: on the boundary of those without a collision
+  // surface when another has one.
+  std::vector<EmbeddedSurface> collision_surfaces;
+  std::vector<Matrix3Xi> boundaries;
+  std::vector<int> first_nodes;
+  int first_node = 0;
+  for (const Model& model : models) {
+    collision_surfaces.push_back(model.collision_surface);
+    boundaries.push_back(model.surface_triangles);
+    first_nodes.push_back(first_node);
+    first_node += model.num_nodes();
+  }
+  merged.collision_surface = MergeEmbeddedSurfaces(collision_surfaces, boundaries, first_nodes);
   merged.dof_mass_kg = merged.node_mass_kg.replicate(1, 3).transpose().reshaped();
   merged.rest_positions_m =
       Eigen::Map<const Eigen::VectorXd>(merged.mesh.rest_positions_m.data(), 3 * num_nodes);

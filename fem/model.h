@@ -12,6 +12,7 @@
 
 #include "core/eigen_types.h"
 #include "fem/material.h"
+#include "fem/surface_embedding.h"
 #include "fem/tet_mesh.h"
 
 namespace hapsim::fem {
@@ -29,6 +30,9 @@ struct TetRestData {
 struct Model {
   TetMesh mesh;
   Matrix3Xi surface_triangles;  // (3 x F) outward-oriented boundary faces
+  // The surface the tool's contacts are found on when it is not the boundary above: a finer or
+  // smoother one carried by the tets (fem/surface_embedding.h). Empty: the boundary itself.
+  EmbeddedSurface collision_surface;
   // The material: its Rayleigh damping (α, β) holds for every tet; its elastic constants and
   // density are the tets' for a body of one material (a merged body's tets keep their own, in
   // tet_rest and node_mass_kg; this is the first object's).

@@ -61,9 +61,8 @@ Problem MakeProblem(int n, unsigned seed) {
   for (int i = 0; i < n; ++i) {
     contacts[i].n_W = (random3() + Eigen::Vector3d(0, 0, -2.0)).normalized();
     contacts[i].p_tool_W_m = x_tool + 0.01 * random3();
-    contacts[i].nodes = {i, i + 1, -1};
     const double w = 0.5 + 0.4 * unit(rng);
-    contacts[i].weights = {w, 1.0 - w, 0.0};
+    contacts[i].SetBodyNodes({i, i + 1}, {w, 1.0 - w});
   }
   p.J = CalcContactJacobian(contacts, x_tool, 1, num_dofs, std::vector<std::uint8_t>(num_dofs, 0));
   const Eigen::MatrixXd R =

@@ -59,9 +59,8 @@ Problem MakeProblem(int num_contacts, unsigned seed) {
     Contact c;
     c.n_W = (random3() + Eigen::Vector3d(0, 0, -2.0)).normalized();  // tool pressing down
     c.p_tool_W_m = p.tool_state.x_W_m + 0.01 * random3();
-    c.nodes = {i % kNumNodes, (i + 1) % kNumNodes, -1};
     const double w = 0.5 + 0.4 * unit(rng);
-    c.weights = {w, 1.0 - w, 0.0};
+    c.SetBodyNodes({i % kNumNodes, (i + 1) % kNumNodes}, {w, 1.0 - w});
     c.gap_m = 1e-4 * unit(rng);
     p.contacts.push_back(c);
     p.b.conservativeResize(i + 1);

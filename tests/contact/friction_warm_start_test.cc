@@ -14,7 +14,7 @@ namespace {
 
 Contact MakeContact(std::array<int, 3> nodes, const Eigen::Vector3d& n_W, int object = -1) {
   Contact contact;
-  contact.nodes = nodes;
+  contact.SetBodyNodes({nodes[0], nodes[1], nodes[2]}, {1.0, 0.0, 0.0});
   contact.n_W = n_W.normalized();
   contact.rigid_object = object;
   return contact;

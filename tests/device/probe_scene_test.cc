@@ -35,9 +35,9 @@ double CalcSurfaceDistance(const Eigen::Vector3d& p_W, const Eigen::VectorXd& x_
                            const Matrix3Xi& faces) {
   double distance_m = std::numeric_limits<double>::infinity();
   for (int f = 0; f < faces.cols(); ++f) {
-    const contact::TrianglePoint q = contact::CalcClosestPointOnTriangle(
-        p_W, x_m.segment<3>(3 * faces(0, f)), x_m.segment<3>(3 * faces(1, f)),
-        x_m.segment<3>(3 * faces(2, f)));
+    const TrianglePoint q = CalcClosestPointOnTriangle(p_W, x_m.segment<3>(3 * faces(0, f)),
+                                                       x_m.segment<3>(3 * faces(1, f)),
+                                                       x_m.segment<3>(3 * faces(2, f)));
     distance_m = std::min(distance_m, (p_W - q.point).norm());
   }
   return distance_m;

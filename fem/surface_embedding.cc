@@ -1,0 +1,244 @@
+#include "fem/surface_embedding.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "core/closest_points.h"
+
+namespace hapsim::fem {
+namespace {
+
+using Eigen::Vector3d;
+using Eigen::Vector4d;
+
+// Barycentric coordinates of p in tet t, inside or out: D λ = p − X0, D = [X1−X0, X2−X0, X3−X0],
+// w = (1 − Σλ, λ). Σ_a w_a X_a = p exactly, whatever the sign of the weights.
+Vector4d CalcBarycentric(const TetMesh& mesh, int t, const Vector3d& p_m) {
+  const Matrix3Xd& X = mesh.rest_positions_m;
+  const Vector3d x0 = X.col(mesh.tets(0, t));
+  Eigen::Matrix3d D;
+  for (int a = 1; a < 4; ++a) D.col(a - 1) = X.col(mesh.tets(a, t)) - x0;
+  const Vector3d lambda = D.partialPivLu().solve(p_m - x0);
+  return Vector4d(1.0 - lambda.sum(), lambda.x(), lambda.y(), lambda.z());
+}
+
+// Distance from p to tet t (0 inside): the nearest of its four faces' closest points.
+double CalcDistanceToTet(const TetMesh& mesh, int t, const Vector3d& p_m) {
+  static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  const Matrix3Xd& X = mesh.rest_positions_m;
+  double distance_m = std::numeric_limits<double>::infinity();
+  for (const auto& face : kFaces) {
+    const TrianglePoint q =
+        CalcClosestPointOnTriangle(p_m, X.col(mesh.tets(face[0], t)), X.col(mesh.tets(face[1], t)),
+                                   X.col(mesh.tets(face[2], t)));
+    distance_m = std::min(distance_m, (q.point - p_m).norm());
+  }
+  return distance_m;
+}
+
+// A uniform grid over the mesh's box; each cell lists the tets whose bounding box meets it
+// (compressed rows: the tets of cell c are tets_[first_[c] .. first_[c + 1])).
+class TetGrid {
+ public:
+  TetGrid(const TetMesh& mesh, double cell_m) : cell_m_(cell_m) {
+    Eigen::AlignedBox3d box;
+    for (int n = 0; n < mesh.num_nodes(); ++n) box.extend(Vector3d(mesh.rest_positions_m.col(n)));
+    origin_m_ = box.min();
+    dims_ = ((box.max() - box.min()) / cell_m_).array().floor().cast<int>() + 1;
+    std::vector<std::vector<int>> cells(static_cast<size_t>(dims_.prod()));
+    for (int t = 0; t < mesh.num_tets(); ++t) {
+      Eigen::AlignedBox3d tet_box;
+      for (int a = 0; a < 4; ++a)
+        tet_box.extend(Vector3d(mesh.rest_positions_m.col(mesh.tets(a, t))));
+      ForEachCell(tet_box, [&](int c) { cells[c].push_back(t); });
+    }
+    first_.push_back(0);
+    for (const std::vector<int>& cell : cells) {
+      tets_.insert(tets_.end(), cell.begin(), cell.end());
+      first_.push_back(static_cast<int>(tets_.size()));
+    }
+  }
+
+  // Calls f(cell) for every cell meeting `box` (clamped to the grid).
+  template <typename F>
+  void ForEachCell(const Eigen::AlignedBox3d& box, F&& f) const {
+    const Eigen::Vector3i lo = CellOf(box.min()), hi = CellOf(box.max());
+    for (int k = lo.z(); k <= hi.z(); ++k)
+      for (int j = lo.y(); j <= hi.y(); ++j)
+        for (int i = lo.x(); i <= hi.x(); ++i) f(i + dims_.x() * (j + dims_.y() * k));
+  }
+  template <typename F>
+  void ForEachTet(int cell, F&& f) const {
+    for (int e = first_[cell]; e < first_[cell + 1]; ++e) f(tets_[e]);
+  }
+
+ private:
+  Eigen::Vector3i CellOf(const Vector3d& p_m) const {
+    const Eigen::Vector3i cell = ((p_m - origin_m_) / cell_m_).array().floor().cast<int>();
+    return cell.cwiseMax(0).cwiseMin(dims_ - Eigen::Vector3i::Ones());
+  }
+
+  double cell_m_;
+  Vector3d origin_m_;
+  Eigen::Vector3i dims_;
+  std::vector<int> first_;
+  std::vector<int> tets_;
+};
+
+double CalcMeanEdgeLength(const TetMesh& mesh) {
+  static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  double sum_m = 0.0;
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    for (const auto& edge : kEdges)
+      sum_m += (mesh.rest_positions_m.col(mesh.tets(edge[0], t)) -
+                mesh.rest_positions_m.col(mesh.tets(edge[1], t)))
+                   .norm();
+  return mesh.num_tets() > 0 ? sum_m / (6.0 * mesh.num_tets()) : 0.0;
+}
+
+}  // namespace
+
+double CalcDefaultMaxOutsideDistance(const TetMesh& mesh) { return 0.5 * CalcMeanEdgeLength(mesh); }
+
+EmbeddedSurface EmbedSurface(const TetMesh& mesh, const Matrix3Xd& vertices_m,
+                             const Matrix3Xi& triangles, double max_outside_m,
+                             EmbeddingReport* report) {
+  const Eigen::Index num_points = vertices_m.cols();
+  if (num_points == 0 || triangles.cols() == 0)
+    throw std::invalid_argument("the surface to embed has no triangles");
+  if (mesh.num_tets() == 0)
+    throw std::invalid_argument("the mesh to embed a surface in has no tets");
+  if (triangles.minCoeff() < 0 || triangles.maxCoeff() >= num_points)
+    throw std::invalid_argument("a triangle of the surface to embed names a vertex out of range");
+  if (!(max_outside_m >= 0.0)) throw std::invalid_argument("max_outside_m must be >= 0");
+
+  constexpr double kInsideTolerance = 1e-9;  // a point on a shared face belongs to either tet
+  const TetGrid grid(mesh, std::max(CalcMeanEdgeLength(mesh), 1e-12));
+  EmbeddedSurface surface;
+  surface.triangles = triangles;
+  surface.nodes.resize(4, num_points);
+  surface.weights.resize(4, num_points);
+  EmbeddingReport found;
+  found.max_allowed_m = max_outside_m;
+  for (Eigen::Index p = 0; p < num_points; ++p) {
+    const Vector3d p_m = vertices_m.col(p);
+    // Inside: the tet whose smallest weight is largest (the most inside of those that touch p).
+    int best_tet = -1;
+    Vector4d best_weights;
+    double best_min_weight = -kInsideTolerance;
+    grid.ForEachCell(Eigen::AlignedBox3d(p_m, p_m), [&](int cell) {
+      grid.ForEachTet(cell, [&](int t) {
+        const Vector4d w = CalcBarycentric(mesh, t, p_m);
+        if (w.minCoeff() >= best_min_weight) {
+          best_min_weight = w.minCoeff();
+          best_tet = t;
+          best_weights = w;
+        }
+      });
+    });
+    if (best_tet < 0) {  // outside: the nearest tet within max_outside_m
+      double best_distance_m = std::numeric_limits<double>::infinity();
+      const Vector3d reach = Vector3d::Constant(max_outside_m);
+      grid.ForEachCell(Eigen::AlignedBox3d(p_m - reach, p_m + reach), [&](int cell) {
+        grid.ForEachTet(cell, [&](int t) {
+          const double distance_m = CalcDistanceToTet(mesh, t, p_m);
+          if (distance_m < best_distance_m) {
+            best_distance_m = distance_m;
+            best_tet = t;
+          }
+        });
+      });
+      if (best_tet < 0 || best_distance_m > max_outside_m) {
+        std::ostringstream message;
+        message << "surface vertex " << p + 1 << " at (" << p_m.x() << ", " << p_m.y() << ", "
+                << p_m.z() << ") m lies "
+                << (best_tet < 0 ? "more than " + std::to_string(max_outside_m)
+                                 : std::to_string(best_distance_m))
+                << " m outside every tet (at most " << max_outside_m
+                << " m, half the tets' mean edge, is taken): is the surface in the mesh's units "
+                   "and placement?";
+        throw std::invalid_argument(message.str());
+      }
+      best_weights = CalcBarycentric(mesh, best_tet, p_m);
+      ++found.num_outside;
+      found.max_outside_m = std::max(found.max_outside_m, best_distance_m);
+    }
+    surface.nodes.col(p) = mesh.tets.col(best_tet);
+    surface.weights.col(p) = best_weights;
+  }
+  if (report != nullptr) *report = found;
+  return surface;
+}
+
+EmbeddedSurface MakeNodeSurface(const Matrix3Xi& triangles) {
+  const int num_nodes = triangles.cols() > 0 ? triangles.maxCoeff() + 1 : 0;
+  std::vector<int> point_of_node(static_cast<size_t>(num_nodes), -1);
+  std::vector<int> nodes;
+  EmbeddedSurface surface;
+  surface.triangles.resize(3, triangles.cols());
+  for (Eigen::Index f = 0; f < triangles.cols(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      int& point = point_of_node[triangles(k, f)];
+      if (point < 0) {
+        point = static_cast<int>(nodes.size());
+        nodes.push_back(triangles(k, f));
+      }
+      surface.triangles(k, f) = point;
+    }
+  surface.nodes.resize(4, static_cast<Eigen::Index>(nodes.size()));
+  surface.weights.setZero(4, static_cast<Eigen::Index>(nodes.size()));
+  for (size_t p = 0; p < nodes.size(); ++p) {
+    surface.nodes.col(p).setConstant(nodes[p]);
+    surface.weights(0, p) = 1.0;
+  }
+  return surface;
+}
+
+EmbeddedSurface MergeEmbeddedSurfaces(const std::vector<EmbeddedSurface>& parts,
+                                      const std::vector<Matrix3Xi>& boundaries,
+                                      const std::vector<int>& first_nodes) {
+  if (boundaries.size() != parts.size() || first_nodes.size() != parts.size())
+    throw std::invalid_argument("MergeEmbeddedSurfaces: one boundary and first node per part");
+  if (std::all_of(parts.begin(), parts.end(), [](const auto& part) { return part.empty(); }))
+    return {};
+  std::vector<EmbeddedSurface> filled;
+  int num_points = 0, num_triangles = 0;
+  for (size_t i = 0; i < parts.size(); ++i) {
+    filled.push_back(parts[i].empty() ? MakeNodeSurface(boundaries[i]) : parts[i]);
+    num_points += filled.back().num_points();
+    num_triangles += filled.back().num_triangles();
+  }
+  EmbeddedSurface merged;
+  merged.nodes.resize(4, num_points);
+  merged.weights.resize(4, num_points);
+  merged.triangles.resize(3, num_triangles);
+  int point = 0, triangle = 0;
+  for (size_t i = 0; i < filled.size(); ++i) {
+    const EmbeddedSurface& part = filled[i];
+    merged.nodes.middleCols(point, part.num_points()) = part.nodes.array() + first_nodes[i];
+    merged.weights.middleCols(point, part.num_points()) = part.weights;
+    merged.triangles.middleCols(triangle, part.num_triangles()) = part.triangles.array() + point;
+    point += part.num_points();
+    triangle += part.num_triangles();
+  }
+  return merged;
+}
+
+void CalcEmbeddedPositions(const EmbeddedSurface& surface, const Eigen::VectorXd& x_nodes_m,
+                           Eigen::VectorXd* x_points_m) {
+  const Eigen::Index size = 3 * static_cast<Eigen::Index>(surface.num_points());
+  if (x_points_m->size() != size) x_points_m->resize(size);
+  for (int p = 0; p < surface.num_points(); ++p) {
+    Vector3d x_m = Vector3d::Zero();
+    for (int a = 0; a < 4; ++a)
+      x_m += surface.weights(a, p) * x_nodes_m.segment<3>(3 * surface.nodes(a, p));
+    x_points_m->segment<3>(3 * p) = x_m;
+  }
+}
+
+}  // namespace hapsim::fem

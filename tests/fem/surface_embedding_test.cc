@@ -1,0 +1,158 @@
+// A surface carried by the tets (fem/surface_embedding.h): each point, inside a tet or just
+// outside, moves with its tet's linear field, so a rigid motion and a uniform strain of the mesh
+// move it exactly as they move the point itself (the map applied to its rest position, an
+// independent computation); a point far from every tet is refused, naming it; the boundary as a
+// surface of its own puts weight 1 on each node; merging lays the parts out as the nodes are.
+#include "fem/surface_embedding.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "fem/lattice_mesher.h"
+
+namespace hapsim::fem {
+namespace {
+
+using Eigen::Vector3d;
+
+const TetMesh& Block() {  // 4 × 3 × 2 cm, 1 cm cells: mean edge ≈ 1.2 cm
+  static const TetMesh mesh = MakeBoxTetMesh({0.0, 0.0, 0.0}, {0.04, 0.03, 0.02}, {4, 3, 2});
+  return mesh;
+}
+
+// Random points in the block, then some up to 4 mm outside its faces (the limit is ~6 mm), with
+// a triangle through each three in turn.
+struct Points {
+  Matrix3Xd vertices_m;
+  Matrix3Xi triangles;
+};
+Points MakePoints(int num_inside, int num_outside) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Points points;
+  points.vertices_m.resize(3, num_inside + num_outside);
+  const Vector3d size_m(0.04, 0.03, 0.02);
+  for (int p = 0; p < num_inside + num_outside; ++p) {
+    Vector3d q(unit(rng), unit(rng), unit(rng));
+    q = q.cwiseProduct(size_m);
+    if (p >= num_inside) {  // pushed out through one face, by 0.5–4 mm
+      const int axis = p % 3;
+      q[axis] =
+          (p % 2 == 0) ? -0.0005 - 0.0035 * unit(rng) : size_m[axis] + 0.0005 + 0.0035 * unit(rng);
+    }
+    points.vertices_m.col(p) = q;
+  }
+  const int num_points = num_inside + num_outside;
+  points.triangles.resize(3, num_points);
+  for (int f = 0; f < num_points; ++f)
+    points.triangles.col(f) << f, (f + 1) % num_points, (f + 2) % num_points;
+  return points;
+}
+
+Eigen::VectorXd Stacked(const Matrix3Xd& p_m) {
+  return Eigen::Map<const Eigen::VectorXd>(p_m.data(), p_m.size());
+}
+
+TEST(SurfaceEmbeddingTest, PointsMoveWithARigidMotionAndAUniformStrainExactly) {
+  const Points points = MakePoints(200, 60);
+  EmbeddingReport report;
+  const EmbeddedSurface surface = EmbedSurface(Block(), points.vertices_m, points.triangles,
+                                               CalcDefaultMaxOutsideDistance(Block()), &report);
+  EXPECT_EQ(report.num_outside, 60);
+  EXPECT_GT(report.max_outside_m, 0.003);
+  EXPECT_LE(report.max_outside_m, 0.004 + 1e-12);
+  for (int p = 0; p < surface.num_points(); ++p)
+    EXPECT_NEAR(surface.weights.col(p).sum(), 1.0, 1e-14);
+
+  Eigen::VectorXd x_points_m;
+  // At rest the points are where they were given.
+  CalcEmbeddedPositions(surface, Stacked(Block().rest_positions_m), &x_points_m);
+  EXPECT_LT((x_points_m - Stacked(points.vertices_m)).cwiseAbs().maxCoeff(), 1e-15);
+
+  // A rigid motion and a uniform strain (any affine map) of the nodes, applied to the points.
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.7, Vector3d(1.0, -2.0, 0.5).normalized()).toRotationMatrix();
+  Eigen::Matrix3d F;
+  F << 1.2, 0.1, -0.05, 0.0, 0.8, 0.2, 0.1, -0.1, 1.1;
+  const Vector3d t_m(0.3, -0.1, 0.05);
+  for (const Eigen::Matrix3d& A : {R, F}) {
+    const Matrix3Xd x_nodes_m = (A * Block().rest_positions_m).colwise() + t_m;
+    CalcEmbeddedPositions(surface, Stacked(x_nodes_m), &x_points_m);
+    const Matrix3Xd expected_m = (A * points.vertices_m).colwise() + t_m;
+    EXPECT_LT((x_points_m - Stacked(expected_m)).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
+TEST(SurfaceEmbeddingTest, APointFarOutsideIsRefusedByNumber) {
+  Points points = MakePoints(10, 0);
+  const double limit_m = CalcDefaultMaxOutsideDistance(Block());
+  // Half the mean of edges between 1 cm (the cells') and √3 cm (their diagonals).
+  EXPECT_GT(limit_m, 0.005);
+  EXPECT_LT(limit_m, 0.0087);
+  points.vertices_m.col(6) = Vector3d(0.02, 0.015, 0.02 + 1.5 * limit_m);  // above the top face
+  try {
+    EmbedSurface(Block(), points.vertices_m, points.triangles, limit_m);
+    FAIL() << "a point 1.5 limits out was embedded";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("surface vertex 7 "), std::string::npos)
+        << error.what();
+    EXPECT_NE(std::string(error.what()).find("outside every tet"), std::string::npos);
+  }
+  // Just inside the limit it binds.
+  points.vertices_m.col(6) = Vector3d(0.02, 0.015, 0.02 + 0.9 * limit_m);
+  EXPECT_NO_THROW(EmbedSurface(Block(), points.vertices_m, points.triangles, limit_m));
+}
+
+TEST(SurfaceEmbeddingTest, TheBoundaryAsASurfaceWeighsEachNodeOnce) {
+  const Matrix3Xi boundary = ExtractBoundarySurface(Block());
+  const EmbeddedSurface own = MakeNodeSurface(boundary);
+  Eigen::VectorXd x_points_m;
+  const Eigen::VectorXd x_nodes_m = Eigen::VectorXd::Random(3 * Block().num_nodes());
+  CalcEmbeddedPositions(own, x_nodes_m, &x_points_m);
+  for (int f = 0; f < own.num_triangles(); ++f)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(x_points_m.segment<3>(3 * own.triangles(k, f)),
+                x_nodes_m.segment<3>(3 * boundary(k, f)));
+  // The same surface embedded by location binds each point to a tet holding its node.
+  Matrix3Xd vertices_m(3, own.num_points());
+  for (int p = 0; p < own.num_points(); ++p)
+    vertices_m.col(p) = Block().rest_positions_m.col(own.nodes(0, p));
+  const EmbeddedSurface located = EmbedSurface(Block(), vertices_m, own.triangles, 1e-9);
+  CalcEmbeddedPositions(located, x_nodes_m, &x_points_m);
+  Eigen::VectorXd x_own_m;
+  CalcEmbeddedPositions(own, x_nodes_m, &x_own_m);
+  EXPECT_LT((x_points_m - x_own_m).cwiseAbs().maxCoeff(), 1e-14);
+}
+
+TEST(SurfaceEmbeddingTest, MergingOffsetsNodesAndPointsAndFillsTheBoundary) {
+  const Points points = MakePoints(5, 0);
+  const EmbeddedSurface part = EmbedSurface(Block(), points.vertices_m, points.triangles, 1e-3);
+  const Matrix3Xi boundary = ExtractBoundarySurface(Block());
+  const int n = Block().num_nodes();
+  // Body 0 without a surface (its boundary), body 1 with one, nodes n.. 2n.
+  const EmbeddedSurface merged =
+      MergeEmbeddedSurfaces({EmbeddedSurface(), part}, {boundary, boundary}, {0, n});
+  const EmbeddedSurface own = MakeNodeSurface(boundary);
+  ASSERT_EQ(merged.num_points(), own.num_points() + part.num_points());
+  ASSERT_EQ(merged.num_triangles(), own.num_triangles() + part.num_triangles());
+  Eigen::VectorXd x_nodes_m(6 * n);
+  x_nodes_m << Stacked(Block().rest_positions_m),
+      Stacked(Block().rest_positions_m.colwise() + Vector3d(1.0, 0.0, 0.0));
+  Eigen::VectorXd x_points_m;
+  CalcEmbeddedPositions(merged, x_nodes_m, &x_points_m);
+  for (int p = 0; p < part.num_points(); ++p)
+    EXPECT_LT((x_points_m.segment<3>(3 * (own.num_points() + p)) -
+               (points.vertices_m.col(p) + Vector3d(1.0, 0.0, 0.0)))
+                  .norm(),
+              1e-15);
+  EXPECT_EQ(merged.triangles.col(own.num_triangles()),
+            (part.triangles.col(0).array() + own.num_points()).matrix());
+  EXPECT_TRUE(MergeEmbeddedSurfaces({EmbeddedSurface()}, {boundary}, {0}).empty());
+}
+
+}  // namespace
+}  // namespace hapsim::fem
