@@ -12,13 +12,13 @@
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
 
-#include "apps/realtime.h"
-#include "apps/receive_thread.h"
 #include "config/scene.h"
+#include "core/realtime.h"
 #include "device/device_backend.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
 #include "messages/message_gate.h"
+#include "messages/receive_thread.h"
 
 namespace {
 
@@ -39,7 +39,7 @@ class Driver {
   // zero.
   void ApplyWrench() {
     const bool fresh =
-        1e-9 * static_cast<double>(hapsim::apps::MonotonicNs() - received_ns_) <= kStaleForce_s;
+        1e-9 * static_cast<double>(hapsim::MonotonicNs() - received_ns_) <= kStaleForce_s;
     if (fresh) {
       hand_.Write(force_W_N_, torque_W_N_m_);
     } else {
@@ -73,7 +73,7 @@ class Driver {
       force_W_N_.setZero();  // never apply a wrench that failed validation
       torque_W_N_m_.setZero();
     }
-    received_ns_ = hapsim::apps::MonotonicNs();
+    received_ns_ = hapsim::MonotonicNs();
   }
 
  private:
@@ -89,18 +89,18 @@ class Driver {
 class StatePublisher {
  public:
   StatePublisher(lcm::LCM* lcm, double dt_s)
-      : lcm_(lcm), dt_ns_(std::llround(1e9 * dt_s)), deadline_ns_(hapsim::apps::MonotonicNs()) {}
+      : lcm_(lcm), dt_ns_(std::llround(1e9 * dt_s)), deadline_ns_(hapsim::MonotonicNs()) {}
   // Publishes `state` for run `run_id` (nothing while it is 0, not known yet), then sleeps until
   // the next period starts.
   void PublishAndWait(const hapsim::DeviceState& state, std::int64_t run_id) {
     if (run_id != 0) {
       hapsim_lcm::device_state_t msg =
-          hapsim::messages::ToMessage(state, hapsim::apps::WallMicros(), sequence_++);
+          hapsim::messages::ToMessage(state, hapsim::WallMicros(), sequence_++);
       msg.run_id = run_id;
       lcm_->publish(hapsim::messages::kDeviceStateChannel, &msg);
     }
     deadline_ns_ += dt_ns_;
-    hapsim::apps::SleepUntil(deadline_ns_);
+    hapsim::SleepUntil(deadline_ns_);
   }
 
  private:
@@ -116,10 +116,10 @@ class StatePublisher {
 // script: its driver just publishes what it reads. Throws after wait_s.
 void HoldUntilLoopRuns(lcm::LCM* lcm, Driver* driver, StatePublisher* publisher, double wait_s,
                        const std::string& url) {
-  const std::int64_t give_up_ns = hapsim::apps::MonotonicNs() + std::llround(1e9 * wait_s);
+  const std::int64_t give_up_ns = hapsim::MonotonicNs() + std::llround(1e9 * wait_s);
   const hapsim::DeviceState start = driver->ReadHandle(0.0);
-  while (!driver->loop_running() && !hapsim::apps::g_stop_requested.load()) {
-    if (hapsim::apps::MonotonicNs() > give_up_ns)
+  while (!driver->loop_running() && !hapsim::g_stop_requested.load()) {
+    if (hapsim::MonotonicNs() > give_up_ns)
       throw std::runtime_error("no haptic loop on " + url + " within " + std::to_string(wait_s) +
                                " s (is `hapsim run` running?)");
     while (lcm->handleTimeout(0) > 0) {
@@ -159,21 +159,21 @@ int main(int argc, char** argv) {
     if (!run_id_text.empty() && !hapsim::messages::ParseRunId(run_id_text, &run_id))
       throw std::runtime_error("--run-id: not 1-16 hex digits (and not 0): " + run_id_text);
     Driver driver(scene, dt_s, run_id);
-    // LCM refuses the newest message once 30 wait (receive_thread.h): after a stall the driver
-    // would apply old forces. Drained every millisecond below, so the queue stays short.
-    hapsim::apps::KeepQueued(
+    // LCM refuses the newest message once 30 wait (messages/receive_thread.h): after a stall the
+    // driver would apply old forces. Drained every millisecond below, so the queue stays short.
+    hapsim::messages::KeepQueued(
         lcm.subscribe(hapsim::messages::kDeviceForceChannel, &Driver::OnForce, &driver));
-    hapsim::apps::KeepQueued(
+    hapsim::messages::KeepQueued(
         lcm.subscribe(hapsim::messages::kHapticStateChannel, &Driver::OnHapticState, &driver));
-    hapsim::apps::InstallStopHandlers();
+    hapsim::InstallStopHandlers();
     // A device's loop is as time-critical as the haptic loop: real-time when permitted.
-    const std::string rt_failure = hapsim::apps::RequestRealtime(80);
+    const std::string rt_failure = hapsim::RequestRealtime(80);
     if (!rt_failure.empty())
       std::fprintf(stderr, "hapsim_example_driver: warning: normal scheduling (%s)\n",
                    rt_failure.c_str());
     StatePublisher publisher(&lcm, dt_s);
     HoldUntilLoopRuns(&lcm, &driver, &publisher, wait_s, url);
-    for (long k = 0; k < steps && !hapsim::apps::g_stop_requested.load(); ++k) {
+    for (long k = 0; k < steps && !hapsim::g_stop_requested.load(); ++k) {
       while (lcm.handleTimeout(0) > 0) {
       }  // apply the newest force first
       driver.ApplyWrench();

@@ -21,12 +21,11 @@
 
 #include "apps/commands.h"
 #include "apps/haptic_inputs.h"
-#include "apps/realtime.h"
-#include "apps/receive_thread.h"
 #include "config/scene.h"
 #include "config/simulation_builder.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/realtime.h"
 #include "core/scripted_trajectory.h"
 #include "core/statistics.h"
 #include "device/device_backend.h"
@@ -34,6 +33,7 @@
 #include "messages/adapters.h"
 #include "messages/channels.h"
 #include "messages/message_gate.h"
+#include "messages/receive_thread.h"
 
 namespace hapsim::apps {
 namespace {
@@ -365,7 +365,7 @@ std::unique_ptr<device::DeviceBackend> MakeDeviceBackend(const std::string& devi
     return std::make_unique<device::SimulatedHand>(ScriptedTrajectory(scene.trajectory), scene.hand,
                                                    dt_s);
   auto external = std::make_unique<ExternalDevice>(gate);
-  KeepQueued(
+  messages::KeepQueued(
       lcm->subscribe(messages::kDeviceStateChannel, &ExternalDevice::Handle, external.get()));
   return external;
 }
@@ -396,12 +396,13 @@ void RunHaptic(const HapticCommandOptions& options) {
       device::EnsureLcpSolver(loop_options, &slot);
   messages::MessageGate gate("hapsim haptic", run_id);
   ModelReceiver receiver(&mailbox, scene, loop_options, &gate);
-  KeepQueued(lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver));
+  messages::KeepQueued(
+      lcm.subscribe(messages::kContactModelChannel, &ModelReceiver::Handle, &receiver));
   const std::unique_ptr<device::DeviceBackend> backend =
       MakeDeviceBackend(options.device, scene, loop_options.dt_s, &gate, &lcm);
   const bool in_process_device = options.device != "external";
   InstallStopHandlers();
-  ReceiveThread receive_thread(&lcm);
+  messages::ReceiveThread receive_thread(&lcm);
   const std::string rt_failure = RequestRealtime(80);
   if (!rt_failure.empty())
     std::fprintf(stderr, "hapsim haptic: warning: normal scheduling (%s)\n", rt_failure.c_str());

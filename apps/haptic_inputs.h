@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "apps/realtime.h"
 #include "config/body_builder.h"
 #include "config/scene.h"
 #include "config/simulation_builder.h"
+#include "core/realtime.h"
 #include "device/device_backend.h"
 #include "device/haptic_loop.h"
 #include "device/model_mailbox.h"

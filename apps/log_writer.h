@@ -1,7 +1,7 @@
 #pragma once
 // Writes an LCM event log from a thread of its own. The receive thread only copies each message
 // into a queue (Add), so a slow disk can never stall it: a stalled receive thread lets LCM's
-// subscription queues overflow and drop messages (see KeepQueued in receive_thread.h).
+// subscription queues overflow and drop messages (see KeepQueued in messages/receive_thread.h).
 
 #include <lcm/lcm-cpp.hpp>
 

@@ -7,14 +7,13 @@
 //   hapsim_loop_jitter [--steps N] [--summary FILE.json]
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <vector>
 
-#include "apps/realtime.h"
 #include "core/atomic_file.h"
+#include "core/realtime.h"
 #include "core/statistics.h"
 
 int main(int argc, char** argv) {
@@ -24,16 +23,16 @@ int main(int argc, char** argv) {
   app.add_option("--steps", steps, "Loop periods to measure")->check(CLI::Range(2L, 10000000L));
   app.add_option("--summary", summary_path, "Write the quantiles (µs) to this JSON file");
   CLI11_PARSE(app, argc, argv);
-  const std::string rt_failure = hapsim::apps::RequestRealtime(80);  // as `hapsim haptic`
+  const std::string rt_failure = hapsim::RequestRealtime(80);  // as `hapsim haptic`
   if (!rt_failure.empty())
     std::fprintf(stderr, "hapsim_loop_jitter: warning: normal scheduling (%s)\n", rt_failure.c_str());
   constexpr std::int64_t kPeriodNs = 1000000;
   std::vector<double> error_s;
   error_s.reserve(steps);
-  std::int64_t deadline_ns = hapsim::apps::MonotonicNs() + kPeriodNs, previous_ns = 0;
+  std::int64_t deadline_ns = hapsim::MonotonicNs() + kPeriodNs, previous_ns = 0;
   for (long k = 0; k < steps; ++k) {
-    hapsim::apps::SleepUntil(deadline_ns);
-    const std::int64_t now_ns = hapsim::apps::MonotonicNs();
+    hapsim::SleepUntil(deadline_ns);
+    const std::int64_t now_ns = hapsim::MonotonicNs();
     if (k > 0) error_s.push_back(1e-9 * std::abs(static_cast<double>(now_ns - previous_ns - kPeriodNs)));
     previous_ns = now_ns;
     deadline_ns += kPeriodNs;

@@ -21,16 +21,16 @@
 
 #include "apps/commands.h"
 #include "apps/haptic_inputs.h"
-#include "apps/logged_run.h"
-#include "apps/realtime.h"
 #include "apps/run_info.h"
 #include "config/scene.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/realtime.h"
 #include "device/haptic_loop.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
 #include "messages/lcm_log_reader.h"
+#include "messages/logged_run.h"
 #include "messages/message_gate.h"
 
 namespace hapsim::apps {
@@ -97,7 +97,7 @@ bool DecodeEvent(const messages::LcmLogEvent& event, const std::string& log_path
 // runs' messages are left alone.
 LogContents ReadLog(const std::string& path, const std::string& requested_run) {
   LogContents contents;
-  contents.run_id = ChooseLoggedRun(path, requested_run);
+  contents.run_id = messages::ChooseLoggedRun(path, requested_run);
   messages::LcmLogEvent event;
   messages::LcmLogReader log(path);
   while (log.Next(&event)) {

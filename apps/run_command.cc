@@ -29,19 +29,19 @@
 #include "apps/child_process.h"
 #include "apps/commands.h"
 #include "apps/log_writer.h"
-#include "apps/realtime.h"
-#include "apps/receive_thread.h"
 #include "apps/run_info.h"
 #include "config/body_builder.h"
 #include "config/scene.h"
 #include "config/simulation_builder.h"
 #include "contact/visual_frame.h"
 #include "core/error.h"
+#include "core/realtime.h"
 #include "device/haptic_loop.h"
 #include "fem/tet_mesh.h"
 #include "messages/adapters.h"
 #include "messages/channels.h"
 #include "messages/message_gate.h"
+#include "messages/receive_thread.h"
 
 namespace hapsim::apps {
 namespace {
@@ -293,15 +293,17 @@ int RunVisual(RunCommandOptions options) {
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   const hapsim_lcm::run_info_t info = MakeRunInfo(scene, device::ToString(mode), run_id);
   Listener listener(run_id);
-  KeepQueued(lcm.subscribe(messages::kDeviceStateChannel, &Listener::OnDevice, &listener));
-  KeepQueued(lcm.subscribe(messages::kHapticStateChannel, &Listener::OnHaptic, &listener));
+  messages::KeepQueued(
+      lcm.subscribe(messages::kDeviceStateChannel, &Listener::OnDevice, &listener));
+  messages::KeepQueued(
+      lcm.subscribe(messages::kHapticStateChannel, &Listener::OnHaptic, &listener));
   const std::string log_tmp = options.log_path + ".tmp";
   if (!options.log_path.empty()) {
     listener.OpenLog(log_tmp);
-    KeepQueued(lcm.subscribe(".*", &Listener::OnAny, &listener));
+    messages::KeepQueued(lcm.subscribe(".*", &Listener::OnAny, &listener));
   }
   InstallStopHandlers();
-  ReceiveThread receive_thread(&lcm);
+  messages::ReceiveThread receive_thread(&lcm);
   std::printf("hapsim run: run id %s on %s%s\n", options.run_id.c_str(), options.lcm_url.c_str(),
               options.no_spawn
                   ? (" (start the haptic process with --run-id " + options.run_id + ")").c_str()

@@ -5,9 +5,9 @@
 #include <fstream>
 #include <iterator>
 
-#include "apps/realtime.h"
 #include "core/content_hash.h"
 #include "core/error.h"
+#include "core/realtime.h"
 
 namespace hapsim::apps {
 namespace fs = std::filesystem;

@@ -104,7 +104,7 @@ describe() {
   out=$(HAPSIM_FUZZ_TMPDIR=$scratch/$1 timeout 120 "$build/tests/fuzz/fuzz_$1" "$2" 2>&1)
   local what where
   what=$(grep -m1 -E 'runtime error|ERROR: (Address|Leak)Sanitizer|hapsim fuzz finding|terminate called|deadly signal' <<< "$out" | sed 's/^==[0-9]*==//')
-  where=$(grep -E '^ *#[0-9]+ .* in .*/(core|fem|contact|device|config|messages|apps)/[a-z_]+\.(cc|h):[0-9]+' <<< "$out" | head -1 | sed 's/.* in \([^ (]*\).* \(\/[^ ]*\)$/\1 \2/')
+  where=$(grep -E '^ *#[0-9]+ .* in .*/(core|fem|contact|device|config|messages|view|apps)/[a-z_]+\.(cc|h):[0-9]+' <<< "$out" | head -1 | sed 's/.* in \([^ (]*\).* \(\/[^ ]*\)$/\1 \2/')
   echo "${what:-unknown (rc only)}${where:+ | at $where}"
 }
 

@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "apps/scene_painter.h"
-#include "apps/x11_window.h"
 #include "config/scene.h"
+#include "view/scene_painter.h"
+#include "view/x11_window.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 // Parses "WIDTHxHEIGHT" (e.g. 1024x768); throws InputError naming `option` otherwise.
 cv::Size ParseWindowSize(const std::string& text, const std::string& option);
@@ -56,4 +56,4 @@ class ViewWindow {
   std::string video_path_, video_temp_path_;
 };
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -1,21 +1,23 @@
-#include "apps/live_run.h"
+#include "view/live_run.h"
 
 #include <chrono>
 #include <limits>
 #include <thread>
 
-#include "apps/realtime.h"
-#include "apps/receive_thread.h"
+#include "core/realtime.h"
 #include "messages/channels.h"
+#include "messages/receive_thread.h"
 #include "messages/wire_decode.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 LiveRun::LiveRun(lcm::LCM* lcm, std::int64_t run_id, const char* process) : gate_(process, run_id) {
-  KeepQueued(lcm->subscribe(messages::kRunInfoChannel, &LiveRun::OnRunInfo, this));
-  KeepQueued(lcm->subscribe(messages::kSimFrameChannel, &LiveRun::OnFrame, this));
-  KeepQueued(lcm->subscribe(messages::kHapticStateChannel, &LiveRun::OnHapticState, this));
-  KeepQueued(lcm->subscribe(messages::kDeviceStateChannel, &LiveRun::OnDeviceState, this));
+  messages::KeepQueued(lcm->subscribe(messages::kRunInfoChannel, &LiveRun::OnRunInfo, this));
+  messages::KeepQueued(lcm->subscribe(messages::kSimFrameChannel, &LiveRun::OnFrame, this));
+  messages::KeepQueued(
+      lcm->subscribe(messages::kHapticStateChannel, &LiveRun::OnHapticState, this));
+  messages::KeepQueued(
+      lcm->subscribe(messages::kDeviceStateChannel, &LiveRun::OnDeviceState, this));
 }
 
 void LiveRun::OnRunInfo(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
@@ -79,4 +81,4 @@ double LiveRun::SecondsSinceLastMessage() const {
   return 1e-9 * static_cast<double>(MonotonicNs() - last);
 }
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -16,7 +16,7 @@
 #include "core/eigen_types.h"
 #include "messages/adapters.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 // What one picture shows: the newest messages of the run at one instant.
 struct ViewState {
@@ -82,4 +82,4 @@ cv::viz::Widget3D MakeShapeWidget(const ToolShape& shape, const cv::viz::Color& 
 // The pose x, q (w, x, y, z) as viz wants it.
 cv::Affine3d ToAffine(const double x_W_m[3], const double q[4]);
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-namespace hapsim::apps {
+namespace hapsim::messages {
 
 // The run id to read from the log at `path`: `requested` (--run-id, hex) or, when empty, the
 // log's only run. Reads the log once, decoding nothing (a message's run id sits at a fixed
@@ -13,4 +13,4 @@ namespace hapsim::apps {
 // several runs and none requested (listing them), a requested run that is not there.
 std::int64_t ChooseLoggedRun(const std::string& path, const std::string& requested);
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::messages

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 struct WindowEvent {
   enum class Type { kKey, kMouseMove, kButtonDown, kButtonUp, kWheelUp, kWheelDown };
@@ -47,4 +47,4 @@ class X11Window {
   bool closed_ = false;
 };
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -24,7 +24,7 @@
 #include "contact/tool_distance.h"
 #include "messages/adapters.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 class PalpationScorer {
  public:
@@ -70,4 +70,4 @@ class PalpationScorer {
   Eigen::Vector3d last_x_W_m_ = Eigen::Vector3d::Zero();  // at the last path sample
 };
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

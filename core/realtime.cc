@@ -1,4 +1,4 @@
-#include "apps/realtime.h"
+#include "core/realtime.h"
 
 #include <sched.h>
 #include <sys/mman.h>
@@ -10,7 +10,7 @@
 #include <cstring>
 #include <ctime>
 
-namespace hapsim::apps {
+namespace hapsim {
 
 std::atomic<bool> g_stop_requested{false};
 
@@ -76,4 +76,4 @@ double TimingHistogram::Quantile(double q) const {
   return max_s_;
 }
 
-}  // namespace hapsim::apps
+}  // namespace hapsim

@@ -1,4 +1,4 @@
-#include "apps/scene_painter.h"
+#include "view/scene_painter.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include "contact/rigid_objects.h"
 #include "contact/tool_distance.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 namespace {
 
 const cv::viz::Color kTissue(170, 170, 235);  // BGR: a pale flesh tone at zero displacement
@@ -344,4 +344,4 @@ void ScenePainter::Draw(const ViewState& state) {
   DrawGauge(state);
 }
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -1,13 +1,13 @@
-// The palpation scorer (apps/palpation_score.h) against hand-made haptic states whose outcome is
+// The palpation scorer (view/palpation_score.h) against hand-made haptic states whose outcome is
 // known: a hold inside the band for hold_s reaches a target, one step short does not; the tool's
 // weight alone is no tissue force; time over the limit and the path are counted per step.
-#include "apps/palpation_score.h"
+#include "view/palpation_score.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
 
-namespace hapsim::apps {
+namespace hapsim::view {
 namespace {
 
 constexpr double kDt_s = 1e-3;
@@ -97,4 +97,4 @@ TEST(PalpationScorer, CountsTimeOverTheLimitAndThePath) {
 }
 
 }  // namespace
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace hapsim::apps {
+namespace hapsim {
 
 // CLOCK_MONOTONIC, ns.
 std::int64_t MonotonicNs();
@@ -42,4 +42,4 @@ class TimingHistogram {
   double max_s_ = 0.0;
 };
 
-}  // namespace hapsim::apps
+}  // namespace hapsim

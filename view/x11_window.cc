@@ -1,11 +1,11 @@
-#include "apps/x11_window.h"
+#include "view/x11_window.h"
 
 #include <X11/Xlib.h>
 #include <X11/Xutil.h>
 
 #include <stdexcept>
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 struct X11Window::Xlib {
   Display* display = nullptr;
@@ -135,4 +135,4 @@ std::vector<WindowEvent> X11Window::Poll() {
   return events;
 }
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -1,17 +1,17 @@
-#include "apps/run_timeline.h"
+#include "view/run_timeline.h"
 
 #include <cmath>
 #include <iterator>
 #include <optional>
 #include <vector>
 
-#include "apps/logged_run.h"
 #include "core/error.h"
 #include "messages/channels.h"
 #include "messages/lcm_log_reader.h"
+#include "messages/logged_run.h"
 #include "messages/wire_decode.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 namespace {
 
 // The entry of `map` with the largest key ≤ key, or nullptr.
@@ -162,7 +162,7 @@ double RunTimeline::visual_dt_s() const {
 }
 
 LoggedRun ReadLoggedRun(const std::string& path, const std::string& requested_run) {
-  const std::int64_t run_id = ChooseLoggedRun(path, requested_run);
+  const std::int64_t run_id = messages::ChooseLoggedRun(path, requested_run);
   LoggedRun run;
   std::optional<hapsim_lcm::run_info_t> info;
   // Messages before RUN_INFO wait here: the haptic step needs the rate RUN_INFO gives.
@@ -215,4 +215,4 @@ LoggedRun ReadLoggedRun(const std::string& path, const std::string& requested_ru
   return run;
 }
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

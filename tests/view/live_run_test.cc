@@ -1,11 +1,11 @@
-// LiveRun (apps/live_run.h), the run a live viewer hears, over an in-process LCM (memq://): when
+// LiveRun (view/live_run.h), the run a live viewer hears, over an in-process LCM (memq://): when
 // it counts the run as heard. `hapsim view` decides a run has ended when it has heard nothing of
 // it for a while, so a message of either of the run's processes must count (a sanitized visual
 // process's frames can be seconds apart while its haptic process publishes every millisecond),
 // and neither another run's messages nor DEVICE_STATE (an external driver's, which may outlive
 // the run) may.
 
-#include "apps/live_run.h"
+#include "view/live_run.h"
 
 #include <gtest/gtest.h>
 
@@ -14,10 +14,10 @@
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
-#include "apps/realtime.h"
+#include "core/realtime.h"
 #include "messages/channels.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 namespace {
 
 constexpr std::int64_t kRunId = 0x5eed;
@@ -91,4 +91,4 @@ TEST_F(LiveRunTest, FramesAndHapticStatesOfTheRunCountAsHeardNothingElseDoes) {
 }
 
 }  // namespace
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

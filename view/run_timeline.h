@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "apps/scene_painter.h"
 #include "messages/adapters.h"
+#include "view/scene_painter.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 class RunTimeline {
  public:
@@ -62,4 +62,4 @@ struct LoggedRun {
 };
 LoggedRun ReadLoggedRun(const std::string& path, const std::string& requested_run);
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -10,11 +10,11 @@
 #include <mutex>
 #include <optional>
 
-#include "apps/run_timeline.h"
 #include "messages/adapters.h"
 #include "messages/message_gate.h"
+#include "view/run_timeline.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 class LiveRun {
  public:
@@ -51,4 +51,4 @@ class LiveRun {
   std::atomic<std::int64_t> last_message_ns_{0};  // MonotonicNs(); 0: none yet
 };
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -1,9 +1,9 @@
-#include "apps/palpation_score.h"
+#include "view/palpation_score.h"
 
 #include <Eigen/Geometry>
 #include <cstdio>
 
-namespace hapsim::apps {
+namespace hapsim::view {
 
 PalpationScorer::PalpationScorer(const config::TaskScene& task, const ToolShape& tool,
                                  const Eigen::Vector3d& tool_weight_N, double haptic_dt_s)
@@ -95,4 +95,4 @@ nlohmann::json PalpationScorer::ToJson() const {
   return json;
 }
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view

@@ -2,12 +2,11 @@
 // A thread that handles an LCM instance's subscriptions until stopped (both processes of a run
 // receive off their main loop). LCM allows publishing from another thread meanwhile.
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <atomic>
+#include <lcm/lcm-cpp.hpp>
 #include <thread>
 
-namespace hapsim::apps {
+namespace hapsim::messages {
 
 // LCM drops a message for a subscription once 30 (its default queue capacity) are waiting to be
 // dispatched. A receive thread held off the CPU for 15 ms therefore lost 2 kHz traffic (the log's
@@ -33,9 +32,10 @@ class ReceiveThread {
     running_.store(false);
     if (thread_.joinable()) thread_.join();
   }
+
  private:
   std::atomic<bool> running_{true};
   std::thread thread_;
 };
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::messages

@@ -1,4 +1,4 @@
-#include "apps/view_window.h"
+#include "view/view_window.h"
 
 #include <unistd.h>
 
@@ -11,7 +11,7 @@
 #include "config/body_builder.h"
 #include "core/error.h"
 
-namespace hapsim::apps {
+namespace hapsim::view {
 namespace fs = std::filesystem;
 namespace {
 
@@ -87,4 +87,4 @@ void ViewWindow::FinishVideo() {
   fs::rename(video_temp_path_, video_path_);
 }
 
-}  // namespace hapsim::apps
+}  // namespace hapsim::view
