@@ -78,6 +78,29 @@ nlohmann::json DescribeShape(const ToolShape& shape) {
 // The scene's objects and tool as they will be simulated (the body built).
 nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* body) {
   nlohmann::json objects = nlohmann::json::array();
+  // A part's share of a merged surface (its points carried by the part's nodes), or of the
+  // boundary when the surface is empty or holds none of the part's points.
+  const auto describe_surface = [&](const fem::EmbeddedSurface& surface, bool given,
+                                    const config::Body::Part& part) {
+    const auto in_part = [&](int node) {
+      return node >= part.first_node && node < part.first_node + part.num_nodes;
+    };
+    int points = 0, triangles = 0;
+    if (given) {
+      for (int p = 0; p < surface.num_points(); ++p) points += in_part(surface.nodes(0, p));
+      for (int f = 0; f < surface.num_triangles(); ++f)
+        triangles += in_part(surface.nodes(0, surface.triangles(0, f)));
+    } else {
+      std::vector<char> used(body->model.num_nodes(), 0);
+      for (Eigen::Index f = 0; f < body->model.surface_triangles.cols(); ++f) {
+        if (!in_part(body->model.surface_triangles(0, f))) continue;
+        ++triangles;
+        for (int k = 0; k < 3; ++k) used[body->model.surface_triangles(k, f)] = 1;
+      }
+      points = static_cast<int>(std::count(used.begin(), used.end(), 1));
+    }
+    return nlohmann::json{{"embedded", given}, {"points", points}, {"triangles", triangles}};
+  };
   // Each deformable object's part of the one FEM system (config::Body::parts, in scene order).
   const auto describe_deformable = [&](const std::string& name, const config::BodyScene& source,
                                        const config::Body::Part& part) {
@@ -85,16 +108,21 @@ nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* bod
     for (int n = part.first_node; n < part.first_node + part.num_nodes; ++n)
       fixed_nodes += body->model.dof_is_fixed[3 * n] ? 1 : 0;
     const fem::FemOptions& fem = source.options;
-    objects.push_back({{"name", name},
-                       {"kind", "deformable"},
-                       {"nodes", part.num_nodes},
-                       {"tets", part.num_tets},
-                       {"dofs", 3 * part.num_nodes},
-                       {"fixed_nodes", fixed_nodes},
-                       {"elasticity", fem::ToString(fem.elasticity)},
-                       {"integrator", fem::ToString(fem.integrator)},
-                       {"solver", fem::ToString(fem.solver.kind)},
-                       {"youngs_modulus_Pa", source.material.youngs_modulus_Pa}});
+    objects.push_back(
+        {{"name", name},
+         {"kind", "deformable"},
+         {"nodes", part.num_nodes},
+         {"tets", part.num_tets},
+         {"dofs", 3 * part.num_nodes},
+         {"fixed_nodes", fixed_nodes},
+         {"elasticity", fem::ToString(fem.elasticity)},
+         {"integrator", fem::ToString(fem.integrator)},
+         {"solver", fem::ToString(fem.solver.kind)},
+         {"youngs_modulus_Pa", source.material.youngs_modulus_Pa},
+         {"collision_surface", describe_surface(body->model.collision_surface,
+                                                source.collision_surface.has_value(), part)},
+         {"visual_surface",
+          describe_surface(body->visual_surface, source.visual_surface.has_value(), part)}});
   };
   if (body != nullptr) {
     describe_deformable(scene.body_name, *scene.body, body->parts[0]);
@@ -177,6 +205,14 @@ void PrintReport(const nlohmann::json& report) {
           object["elasticity"].get<std::string>().c_str(),
           object["integrator"].get<std::string>().c_str(),
           object["solver"].get<std::string>().c_str());
+      const auto surface_text = [](const nlohmann::json& surface) {
+        return std::to_string(surface["points"].get<int>()) + " points, " +
+               std::to_string(surface["triangles"].get<int>()) + " triangles" +
+               (surface["embedded"].get<bool>() ? " (embedded in the tets)" : " (the boundary)");
+      };
+      std::printf("  %-12s   collision surface %s; visual %s\n", "",
+                  surface_text(object["collision_surface"]).c_str(),
+                  surface_text(object["visual_surface"]).c_str());
     } else {
       std::printf("  %-12s rigid %s: 0 DOFs, no FEM\n", object["name"].get<std::string>().c_str(),
                   object["shape"].get<std::string>().c_str());

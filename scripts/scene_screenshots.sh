@@ -5,7 +5,8 @@
 # Headless: under Xvfb (xvfb-run). LCM stays on this machine: a private network namespace when
 # root, else a port of its own with ttl=0.
 #
-#   scripts/scene_screenshots.sh        # writes docs/scenes/<scene>.png and docs/scenes/<scene>.json
+#   scripts/scene_screenshots.sh [SCENE ...]   # writes docs/scenes/<scene>.png and .json (all, or
+#                                              # only the scenes named)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ -z "${HAPSIM_IN_NETNS:-}" ] && [ "$(id -u)" -eq 0 ] && unshare -n true 2>/dev/null; then
@@ -20,8 +21,10 @@ trap 'rm -rf "$work"' EXIT
 mkdir -p docs/scenes
 # scene, seconds to run, time of the picture (mid-press), colours from the shape at (s)
 for entry in "block_press 1.6 1.5 0" "liver_palpation 3.6 3.5 1.0" "probe_on_tray 1.6 1.5 0" \
-  "polyp 3.2 3.0 0.5" "pick_and_place 5.6 5.5 0" "peg_in_hole 2.9 2.8 0" "probe 4.9 4.8 0"; do
+  "polyp 3.2 3.0 0.5" "pick_and_place 5.6 5.5 0" "peg_in_hole 2.9 2.8 0" "probe 4.9 4.8 0" \
+  "two_organs 6.9 6.8 1.0"; do
   read -r scene duration at settle <<< "$entry"
+  if [ $# -gt 0 ] && [[ " $* " != *" $scene "* ]]; then continue; fi
   echo "scene_screenshots: $scene"
   "$hapsim" inspect "scenes/$scene.yaml" --json "docs/scenes/$scene.json" > /dev/null
   "$hapsim" run "scenes/$scene.yaml" --lcm-url "$url" --duration "$duration" --log "$work/$scene.lcm" \

@@ -6,6 +6,9 @@
 
 #include "contact/rigid_objects.h"
 #include "contact/tool_distance.h"
+#include "core/shape_mesh.h"
+#include "view/depth_cue.h"
+#include "view/shape_widget.h"
 
 namespace hapsim::view {
 namespace {
@@ -21,8 +24,7 @@ const cv::viz::Color kContact(0, 230, 255);
 const cv::viz::Color kForce(60, 60, 255);
 const cv::viz::Color kTargetOpen(0, 140, 255);
 const cv::viz::Color kTargetReached(60, 200, 60);
-
-cv::Vec3d ToVec(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
+const cv::viz::Color kDropLine(40, 220, 250);  // the tool's drop line and shadow ring
 
 // A camera looking at the middle of the scene's bounding box from the front, above and to the
 // side, far enough to hold the whole box.
@@ -34,113 +36,21 @@ cv::Affine3d MakeCameraPose(const Eigen::AlignedBox3d& box) {
   return cv::viz::makeCameraPose(ToVec(eye), ToVec(centre), cv::Vec3d(0, 0, -1));
 }
 
-// A flat disc of `radius_m` at height z, normal ±z, as a triangle fan.
-cv::viz::WMesh MakeDisc(double radius_m, double z_m, int sides, const cv::viz::Color& color) {
-  cv::viz::Mesh mesh;
-  mesh.cloud.create(1, sides + 1, CV_64FC3);
-  mesh.cloud.at<cv::Vec3d>(0, 0) = cv::Vec3d(0, 0, z_m);
-  for (int k = 0; k < sides; ++k) {
-    const double angle = 2.0 * M_PI * k / sides;
-    mesh.cloud.at<cv::Vec3d>(0, k + 1) =
-        cv::Vec3d(radius_m * std::cos(angle), radius_m * std::sin(angle), z_m);
-  }
-  mesh.polygons.create(1, 4 * sides, CV_32SC1);
-  for (int k = 0; k < sides; ++k) {
-    int* triangle = mesh.polygons.ptr<int>(0) + 4 * k;
-    triangle[0] = 3;
-    triangle[1] = 0;
-    triangle[2] = k + 1;
-    triangle[3] = (k + 1) % sides + 1;
-  }
-  cv::viz::WMesh disc(mesh);
-  disc.setColor(color);
-  return disc;
-}
-
-// `shape` grown by `fraction` of its bounding radius on every side (a mesh: scaled), so that the
-// device's ghost, drawn as lines, does not lie on the tool's surface where the two coincide: there
-// the depth test would pick between them by rounding, differently from one window to the next.
-ToolShape Inflate(ToolShape shape, double fraction) {
-  const double grow_m = fraction * contact::ToolDistanceField(shape).bounding_radius_m();
-  shape.radius_m += grow_m;
-  shape.length_m += shape.kind == ToolShape::Kind::kCylinder ? 2.0 * grow_m : 0.0;
-  shape.edge_radius_m = 0.0;
-  shape.half_extents_m.array() += grow_m;
-  shape.mesh.vertices_m *= 1.0 + fraction;
-  return shape;
-}
-
 }  // namespace
 
-cv::Affine3d ToAffine(const double x_W_m[3], const double q[4]) {
-  const Eigen::Matrix3d R =
-      Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
-  cv::Matx33d rotation;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) rotation(i, j) = R(i, j);
-  return cv::Affine3d(rotation, cv::Vec3d(x_W_m[0], x_W_m[1], x_W_m[2]));
-}
-
-cv::viz::Widget3D MakeShapeWidget(const ToolShape& shape, const cv::viz::Color& color,
-                                  bool wireframe) {
-  cv::viz::WWidgetMerger merged;
-  const double half_length = 0.5 * shape.length_m;
-  switch (shape.kind) {
-    case ToolShape::Kind::kSphere:
-      merged.addWidget(cv::viz::WSphere(cv::Point3d(0, 0, 0), shape.radius_m, 24, color));
-      break;
-    case ToolShape::Kind::kCapsule:
-      merged.addWidget(cv::viz::WCylinder(cv::Point3d(0, 0, -half_length),
-                                          cv::Point3d(0, 0, half_length), shape.radius_m, 32,
-                                          color));
-      for (const double z : {-half_length, half_length})
-        merged.addWidget(cv::viz::WSphere(cv::Point3d(0, 0, z), shape.radius_m, 24, color));
-      break;
-    case ToolShape::Kind::kCylinder:
-      merged.addWidget(cv::viz::WCylinder(cv::Point3d(0, 0, -half_length),
-                                          cv::Point3d(0, 0, half_length), shape.radius_m, 48,
-                                          color));
-      // WCylinder is an open tube (and viz circles are rings): close it with two discs.
-      for (const double z : {-half_length, half_length})
-        merged.addWidget(MakeDisc(shape.radius_m, z, 48, color));
-      break;
-    case ToolShape::Kind::kBox: {
-      const Eigen::Vector3d& h = shape.half_extents_m;
-      merged.addWidget(cv::viz::WCube(cv::Point3d(-h.x(), -h.y(), -h.z()),
-                                      cv::Point3d(h.x(), h.y(), h.z()), false, color));
-      break;
-    }
-    case ToolShape::Kind::kMesh: {
-      cv::viz::Mesh mesh;
-      mesh.cloud.create(1, static_cast<int>(shape.mesh.vertices_m.cols()), CV_64FC3);
-      for (int v = 0; v < mesh.cloud.cols; ++v)
-        mesh.cloud.at<cv::Vec3d>(0, v) = ToVec(shape.mesh.vertices_m.col(v));
-      mesh.polygons.create(1, 4 * static_cast<int>(shape.mesh.triangles.cols()), CV_32SC1);
-      for (int f = 0; f < shape.mesh.triangles.cols(); ++f) {
-        mesh.polygons.at<int>(0, 4 * f) = 3;
-        for (int k = 0; k < 3; ++k)
-          mesh.polygons.at<int>(0, 4 * f + 1 + k) = shape.mesh.triangles(k, f);
-      }
-      cv::viz::WMesh widget(mesh);
-      widget.setColor(color);
-      merged.addWidget(widget);
-      break;
-    }
-  }
-  merged.finalize();
-  merged.setColor(color);  // the parts' colours do not all survive the merge
-  merged.setRenderingProperty(cv::viz::SHADING, cv::viz::SHADING_PHONG);
-  if (wireframe)
-    merged.setRenderingProperty(cv::viz::REPRESENTATION, cv::viz::REPRESENTATION_WIREFRAME);
-  return merged;
-}
-
 ScenePainter::ScenePainter(cv::viz::Viz3d* window, const config::Scene& scene,
-                           Matrix3Xd rest_positions_m, const PainterOptions& options)
+                           Matrix3Xd rest_positions_m, fem::EmbeddedSurface visual_surface,
+                           const PainterOptions& options)
     : window_(window),
       scene_(scene),
       rest_positions_m_(std::move(rest_positions_m)),
+      visual_(std::move(visual_surface)),
       options_(options) {
+  // A visual surface that does not fit the body drawn (another scene's) is not used.
+  if (!visual_.empty() && visual_.nodes.maxCoeff() >= rest_positions_m_.cols())
+    visual_ = fem::EmbeddedSurface();
+  if (!visual_.empty())
+    fem::CalcEmbeddedPositions(visual_, rest_positions_m_.reshaped(), &visual_rest_m_);
   window_->setBackgroundColor(cv::viz::Color(60, 45, 40));  // a gradient cost 7 ms a picture
   Eigen::AlignedBox3d box;
   for (Eigen::Index n = 0; n < rest_positions_m_.cols(); ++n) box.extend(rest_positions_m_.col(n));
@@ -152,6 +62,7 @@ ScenePainter::ScenePainter(cv::viz::Viz3d* window, const config::Scene& scene,
     const double q_wxyz[4] = {q.w(), q.x(), q.y(), q.z()};
     window_->showWidget("rigid_" + object.name, MakeShapeWidget(object.shape, kRigid, false),
                         ToAffine(x, q_wxyz));
+    object_meshes_.push_back(MakeShapeMesh(object.shape));
     box.extend(contact::CalcWorldBox(object));
   }
   if (scene.tool) {
@@ -177,7 +88,8 @@ ScenePainter::ScenePainter(cv::viz::Viz3d* window, const config::Scene& scene,
   // by Place() when first seen.
   if (scene.tool) {
     tool_widget_ = MakeShapeWidget(scene.tool->model.shape, kTool, false);
-    ghost_widget_ = MakeShapeWidget(Inflate(scene.tool->model.shape, 0.03), kGhost, true);
+    tool_mesh_ = MakeShapeMesh(scene.tool->model.shape);
+    ghost_widget_ = MakeShapeWidget(InflateShape(scene.tool->model.shape, 0.03), kGhost, true);
   }
   if (scene.task) {
     for (const config::PalpationTarget& target : scene.task->targets) {
@@ -204,52 +116,120 @@ void ScenePainter::SetDisplacementReference(const hapsim_lcm::sim_frame_t& frame
   rest_positions_m_.resize(3, frame.num_nodes);
   for (int n = 0; n < frame.num_nodes; ++n)
     for (int d = 0; d < 3; ++d) rest_positions_m_(d, n) = frame.positions_W_m[n][d];
+  if (!visual_.empty() && visual_.nodes.maxCoeff() < frame.num_nodes)
+    fem::CalcEmbeddedPositions(visual_, rest_positions_m_.reshaped(), &visual_rest_m_);
 }
 
 void ScenePainter::DrawBody(const hapsim_lcm::sim_frame_t& frame) {
   const int num_nodes = frame.num_nodes;
   if (num_nodes == 0 || frame.num_triangles == 0) return;
-  cv::viz::Mesh mesh;
-  mesh.cloud.create(1, num_nodes, CV_32FC3);
-  cv::Mat level(1, num_nodes, CV_8UC1);
-  const bool has_rest = rest_positions_m_.cols() == num_nodes;
-  for (int n = 0; n < num_nodes; ++n) {
-    const std::vector<float>& p = frame.positions_W_m[n];
-    mesh.cloud.at<cv::Vec3f>(0, n) = cv::Vec3f(p[0], p[1], p[2]);
-    const double u_m =
-        has_rest ? (Eigen::Vector3d(p[0], p[1], p[2]) - rest_positions_m_.col(n)).norm() : 0.0;
-    level.at<uchar>(0, n) = static_cast<uchar>(
-        std::lround(255.0 * std::clamp(u_m / options_.displacement_scale_m, 0.0, 1.0)));
+  Eigen::VectorXd x_nodes_m(3 * num_nodes);
+  for (int n = 0; n < num_nodes; ++n)
+    for (int d = 0; d < 3; ++d) x_nodes_m[3 * n + d] = frame.positions_W_m[n][d];
+  // The points drawn and where they were at the displacement reference (empty: unknown).
+  Eigen::VectorXd x_points_m, rest_points_m;
+  if (!visual_.empty() && visual_.nodes.maxCoeff() < num_nodes) {
+    fem::CalcEmbeddedPositions(visual_, x_nodes_m, &x_points_m);
+    rest_points_m = visual_rest_m_;
+    body_triangles_ = visual_.triangles;
+  } else {
+    x_points_m = x_nodes_m;
+    if (rest_positions_m_.cols() == num_nodes) rest_points_m = rest_positions_m_.reshaped();
+    body_triangles_.resize(3, frame.num_triangles);
+    for (int f = 0; f < frame.num_triangles; ++f)
+      for (int k = 0; k < 3; ++k) body_triangles_(k, f) = frame.triangles[f][k];
   }
-  // Colour: the tissue tone at rest, blending linearly into a deep red at displacement_scale_m.
-  mesh.colors.create(1, num_nodes, CV_8UC3);
-  for (int n = 0; n < num_nodes; ++n) {
-    const double a = level.at<uchar>(0, n) / 255.0;
+  const int num_points = static_cast<int>(x_points_m.size() / 3);
+  body_points_W_m_ = x_points_m.reshaped(3, num_points);
+  const bool has_rest = rest_points_m.size() == x_points_m.size();
+
+  cv::viz::Mesh mesh;
+  mesh.cloud.create(1, num_points, CV_32FC3);
+  mesh.colors.create(1, num_points, CV_8UC3);
+  for (int p = 0; p < num_points; ++p) {
+    const Eigen::Vector3d x_m = x_points_m.segment<3>(3 * p);
+    mesh.cloud.at<cv::Vec3f>(0, p) = cv::Vec3f(x_m.x(), x_m.y(), x_m.z());
+    // Colour: the tissue tone at rest, blending linearly into a deep red at displacement_scale_m.
+    const double u_m = has_rest ? (x_m - rest_points_m.segment<3>(3 * p)).norm() : 0.0;
+    const double a = std::clamp(u_m / options_.displacement_scale_m, 0.0, 1.0);
     cv::Vec3b c;
     for (int k = 0; k < 3; ++k) c[k] = static_cast<uchar>((1.0 - a) * kTissue[k] + a * kDeepRed[k]);
-    mesh.colors.at<cv::Vec3b>(0, n) = c;
+    mesh.colors.at<cv::Vec3b>(0, p) = c;
   }
-  // Area-weighted vertex normals, for smooth shading of the faceted surface.
-  mesh.polygons.create(1, 4 * frame.num_triangles, CV_32SC1);
-  mesh.normals = cv::Mat::zeros(1, num_nodes, CV_32FC3);
-  for (int f = 0; f < frame.num_triangles; ++f) {
+  // Area-weighted vertex normals: smooth (Phong) shading instead of a facet per triangle.
+  const int num_triangles = static_cast<int>(body_triangles_.cols());
+  mesh.polygons.create(1, 4 * num_triangles, CV_32SC1);
+  mesh.normals = cv::Mat::zeros(1, num_points, CV_32FC3);
+  for (int f = 0; f < num_triangles; ++f) {
     mesh.polygons.at<int>(0, 4 * f) = 3;
-    const std::vector<int32_t>& t = frame.triangles[f];
+    const Eigen::Vector3i t = body_triangles_.col(f);
     for (int k = 0; k < 3; ++k) mesh.polygons.at<int>(0, 4 * f + 1 + k) = t[k];
     const cv::Vec3f a = mesh.cloud.at<cv::Vec3f>(0, t[0]), b = mesh.cloud.at<cv::Vec3f>(0, t[1]),
                     c = mesh.cloud.at<cv::Vec3f>(0, t[2]);
     const cv::Vec3f area_normal = (b - a).cross(c - a);  // twice the area, outward
     for (int k = 0; k < 3; ++k) mesh.normals.at<cv::Vec3f>(0, t[k]) += area_normal;
   }
-  for (int n = 0; n < num_nodes; ++n) {
-    cv::Vec3f& normal = mesh.normals.at<cv::Vec3f>(0, n);
+  for (int p = 0; p < num_points; ++p) {
+    cv::Vec3f& normal = mesh.normals.at<cv::Vec3f>(0, p);
     const float length = static_cast<float>(cv::norm(normal));
     if (length > 0.0f) normal /= length;
   }
-  Show("body", cv::viz::WMesh(mesh));
+  cv::viz::WMesh widget(mesh);
+  widget.setRenderingProperty(cv::viz::SHADING, cv::viz::SHADING_PHONG);
+  Show("body", widget);
 }
 
-void ScenePainter::DrawGauge(const ViewState& state) {
+std::string ScenePainter::DrawDepthCue(const hapsim_lcm::sim_frame_t& frame) {
+  if (!scene_.tool || tool_mesh_.vertices_m.cols() == 0) return "";
+  // The line starts under the tool's centre, on the tool's own lower surface (a probe's tip, the
+  // middle of a lying scope's underside).
+  const cv::Affine3d pose = ToAffine(frame.x_W_m, frame.q_WT);
+  Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) X_WT.linear()(i, j) = pose.rotation()(i, j);
+    X_WT.translation()[i] = pose.translation()[i];
+  }
+  const Matrix3Xd tool_W_m = X_WT * tool_mesh_.vertices_m;
+  const Eigen::Vector3d down_W(0.0, 0.0, -1.0);
+  const double inside_m = CastRay(X_WT.translation(), down_W, tool_W_m, tool_mesh_.triangles);
+  const Eigen::Vector3d start_W_m =
+      X_WT.translation() + (std::isfinite(inside_m) ? inside_m : 0.0) * down_W;
+  std::vector<DropSurface> surfaces;
+  if (body_points_W_m_.cols() > 0)
+    surfaces.push_back({scene_.more_bodies.empty() ? scene_.body_name : "tissue", &body_points_W_m_,
+                        &body_triangles_, Eigen::Isometry3d::Identity()});
+  const bool objects_posed = frame.num_objects == static_cast<int>(scene_.rigid_objects.size());
+  for (size_t i = 0; i < scene_.rigid_objects.size(); ++i) {
+    if (objects_posed && static_cast<int>(i) == frame.grabbed_object) continue;  // the tool's
+    Eigen::Isometry3d X_WO = scene_.rigid_objects[i].object.X_WO;
+    if (objects_posed) {
+      X_WO.translation() = Eigen::Map<const Eigen::Vector3d>(frame.object_x_W_m[i].data());
+      const std::vector<double>& q = frame.object_q_WO[i];
+      X_WO.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+    }
+    surfaces.push_back({scene_.rigid_objects[i].object.name, &object_meshes_[i].vertices_m,
+                        &object_meshes_[i].triangles, X_WO});
+  }
+  const DropHit hit = CastDropLine(start_W_m, surfaces);
+  if (!std::isfinite(hit.distance_m)) {
+    Hide("drop_line");
+    Hide("drop_ring");
+    return "depth: nothing below the tool";
+  }
+  Show("drop_line", cv::viz::WLine(ToVec(hit.from_W_m), ToVec(hit.to_W_m), kDropLine));
+  // A ring a little above the surface hit, the size of the tool's footprint, as its shadow.
+  const double radius_m =
+      0.5 * (tool_W_m.rowwise().maxCoeff() - tool_W_m.rowwise().minCoeff()).head<2>().maxCoeff();
+  cv::viz::WCircle ring(std::max(radius_m, 1e-4), 0.1 * std::max(radius_m, 1e-4), kDropLine);
+  Show("drop_ring", ring,
+       cv::Affine3d(cv::Matx33d::eye(), ToVec(hit.to_W_m + Eigen::Vector3d(0.0, 0.0, 1e-4))));
+  char line[160];
+  std::snprintf(line, sizeof(line), "depth: %.1f mm above the %s", 1e3 * hit.distance_m,
+                hit.name.c_str());
+  return line;
+}
+
+void ScenePainter::DrawGauge(const ViewState& state, const std::string& depth_line) {
   char line[256];
   const double force_N =
       state.has_haptic ? Eigen::Map<const Eigen::Vector3d>(state.haptic.force_device_W_N).norm()
@@ -273,6 +253,7 @@ void ScenePainter::DrawGauge(const ViewState& state) {
   } else {
     text += "\nloop: no state yet";
   }
+  if (!depth_line.empty()) text += "\n" + depth_line;
   if (!state.status.empty()) text += "\n" + state.status;
   Show("gauge", cv::viz::WText(text, cv::Point(10, 12), 14, cv::viz::Color::white()));
 }
@@ -341,7 +322,7 @@ void ScenePainter::Draw(const ViewState& state) {
       Hide("force");
     }
   }
-  DrawGauge(state);
+  DrawGauge(state, state.has_frame ? DrawDepthCue(state.frame) : "");
 }
 
 }  // namespace hapsim::view

@@ -14,7 +14,10 @@
 
 #include "config/scene.h"
 #include "core/eigen_types.h"
+#include "core/tool_shape.h"
+#include "fem/surface_embedding.h"
 #include "messages/adapters.h"
+#include "view/shape_widget.h"
 
 namespace hapsim::view {
 
@@ -46,8 +49,10 @@ class ScenePainter {
  public:
   // Draws the fixed parts (rigid objects, targets) and points the camera at the scene.
   // rest_positions_m: (3 × N) the body's rest node positions (for the displacement), or empty.
+  // visual_surface: the surface the tets carry that is drawn for the body (config::Body), or
+  // empty: the frame's boundary triangles are drawn.
   ScenePainter(cv::viz::Viz3d* window, const config::Scene& scene, Matrix3Xd rest_positions_m,
-               const PainterOptions& options);
+               fem::EmbeddedSurface visual_surface, const PainterOptions& options);
 
   void Draw(const ViewState& state);
   // Displacements from `frame`'s node positions from now on, instead of from the rest shape: a
@@ -55,10 +60,14 @@ class ScenePainter {
   void SetDisplacementReference(const hapsim_lcm::sim_frame_t& frame);
 
  private:
+  // The body's surface (the visual one, moved by its weights, or the boundary), smooth-shaded and
+  // coloured by displacement; keeps it in body_points_W_m_ for the drop line.
   void DrawBody(const hapsim_lcm::sim_frame_t& frame);
+  // The tool's drop line and shadow ring (view/depth_cue.h); returns the gauge's line for it.
+  std::string DrawDepthCue(const hapsim_lcm::sim_frame_t& frame);
   // The rigid objects where the frame has them, coloured when selected or grabbed.
   void DrawObjects(const hapsim_lcm::sim_frame_t& frame);
-  void DrawGauge(const ViewState& state);
+  void DrawGauge(const ViewState& state, const std::string& depth_line);
   // showWidget / removeWidget, remembering what is shown (viz asserts on removing an unknown name).
   void Show(const std::string& name, const cv::viz::Widget& widget,
             const cv::Affine3d& pose = cv::Affine3d::Identity());
@@ -69,17 +78,18 @@ class ScenePainter {
   cv::viz::Viz3d* window_;
   const config::Scene& scene_;
   Matrix3Xd rest_positions_m_;
+  fem::EmbeddedSurface visual_;
+  Eigen::VectorXd visual_rest_m_;  // (3P) the visual surface at the displacement reference
   PainterOptions options_;
+  // The body's surface as last drawn (world) and the rigid objects' meshes (own frames), for the
+  // drop line; the tool's mesh, for its lowest point.
+  Matrix3Xd body_points_W_m_;
+  Matrix3Xi body_triangles_;
+  std::vector<TriangleMesh> object_meshes_;
+  TriangleMesh tool_mesh_;
   std::set<std::string> shown_;
   cv::viz::Widget3D tool_widget_;
-  cv::viz::Widget3D ghost_widget_;  // the tool, a little larger (see Inflate), as lines
+  cv::viz::Widget3D ghost_widget_;  // the tool, a little larger (see InflateShape), as lines
 };
-
-// A viz widget of `shape` (core/tool_shape.h) in its own frame; wireframe for the ghost.
-cv::viz::Widget3D MakeShapeWidget(const ToolShape& shape, const cv::viz::Color& color,
-                                  bool wireframe);
-
-// The pose x, q (w, x, y, z) as viz wants it.
-cv::Affine3d ToAffine(const double x_W_m[3], const double q[4]);
 
 }  // namespace hapsim::view

@@ -45,7 +45,8 @@ ViewWindow::ViewWindow(const std::string& title, const config::Scene& scene, cv:
   renderer_.setWindowSize(size);
   const std::optional<config::Body> body = config::MakeSceneBody(scene);
   painter_ = std::make_unique<ScenePainter>(
-      &renderer_, scene, body ? body->model.mesh.rest_positions_m : Matrix3Xd(), options);
+      &renderer_, scene, body ? body->model.mesh.rest_positions_m : Matrix3Xd(),
+      body ? body->visual_surface : fem::EmbeddedSurface(), options);
   if (open_window) window_ = std::make_unique<X11Window>(title, size);
 }
 
