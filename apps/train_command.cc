@@ -87,7 +87,9 @@ void RunTrain(TrainOptions options) {
   if (!lcm.good()) throw std::runtime_error("LCM: cannot open " + options.lcm_url);
   view::LiveRun live(&lcm, run_id, "hapsim train");
   messages::ReceiveThread receiver(&lcm);
-  view::ViewWindow window("hapsim train: " + scene.name, scene, size, view::PainterOptions{}, true);
+  view::PainterOptions painter;
+  painter.side_view = options.side_view;
+  view::ViewWindow window("hapsim train: " + scene.name, scene, size, painter, true);
   // The handle starts where the scene's device starts, so that the tool starts at rest.
   const Eigen::Vector3d start_W_m =
       scene.trajectory.empty() ? scene.tool->initial_state.x_W_m : scene.trajectory[0].x_W_m;
@@ -154,6 +156,9 @@ void AddTrainCommand(CLI::App* app) {
                     "Folder for run.lcm, score.json, haptic_summary.json and screenshots\n"
                     "(default out/<scene>_train)");
   train->add_option("--size", options->size, "Window size")->capture_default_str();
+  train->add_flag("--side-view", options->side_view,
+                  "Add a second view from the side (an inset, top right); the mouse still moves "
+                  "the tool in the main view's plane");
   train
       ->add_option("--settle", options->settle_s,
                    "Colour displacements from the shape at this time, s (after settling)")

@@ -106,6 +106,9 @@ void AddViewCommand(CLI::App* app) {
   view->add_option("--duration", options->duration_s, "Live --video: seconds to record")
       ->check(CLI::NonNegativeNumber);
   view->add_option("--size", options->size, "Window size")->capture_default_str();
+  view->add_flag("--side-view", options->painter.side_view,
+                 "Add a second view from the side, level with the scene (an inset, top right): "
+                 "how far the tool is from the tissue, seen as height");
   view->add_option("--wait", options->wait_s, "Live: seconds to wait for the run")
       ->check(CLI::Range(0.001, 86400.0))
       ->capture_default_str();

@@ -49,8 +49,9 @@ std::string ReadMeshFile(const YamlMap& mesh, const std::string& base_dir) {
   const fs::path given = mesh.GetString("file");
   const fs::path path = given.is_absolute() ? given : fs::path(base_dir) / given;
   const std::string extension = path.extension().string();
-  if (extension != ".msh" && extension != ".node") {
-    mesh.FailKey("file", "must be a Gmsh .msh or TetGen .node file, got '" + given.string() + "'");
+  if (extension != ".msh" && extension != ".node" && extension != ".vtk") {
+    mesh.FailKey("file", "must be a Gmsh .msh, TetGen .node or legacy VTK .vtk file, got '" +
+                             given.string() + "'");
   }
   std::error_code error;
   if (!fs::is_regular_file(path, error)) mesh.FailKey("file", "no such file: " + path.string());

@@ -18,7 +18,8 @@
 //         # optional in box: graded: {focus_m: [x,y,z], ratio: 5}: cells grow linearly with the
 //         # distance from focus_m (inside the box) to `ratio` (≥ 1) times at the farthest face
 //       ellipsoid: {center_m: [..], radii_m: [..], cell_size_m: h} # radii > 0, h > 0
-//       file: meshes/liver.msh         # .msh (Gmsh, any version) or .node (TetGen, + .ele),
+//       file: meshes/liver.msh         # .msh (Gmsh, any version), .node (TetGen, + .ele) or .vtk
+//                                      # (legacy VTK unstructured grid, ASCII or binary),
 //                                      # relative to the scene file's folder
 //       surface: meshes/liver.obj      # a closed OBJ/STL surface in metres, filled with tets at
 //       cell_size_m: 0.008             # load (fem/surface_mesher.h; cached: config/

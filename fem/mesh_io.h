@@ -1,6 +1,7 @@
 #pragma once
 // Tetrahedral mesh files: readers for Gmsh MSH (every version: ASCII 2.x and 4.1 here, line by
-// line; MSH 1, 4.0 and binary 2.x / 4.x by Gmsh's own reader) and TetGen (.node + .ele),
+// line; MSH 1, 4.0 and binary 2.x / 4.x by Gmsh's own reader), TetGen (.node + .ele) and legacy
+// VTK unstructured grids (ASCII and binary),
 // writers for those and for legacy VTK (ParaView). Units are taken as they stand: coordinates in
 // files are read and written as metres.
 //
@@ -53,8 +54,16 @@ TetMesh ReadGmshMesh(const std::string& path);
 // fault.
 TetMesh ReadTetgenMesh(const std::string& node_path);
 
+// Reads a legacy VTK file (fem/vtk_reader.cc): DATASET UNSTRUCTURED_GRID, ASCII or BINARY
+// (big-endian), the classic cell layout (file versions up to 4.2) or 5.1's OFFSETS and
+// CONNECTIVITY. Tetrahedra (cell type 10) are kept; vertices, lines and surface cells (types 1-9)
+// skipped; other volume cells refused. Point and cell data are ignored. Errors name the line
+// (ASCII) and the section as key; in BINARY data, the section's line.
+TetMesh ReadVtkMesh(const std::string& path);
+
 // Reads a mesh by extension (case-insensitive): .msh -> ReadGmshMesh, .node/.ele ->
-// ReadTetgenMesh. Throws InputError (line 0) for any other extension, else what the reader throws.
+// ReadTetgenMesh, .vtk -> ReadVtkMesh. Throws InputError (line 0) for any other extension, else
+// what the reader throws.
 TetMesh ReadTetMesh(const std::string& path);
 
 // Writes `mesh` as Gmsh MSH ASCII, version 2.2 (version_major 2) or 4.1 (version_major 4), with

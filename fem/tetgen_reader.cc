@@ -160,9 +160,10 @@ TetMesh ReadTetMesh(const std::string& path) {
   const std::string extension = LowerExtension(path);
   if (extension == ".msh") return ReadGmshMesh(path);
   if (extension == ".node" || extension == ".ele") return ReadTetgenMesh(path);
+  if (extension == ".vtk") return ReadVtkMesh(path);
   throw InputError(path, 0, "",
                    "unknown mesh file extension '" + extension +
-                       "'; expected .msh (Gmsh) or .node/.ele (TetGen)");
+                       "'; expected .msh (Gmsh), .node/.ele (TetGen) or .vtk (legacy VTK)");
 }
 
 }  // namespace hapsim::fem

@@ -20,7 +20,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
-readonly ALL_TARGETS="scene gmsh tetgen obj stl surface_mesher lcm_log device_state device_force haptic_state
+readonly ALL_TARGETS="scene gmsh tetgen vtk obj stl surface_mesher lcm_log device_state device_force haptic_state
 contact_model sim_frame run_info"
 # Per-input limits: one input taking this long is a hang; an allocation above malloc_limit is an
 # unbounded count field (issue 9: every reader checks counts against the bytes that remain).

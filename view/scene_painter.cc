@@ -27,11 +27,12 @@ const cv::viz::Color kTargetReached(60, 200, 60);
 const cv::viz::Color kDropLine(40, 220, 250);  // the tool's drop line and shadow ring
 
 // A camera looking at the middle of the scene's bounding box from the front, above and to the
-// side, far enough to hold the whole box.
-cv::Affine3d MakeCameraPose(const Eigen::AlignedBox3d& box) {
+// side (or, for the side view, level from the front along +y), far enough to hold the whole box.
+cv::Affine3d MakeCameraPose(const Eigen::AlignedBox3d& box, bool side) {
   const Eigen::Vector3d centre = box.center();
   const double size = std::max(box.diagonal().norm(), 0.02);
-  const Eigen::Vector3d eye = centre + size * Eigen::Vector3d(0.6, -1.5, 0.9);
+  const Eigen::Vector3d eye =
+      centre + size * (side ? Eigen::Vector3d(0.0, -1.2, 0.0) : Eigen::Vector3d(0.6, -1.5, 0.9));
   // viz cameras follow OpenCV's convention, y pointing down the image: world z up is −y.
   return cv::viz::makeCameraPose(ToVec(eye), ToVec(centre), cv::Vec3d(0, 0, -1));
 }
@@ -70,7 +71,7 @@ ScenePainter::ScenePainter(cv::viz::Viz3d* window, const config::Scene& scene,
     box.extend(scene.tool->initial_state.x_W_m + Eigen::Vector3d::Constant(radius_m));
     box.extend(scene.tool->initial_state.x_W_m - Eigen::Vector3d::Constant(radius_m));
   }
-  window_->setViewerPose(MakeCameraPose(box));
+  window_->setViewerPose(MakeCameraPose(box, options_.side_camera));
   if (!(options_.displacement_scale_m > 0.0)) {
     options_.displacement_scale_m = 0.005;
     if (rest_positions_m_.cols() > 0) {
@@ -322,7 +323,8 @@ void ScenePainter::Draw(const ViewState& state) {
       Hide("force");
     }
   }
-  DrawGauge(state, state.has_frame ? DrawDepthCue(state.frame) : "");
+  const std::string depth_line = state.has_frame ? DrawDepthCue(state.frame) : "";
+  if (!options_.side_camera) DrawGauge(state, depth_line);  // the side view is an inset
 }
 
 }  // namespace hapsim::view

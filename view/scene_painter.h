@@ -43,6 +43,12 @@ struct PainterOptions {
   double displacement_scale_m = 0.0;  // displacement drawn in the deepest red, m
   double force_scale_m_N = 0.0;       // length of the force arrow per newton, m/N
   double force_gauge_N = 0.0;         // full scale of the on-screen gauge, N
+  // The view's camera looks from the side, level with the scene's middle, along +y (the second,
+  // orthogonal view: depth towards the organ as height on the screen), instead of from the front,
+  // above and aside.
+  bool side_camera = false;
+  // ViewWindow: add the side view as an inset in the picture's top-right corner.
+  bool side_view = false;
 };
 
 class ScenePainter {

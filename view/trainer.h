@@ -27,6 +27,7 @@ struct TrainOptions {
   std::string size = "800x600";
   double settle_s = 1.0;        // displacements are coloured from the shape at this time
   double depth_step_m = 0.002;  // per wheel notch or key press
+  bool side_view = false;       // a second view from the side, as an inset (PainterOptions)
 };
 
 // Where each target is on the screen, and how far the tool must go down to touch it (for the

@@ -2,9 +2,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <stdexcept>
 
@@ -44,15 +46,37 @@ ViewWindow::ViewWindow(const std::string& title, const config::Scene& scene, cv:
   renderer_.setOffScreenRendering();
   renderer_.setWindowSize(size);
   const std::optional<config::Body> body = config::MakeSceneBody(scene);
-  painter_ = std::make_unique<ScenePainter>(
-      &renderer_, scene, body ? body->model.mesh.rest_positions_m : Matrix3Xd(),
-      body ? body->visual_surface : fem::EmbeddedSurface(), options);
+  const Matrix3Xd rest_m = body ? body->model.mesh.rest_positions_m : Matrix3Xd();
+  const fem::EmbeddedSurface visual = body ? body->visual_surface : fem::EmbeddedSurface();
+  painter_ = std::make_unique<ScenePainter>(&renderer_, scene, rest_m, visual, options);
+  if (options.side_view) {
+    side_renderer_ = std::make_unique<cv::viz::Viz3d>(title + " (side renderer)");
+    side_renderer_->setOffScreenRendering();
+    side_renderer_->setWindowSize(
+        cv::Size(std::max(size.width / 3, 64), std::max(size.height / 3, 64)));
+    PainterOptions side = options;
+    side.side_camera = true;
+    side_painter_ =
+        std::make_unique<ScenePainter>(side_renderer_.get(), scene, rest_m, visual, side);
+  }
   if (open_window) window_ = std::make_unique<X11Window>(title, size);
 }
 
 const cv::Mat& ViewWindow::Show(const ViewState& state) {
   painter_->Draw(state);
   picture_ = renderer_.getScreenshot();  // renders
+  if (side_painter_) {
+    // The side view (no gauge of its own), framed, in the top-right corner.
+    side_painter_->Draw(state);
+    const cv::Mat side = side_renderer_->getScreenshot();
+    const int width = std::min(side.cols, picture_.cols),
+              height = std::min(side.rows, picture_.rows);
+    const cv::Rect inset(picture_.cols - width, 0, width, height);
+    side(cv::Rect(0, 0, width, height)).copyTo(picture_(inset));
+    cv::rectangle(picture_, inset, cv::Scalar(200, 200, 200), 1);
+    cv::putText(picture_, "side", inset.tl() + cv::Point(6, 16), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                cv::Scalar(220, 220, 220), 1, cv::LINE_AA);
+  }
   if (window_) window_->Show(picture_);
   return picture_;
 }

@@ -23,8 +23,9 @@ class ViewWindow {
  public:
   // Sets up the renderer at `size` and draws the scene's fixed parts; opens a window titled
   // `title` when `open_window` (an interactive view; screenshots and videos need none). The
-  // body's rest positions come from building the scene's deformable object. `scene` must
-  // outlive the view.
+  // body's rest positions and visual surface come from building the scene's deformable objects.
+  // With options.side_view a second renderer draws the scene from the side, shown as an inset a
+  // third of the picture's size in its top-right corner. `scene` must outlive the view.
   ViewWindow(const std::string& title, const config::Scene& scene, cv::Size size,
              const PainterOptions& options, bool open_window);
 
@@ -33,6 +34,7 @@ class ViewWindow {
   // Colour displacements from this frame's shape (ScenePainter::SetDisplacementReference).
   void SetDisplacementReference(const hapsim_lcm::sim_frame_t& frame) {
     painter_->SetDisplacementReference(frame);
+    if (side_painter_) side_painter_->SetDisplacementReference(frame);
   }
   // The window's events since the last call; none without a window.
   std::vector<WindowEvent> Poll();
@@ -50,6 +52,8 @@ class ViewWindow {
  private:
   cv::viz::Viz3d renderer_;
   std::unique_ptr<ScenePainter> painter_;
+  std::unique_ptr<cv::viz::Viz3d> side_renderer_;  // with options.side_view
+  std::unique_ptr<ScenePainter> side_painter_;
   std::unique_ptr<X11Window> window_;
   cv::Mat picture_;
   cv::VideoWriter video_;

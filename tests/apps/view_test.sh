@@ -93,6 +93,23 @@ print(f"tissue redness {red(start, mask):.3f} at 0 s, {red(pressed, mask):.3f} a
 assert red(pressed, mask) > red(start, mask) + 0.04, "no displacement colour where the block is pressed"
 PY
 
+# 2b. The second, side view (--side-view): an inset in the top-right third that shows the tool and
+# the tissue, where the picture without it shows neither.
+"$hapsim" view "$work/run.lcm" --screenshot "$work/side.png" --at 0 --size 800x600 --side-view \
+  > "$work/side.out" 2>&1 || fail "side view: $(cat "$work/side.out")"
+/usr/bin/python3 - "$work/side.png" "$work/colour_0.png" <<'PY'
+import sys
+import matplotlib.image as image
+side, plain = (image.imread(p)[:, :, :3] for p in sys.argv[1:3])
+inset = lambda img: img[: 600 // 3, 800 - 800 // 3 :]
+tool = lambda img: ((img[:, :, 2] > img[:, :, 0] + 0.15) & (img[:, :, 1] > img[:, :, 0] + 0.1)).mean()
+tissue = lambda img: ((img[:, :, 0] > img[:, :, 1] + 0.08) & (img[:, :, 0] > img[:, :, 2] + 0.08)).mean()
+print(f"side inset: tool {tool(inset(side)):.3f}, tissue {tissue(inset(side)):.3f}; "
+      f"without it: {tool(inset(plain)):.3f}, {tissue(inset(plain)):.3f}")
+assert tool(inset(side)) > 0.005 and tissue(inset(side)) > 0.02, "the inset shows no tool or tissue"
+assert tool(inset(plain)) < 0.001 and tissue(inset(plain)) < 0.001, "the plain picture's corner is not empty"
+PY
+
 # 3. A video of the log, and playback keys in the window.
 "$hapsim" view "$work/run.lcm" --video "$work/run.avi" --fps 10 --size 320x240 > "$work/video.out" 2>&1 ||
   fail "video: $(cat "$work/video.out")"

@@ -540,5 +540,77 @@ TEST_F(MeshIoTest, VtkHasHeaderCountsAndFields) {
                InputError);
 }
 
+// Legacy VTK (ReadVtkMesh): our own writer's file, the files Gmsh writes (ASCII and big-endian
+// binary, with its surface triangles and points among the cells), and a hand-written 5.1 file
+// (OFFSETS / CONNECTIVITY) all give the same nodes and tets.
+TEST_F(MeshIoTest, VtkFilesGiveTheSameMesh) {
+  const TetMesh mesh = MakeTwoCubeMesh();
+  WriteVtkTetMesh(mesh.rest_positions_m, mesh.tets, {}, PathOf("ours.vtk"));
+  ExpectSameMesh(mesh, ReadVtkMesh(PathOf("ours.vtk")));
+  ExpectSameMesh(mesh, ReadTetMesh(PathOf("ours.vtk")));
+  WriteGmshMesh(mesh, PathOf("ours.msh"), 4);
+  gmsh::initialize(0, nullptr, false);
+  gmsh::option::setNumber("General.Terminal", std::getenv("HAPSIM_GMSH_VERBOSE") ? 1 : 0);
+  gmsh::open(PathOf("ours.msh"));
+  for (const int binary : {0, 1}) {
+    gmsh::option::setNumber("Mesh.Binary", binary);
+    gmsh::write(PathOf(binary ? "gmsh_binary.vtk" : "gmsh_ascii.vtk"));
+  }
+  gmsh::finalize();
+  EXPECT_NE(ReadText(PathOf("gmsh_binary.vtk")).find("\nBINARY\n"), std::string::npos);
+  ExpectSameMesh(mesh, ReadVtkMesh(PathOf("gmsh_binary.vtk")));  // doubles, bit for bit
+  const TetMesh ascii = ReadVtkMesh(PathOf("gmsh_ascii.vtk"));
+  EXPECT_EQ(ascii.tets, mesh.tets);
+  ASSERT_EQ(ascii.rest_positions_m.cols(), mesh.rest_positions_m.cols());
+  EXPECT_LT((ascii.rest_positions_m - mesh.rest_positions_m).cwiseAbs().maxCoeff(), 1e-15);
+
+  // Version 5.1: one tet and one triangle, offsets and connectivity.
+  const TetMesh one = ReadVtkMesh(Write("v51.vtk", R"(# vtk DataFile Version 5.1
+a tet and a face
+ASCII
+DATASET UNSTRUCTURED_GRID
+POINTS 4 float
+0 0 0 1 0 0 0 1 0
+0 0 1
+METADATA
+INFORMATION 0
+
+CELLS 3 7
+OFFSETS vtktypeint64
+0 4 7
+CONNECTIVITY vtktypeint64
+0 1 2 3 0 1 2
+CELL_TYPES 2
+10
+5
+)"));
+  ASSERT_EQ(one.num_tets(), 1);
+  EXPECT_NEAR(CalcSignedVolume(one.rest_positions_m, one.tets.col(0)), 1.0 / 6.0, 1e-15);
+}
+
+TEST_F(MeshIoTest, BadVtkFilesAreRefusedAtTheirLine) {
+  const std::string head =
+      "# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n"
+      "0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+  const std::vector<MalformedCase> cases = {
+      {"not vtk", "solid x\n", 1, "header", "not a legacy VTK file"},
+      {"polydata",
+       "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 1 float\n0 0 0\n", 4,
+       "DATASET", "UNSTRUCTURED_GRID"},
+      {"hexahedron", head + "CELLS 1 9\n8 0 1 2 3 0 1 2 3\nCELL_TYPES 1\n12\n", 13, "CELL_TYPES",
+       "VTK type 12"},
+      {"huge count", head + "CELLS 1000000000 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n", 10, "CELLS",
+       "is more than the cells' size"},
+      {"bad coordinate",
+       "# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 double\n0 x 0\n",
+       6, "POINTS", "finite number"},
+      {"missing point", head + "CELLS 1 5\n4 0 1 2 7\nCELL_TYPES 1\n10\n", 11, "CELLS", "7"},
+      {"no tets", head + "CELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n5\n", 13, "CELL_TYPES",
+       "no tetrahedra"},
+  };
+  for (size_t i = 0; i < cases.size(); ++i)
+    ExpectInputError(Write("bad" + std::to_string(i) + ".vtk", cases[i].text), cases[i]);
+}
+
 }  // namespace
 }  // namespace hapsim::fem
