@@ -105,7 +105,8 @@ void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
   statistics_ = DetectionStatistics();
   // The surface's positions: the nodes themselves, or the embedded points, computed here or, when
   // the tree is not refitted, at the refit (the same positions, by the caller's contract).
-  const Eigen::VectorXd& s_start_m = (refit_tree || embedded_.empty())
+  const bool points_cached = points_start_m_.size() == 3 * embedded_.num_points();
+  const Eigen::VectorXd& s_start_m = (refit_tree || embedded_.empty() || !points_cached)
                                          ? SurfacePositions(x_start_m, &points_start_m_)
                                          : points_start_m_;
   if (options_.continuous) {
@@ -169,6 +170,7 @@ void CollisionDetector::ExpandEmbeddedContacts(std::vector<Contact>* contacts) c
         weights[slot] += w;
       }
     }
+    std::copy(contact.nodes.begin(), contact.nodes.begin() + 3, contact.surface_points.begin());
     contact.nodes = nodes;
     contact.weights = weights;
     contact.embedded = true;

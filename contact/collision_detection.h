@@ -109,7 +109,8 @@ class CollisionDetector {
   // x_start_m, x_end_m: (3N) stacked node positions, world, m. Throws std::invalid_argument on a
   // size mismatch.
   // refit_tree = false skips step 1: the tree was refitted to x_start_m already (by an earlier
-  // Detect or by Refit), as when the same body positions are searched at 1 kHz between frames.
+  // Detect or by Refit), as when the same body positions are searched at 1 kHz between frames;
+  // on an embedded surface the points computed then are used, and x_start_m only until they are.
   void Detect(const Eigen::VectorXd& x_start_m, const Eigen::Isometry3d& X_WT_start,
               const Eigen::VectorXd& x_end_m, const Eigen::Isometry3d& X_WT_end,
               std::vector<Contact>* contacts, bool refit_tree = true);

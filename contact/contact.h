@@ -40,6 +40,9 @@ struct Contact {
   std::array<int, kMaxContactNodes> nodes = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
   std::array<double, kMaxContactNodes> weights = {};
   bool embedded = false;  // the body point lies on an embedded collision surface
+  // Embedded: the one to three points of the collision surface that carry the body point (before
+  // their tets' nodes replaced them), −1 unused: what names the contact from frame to frame.
+  std::array<int, 3> surface_points = {-1, -1, -1};
   bool on_tool = true;    // false: a body node against a rigid object
   int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none
 

@@ -24,7 +24,7 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
   J.J_v.resize(num_rows, 3);
   J.J_w.resize(num_rows, 3);
   std::vector<Eigen::Triplet<double>> body_entries;
-  body_entries.reserve(static_cast<size_t>(num_rows) * 9);
+  body_entries.reserve(static_cast<size_t>(num_rows) * 3 * kMaxContactNodes);
   for (size_t i = 0; i < contacts.size(); ++i) {
     const Contact& contact = contacts[i];
     Eigen::Vector3d directions[3];

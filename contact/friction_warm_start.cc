@@ -7,8 +7,10 @@
 namespace hapsim::contact {
 
 FrictionWarmStart::Identity FrictionWarmStart::IdentityOf(const Contact& contact) {
-  return {contact.nodes[0], contact.nodes[1], contact.nodes[2], contact.rigid_object,
-          contact.on_tool ? 1 : 0};
+  // An embedded contact's first nodes are its first point's tet's, shared by its neighbours: its
+  // surface points name it.
+  const int* names = contact.embedded ? contact.surface_points.data() : contact.nodes.data();
+  return {names[0], names[1], names[2], contact.rigid_object, contact.on_tool ? 1 : 0};
 }
 
 void FrictionWarmStart::Record(const std::vector<Contact>& contacts,

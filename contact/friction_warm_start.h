@@ -7,11 +7,12 @@
 // states again every frame: a median of 34 sweeps a solve on block_press_friction, 17.5 with
 // this start (frames.csv's solver_iterations, 2026-11-27).
 // This carries a contact's impulse over when the new frame has a contact of the same identity:
-// the same body nodes (weights may differ), the same rigid object, the same side (on the tool or
-// not). The normal impulse is kept; the tangential one is kept as a world vector and projected
-// onto the new tangent plane (the normal may have turned), then written in the new tangents
-// (CalcTangents). Contacts with no body node (the tool on a rigid object) have no identity that
-// survives a frame and start at zero, as do identities found twice in either frame.
+// the same body nodes (on an embedded collision surface: the same surface points; weights may
+// differ), the same rigid object, the same side (on the tool or not). The normal impulse is kept;
+// the tangential one is kept as a world vector and projected onto the new tangent plane (the normal
+// may have turned), then written in the new tangents (CalcTangents). Contacts with no body node
+// (the tool on a rigid object) have no identity that survives a frame and start at zero, as do
+// identities found twice in either frame.
 //
 // The start only speeds the solve up when the solve converges: the solver clamps it to be
 // admissible and stops on the same residual, so it returns the cold start's solution to that

@@ -69,7 +69,7 @@ struct VisualFrameOptions {
   CouplingParams coupling;
   DetectionOptions detection;
   ResponseOptions response;
-  double sanity_tolerance_m = 1e-4;  // nodes deeper than this inside the tool are moved out
+  double sanity_tolerance_m = 1e-4;  // nodes (embedded points) deeper inside the tool move out
   ComplianceMethod compliance = ComplianceMethod::kWarped;
   // CG's relative tolerance for the contact correction A_u⁻¹ Δt J_uᵀ λ, or the scene's solver
   // tolerance where that is looser; 0: the scene's. Looser than the free step's 1e-6 because

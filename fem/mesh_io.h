@@ -56,9 +56,10 @@ TetMesh ReadTetgenMesh(const std::string& node_path);
 
 // Reads a legacy VTK file (fem/vtk_reader.cc): DATASET UNSTRUCTURED_GRID, ASCII or BINARY
 // (big-endian), the classic cell layout (file versions up to 4.2) or 5.1's OFFSETS and
-// CONNECTIVITY. Tetrahedra (cell type 10) are kept; vertices, lines and surface cells (types 1-9)
-// skipped; other volume cells refused. Point and cell data are ignored. Errors name the line
-// (ASCII) and the section as key; in BINARY data, the section's line.
+// CONNECTIVITY. Tetrahedra (cell type 10) are kept; points, lines and surface cells (types 1-9,
+// 21-23) skipped; every other type refused. Point and cell data are ignored. Errors name the
+// section as key and, in ASCII, the line; a node's or tet's problem found after reading (a
+// missing point, a degenerate tet) is at line 0 in BINARY data and 5.1's arrays.
 TetMesh ReadVtkMesh(const std::string& path);
 
 // Reads a mesh by extension (case-insensitive): .msh -> ReadGmshMesh, .node/.ele ->

@@ -59,29 +59,52 @@ void MeshTextReader::Fail(const std::string& key, const std::string& message) co
   throw InputError(path_, line_number_, key, message);
 }
 
-long long MeshTextReader::ParseInteger(const std::string& token, const std::string& key,
-                                       const std::string& what) const {
+NumberStatus ParseIntegerToken(const std::string& token, long long* value) {
   const char* first = NumberStart(token);
   const char* last = token.data() + token.size();
+  const auto [end, error] = std::from_chars(first, last, *value);
+  if (error == std::errc::result_out_of_range) return NumberStatus::kOutOfRange;
+  if (error != std::errc() || end != last) return NumberStatus::kNotANumber;
+  return NumberStatus::kOk;
+}
+
+NumberStatus ParseRealToken(const std::string& token, double* value) {
+  const char* first = NumberStart(token);
+  const char* last = token.data() + token.size();
+  const auto [end, error] = std::from_chars(first, last, *value);
+  if (error == std::errc::result_out_of_range) return NumberStatus::kOutOfRange;
+  if (error != std::errc() || end != last) return NumberStatus::kNotANumber;
+  if (!std::isfinite(*value)) return NumberStatus::kNotFinite;
+  return NumberStatus::kOk;
+}
+
+long long MeshTextReader::ParseInteger(const std::string& token, const std::string& key,
+                                       const std::string& what) const {
   long long value = 0;
-  const auto [end, error] = std::from_chars(first, last, value);
-  if (error == std::errc::result_out_of_range) Fail(key, what + " '" + token + "' is out of range");
-  if (error != std::errc() || end != last)
-    Fail(key, "expected an integer for " + what + ", found '" + token + "'");
+  switch (ParseIntegerToken(token, &value)) {
+    case NumberStatus::kOk:
+      break;
+    case NumberStatus::kOutOfRange:
+      Fail(key, what + " '" + token + "' is out of range");
+    default:
+      Fail(key, "expected an integer for " + what + ", found '" + token + "'");
+  }
   return value;
 }
 
 double MeshTextReader::ParseReal(const std::string& token, const std::string& key,
                                  const std::string& what) const {
-  const char* first = NumberStart(token);
-  const char* last = token.data() + token.size();
   double value = 0.0;
-  const auto [end, error] = std::from_chars(first, last, value);
-  if (error == std::errc::result_out_of_range)
-    Fail(key, what + " '" + token + "' is out of the range of a double");
-  if (error != std::errc() || end != last)
-    Fail(key, "expected a number for " + what + ", found '" + token + "'");
-  if (!std::isfinite(value)) Fail(key, what + " is not finite ('" + token + "')");
+  switch (ParseRealToken(token, &value)) {
+    case NumberStatus::kOk:
+      break;
+    case NumberStatus::kOutOfRange:
+      Fail(key, what + " '" + token + "' is out of the range of a double");
+    case NumberStatus::kNotFinite:
+      Fail(key, what + " is not finite ('" + token + "')");
+    default:
+      Fail(key, "expected a number for " + what + ", found '" + token + "'");
+  }
   return value;
 }
 

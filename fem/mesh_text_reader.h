@@ -12,6 +12,12 @@
 
 namespace hapsim::fem::internal {
 
+// Parses all of `token` as an integer or a finite real with std::from_chars (independent of the
+// locale; a leading '+' allowed). kOutOfRange: beyond long long or double (subnormals included).
+enum class NumberStatus { kOk, kNotANumber, kOutOfRange, kNotFinite };
+NumberStatus ParseIntegerToken(const std::string& token, long long* value);
+NumberStatus ParseRealToken(const std::string& token, double* value);
+
 // Reads a text file line by line, keeping the 1-based number of the current line so errors can
 // point at it.
 class MeshTextReader {

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -27,7 +28,8 @@ Vector4d CalcBarycentric(const TetMesh& mesh, int t, const Vector3d& p_m) {
   return Vector4d(1.0 - lambda.sum(), lambda.x(), lambda.y(), lambda.z());
 }
 
-// Distance from p to tet t (0 inside): the nearest of its four faces' closest points.
+// Distance from p to the surface of tet t: the nearest of its four faces' closest points (for a
+// point outside the tet, its distance to the tet).
 double CalcDistanceToTet(const TetMesh& mesh, int t, const Vector3d& p_m) {
   static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   const Matrix3Xd& X = mesh.rest_positions_m;
@@ -45,12 +47,16 @@ double CalcDistanceToTet(const TetMesh& mesh, int t, const Vector3d& p_m) {
 // (compressed rows: the tets of cell c are tets_[first_[c] .. first_[c + 1])).
 class TetGrid {
  public:
-  TetGrid(const TetMesh& mesh, double cell_m) : cell_m_(cell_m) {
+  // Cells about `edge_m` across, larger where the tets are spread thin (pieces far apart): at
+  // most ~8 cells per tet, whatever the mesh's extent.
+  TetGrid(const TetMesh& mesh, double edge_m) {
     Eigen::AlignedBox3d box;
     for (int n = 0; n < mesh.num_nodes(); ++n) box.extend(Vector3d(mesh.rest_positions_m.col(n)));
     origin_m_ = box.min();
-    dims_ = ((box.max() - box.min()) / cell_m_).array().floor().cast<int>() + 1;
-    std::vector<std::vector<int>> cells(static_cast<size_t>(dims_.prod()));
+    const Vector3d extent_m = (box.max() - box.min()).cwiseMax(edge_m);
+    cell_m_ = std::max(edge_m, std::cbrt(extent_m.prod() / (8.0 * mesh.num_tets() + 1.0)));
+    dims_ = ((extent_m / cell_m_).array().floor() + 1.0).cast<int>();
+    std::vector<std::vector<int>> cells(static_cast<size_t>(dims_.cast<std::int64_t>().prod()));
     for (int t = 0; t < mesh.num_tets(); ++t) {
       Eigen::AlignedBox3d tet_box;
       for (int a = 0; a < 4; ++a)
@@ -78,9 +84,10 @@ class TetGrid {
   }
 
  private:
+  // Clamped in double before the cast: a point far off the grid stays a defined cell.
   Eigen::Vector3i CellOf(const Vector3d& p_m) const {
-    const Eigen::Vector3i cell = ((p_m - origin_m_) / cell_m_).array().floor().cast<int>();
-    return cell.cwiseMax(0).cwiseMin(dims_ - Eigen::Vector3i::Ones());
+    const Eigen::Array3d cell = ((p_m - origin_m_) / cell_m_).array().floor();
+    return cell.max(0.0).min((dims_ - Eigen::Vector3i::Ones()).cast<double>().array()).cast<int>();
   }
 
   double cell_m_;
@@ -89,6 +96,51 @@ class TetGrid {
   std::vector<int> first_;
   std::vector<int> tets_;
 };
+
+// The tet that contains p: of those that touch it (weights ≥ −1e-9: a point on a shared face
+// belongs to either), the one whose smallest weight is largest; −1 if none.
+int FindContainingTet(const TetMesh& mesh, const TetGrid& grid, const Vector3d& p_m) {
+  constexpr double kInsideTolerance = 1e-9;
+  int best_tet = -1;
+  double best_min_weight = -kInsideTolerance;
+  grid.ForEachCell(Eigen::AlignedBox3d(p_m, p_m), [&](int cell) {
+    grid.ForEachTet(cell, [&](int t) {
+      const double min_weight = CalcBarycentric(mesh, t, p_m).minCoeff();
+      if (min_weight >= best_min_weight) {
+        best_min_weight = min_weight;
+        best_tet = t;
+      }
+    });
+  });
+  return best_tet;
+}
+
+// The tet nearest p among those whose boxes come within reach_m of it, and its distance; −1 if
+// none. Of tets as near to round-off (p nearest a shared edge or node), the one whose weights
+// stay smallest: a sliver's extrapolated weights can reach tens, and with them the contact rows'
+// entries.
+int FindNearestTet(const TetMesh& mesh, const TetGrid& grid, const Vector3d& p_m, double reach_m,
+                   double* distance_m) {
+  int best_tet = -1;
+  double best_distance_m = std::numeric_limits<double>::infinity();
+  double best_max_weight = std::numeric_limits<double>::infinity();
+  const double tie_m = 1e-9 * std::max(1.0, p_m.cwiseAbs().maxCoeff());
+  const Vector3d reach = Vector3d::Constant(reach_m);
+  grid.ForEachCell(Eigen::AlignedBox3d(p_m - reach, p_m + reach), [&](int cell) {
+    grid.ForEachTet(cell, [&](int t) {
+      const double distance = CalcDistanceToTet(mesh, t, p_m);
+      if (distance > best_distance_m + tie_m) return;
+      const double max_weight = CalcBarycentric(mesh, t, p_m).cwiseAbs().maxCoeff();
+      if (distance < best_distance_m - tie_m || max_weight < best_max_weight) {
+        best_distance_m = std::min(best_distance_m, distance);
+        best_max_weight = max_weight;
+        best_tet = t;
+      }
+    });
+  });
+  *distance_m = best_distance_m;
+  return best_tet;
+}
 
 double CalcMeanEdgeLength(const TetMesh& mesh) {
   static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
@@ -117,7 +169,6 @@ EmbeddedSurface EmbedSurface(const TetMesh& mesh, const Matrix3Xd& vertices_m,
     throw std::invalid_argument("a triangle of the surface to embed names a vertex out of range");
   if (!(max_outside_m >= 0.0)) throw std::invalid_argument("max_outside_m must be >= 0");
 
-  constexpr double kInsideTolerance = 1e-9;  // a point on a shared face belongs to either tet
   const TetGrid grid(mesh, std::max(CalcMeanEdgeLength(mesh), 1e-12));
   EmbeddedSurface surface;
   surface.triangles = triangles;
@@ -127,49 +178,26 @@ EmbeddedSurface EmbedSurface(const TetMesh& mesh, const Matrix3Xd& vertices_m,
   found.max_allowed_m = max_outside_m;
   for (Eigen::Index p = 0; p < num_points; ++p) {
     const Vector3d p_m = vertices_m.col(p);
-    // Inside: the tet whose smallest weight is largest (the most inside of those that touch p).
-    int best_tet = -1;
-    Vector4d best_weights;
-    double best_min_weight = -kInsideTolerance;
-    grid.ForEachCell(Eigen::AlignedBox3d(p_m, p_m), [&](int cell) {
-      grid.ForEachTet(cell, [&](int t) {
-        const Vector4d w = CalcBarycentric(mesh, t, p_m);
-        if (w.minCoeff() >= best_min_weight) {
-          best_min_weight = w.minCoeff();
-          best_tet = t;
-          best_weights = w;
-        }
-      });
-    });
-    if (best_tet < 0) {  // outside: the nearest tet within max_outside_m
-      double best_distance_m = std::numeric_limits<double>::infinity();
-      const Vector3d reach = Vector3d::Constant(max_outside_m);
-      grid.ForEachCell(Eigen::AlignedBox3d(p_m - reach, p_m + reach), [&](int cell) {
-        grid.ForEachTet(cell, [&](int t) {
-          const double distance_m = CalcDistanceToTet(mesh, t, p_m);
-          if (distance_m < best_distance_m) {
-            best_distance_m = distance_m;
-            best_tet = t;
-          }
-        });
-      });
-      if (best_tet < 0 || best_distance_m > max_outside_m) {
+    int tet = FindContainingTet(mesh, grid, p_m);
+    if (tet < 0) {
+      double distance_m = 0.0;
+      tet = FindNearestTet(mesh, grid, p_m, max_outside_m, &distance_m);
+      if (tet < 0 || distance_m > max_outside_m) {
         std::ostringstream message;
         message << "surface vertex " << p + 1 << " at (" << p_m.x() << ", " << p_m.y() << ", "
                 << p_m.z() << ") m lies "
-                << (best_tet < 0 ? "more than " + std::to_string(max_outside_m)
-                                 : std::to_string(best_distance_m))
-                << " m outside every tet (at most " << max_outside_m
-                << " m, half the tets' mean edge, is taken): is the surface in the mesh's units "
+                << (tet < 0 ? "more than " + std::to_string(max_outside_m)
+                            : std::to_string(distance_m))
+                << " m outside every tet (the limit is " << max_outside_m
+                << " m; scenes take half the tets' mean edge): is the surface in the mesh's units "
                    "and placement?";
         throw std::invalid_argument(message.str());
       }
-      best_weights = CalcBarycentric(mesh, best_tet, p_m);
       ++found.num_outside;
-      found.max_outside_m = std::max(found.max_outside_m, best_distance_m);
+      found.max_outside_m = std::max(found.max_outside_m, distance_m);
     }
-    surface.nodes.col(p) = mesh.tets.col(best_tet);
-    surface.weights.col(p) = best_weights;
+    surface.nodes.col(p) = mesh.tets.col(tet);
+    surface.weights.col(p) = CalcBarycentric(mesh, tet, p_m);
   }
   if (report != nullptr) *report = found;
   return surface;

@@ -101,26 +101,15 @@ class VtkCursor {
                          const std::string& what) const {
     if (token.empty()) Fail(key, "unexpected end of file: expected " + what);
     long long value = 0;
-    std::size_t used = 0;
-    try {
-      value = std::stoll(token, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != token.size()) Fail(key, what + " must be an integer, found '" + token + "'");
+    if (internal::ParseIntegerToken(token, &value) != internal::NumberStatus::kOk)
+      Fail(key, what + " must be an integer of 64 bits, found '" + token + "'");
     return value;
   }
   double ParseReal(const std::string& token, const std::string& key,
                    const std::string& what) const {
     if (token.empty()) Fail(key, "unexpected end of file: expected " + what);
     double value = 0.0;
-    std::size_t used = 0;
-    try {
-      value = std::stod(token, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != token.size() || !std::isfinite(value))
+    if (internal::ParseRealToken(token, &value) != internal::NumberStatus::kOk)
       Fail(key, what + " must be a finite number, found '" + token + "'");
     return value;
   }
@@ -195,6 +184,13 @@ class ValueReader {
   std::size_t size_ = 0;
 };
 
+// Points, lines and surface cells, linear or quadratic (VTK_VERTEX .. VTK_QUAD = 1..9,
+// VTK_QUADRATIC_EDGE, _TRIANGLE, _QUAD = 21..23): a volume mesh's boundary or markers, skipped.
+// Every other type is a volume cell hapsim cannot use (or unknown): dropping it would leave a hole.
+bool IsSkippedCellType(long long type) {
+  return (type >= 1 && type <= 9) || (type >= 21 && type <= 23);
+}
+
 // The next keyword section: skips tokens until one of `keywords` (upper case), returning it, or ""
 // at end of file.
 std::string NextSection(VtkCursor* cursor, const std::vector<std::string>& keywords) {
@@ -259,7 +255,7 @@ TetMesh ReadVtkMesh(const std::string& path) {
     long long read = 0;
     for (long long c = 0; c < cells_a; ++c) {
       const long long count = values.Integer("a cell's point count");
-      if (count < 0 || read + 1 + count > cells_b)
+      if (count < 0 || count > cells_b - read - 1)  // read < cells_b here: no overflow
         cursor.Fail("CELLS", "cell " + std::to_string(c) + " overruns the declared size " +
                                  std::to_string(cells_b));
       std::vector<long long> cell;
@@ -314,11 +310,11 @@ TetMesh ReadVtkMesh(const std::string& path) {
       RawTet tet{c, {}, cell_lines[c]};
       std::copy(cells[c].begin(), cells[c].end(), tet.nodes.begin());
       tets.push_back(tet);
-    } else if (type >= 11 || type < 1) {
+    } else if (!IsSkippedCellType(type)) {
       cursor.Fail("CELL_TYPES", "cell " + std::to_string(c) + " is of VTK type " +
                                     std::to_string(type) +
-                                    ", a volume other than a linear tetrahedron (10) or unknown: "
-                                    "hapsim needs linear 4-node tetrahedra");
+                                    ": not a linear tetrahedron (10), nor a point, line or surface "
+                                    "cell to skip; hapsim needs linear 4-node tetrahedra");
     }
   }
   if (tets.empty()) cursor.Fail("CELL_TYPES", "the grid has no tetrahedra (VTK type 10)");

@@ -1,8 +1,8 @@
 #pragma once
 // The tool's depth cue (issue 26): on a flat picture a trainee cannot tell how far in front of the
-// organ the tool is. A drop line from the tool's lowest point straight down (−z, the direction of
-// gravity in every scene) to the first surface beneath it, a shadow ring where it lands, and the
-// distance in the gauge show it.
+// organ the tool is. A drop line from the tool's underside below its centre straight down (−z,
+// the direction of gravity in every scene) to the first surface beneath it, a shadow ring where it
+// lands, and the distance in the gauge show it (view/scene_painter.cc draws them).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -29,7 +29,7 @@ struct DropSurface {
 };
 
 struct DropHit {
-  Eigen::Vector3d from_W_m = Eigen::Vector3d::Zero();           // the tool's lowest point
+  Eigen::Vector3d from_W_m = Eigen::Vector3d::Zero();           // where the line starts
   Eigen::Vector3d to_W_m = Eigen::Vector3d::Zero();             // where the line lands
   double distance_m = std::numeric_limits<double>::infinity();  // +∞: nothing below
   std::string name;                                             // the surface it lands on

@@ -46,6 +46,7 @@ ScenePainter::ScenePainter(cv::viz::Viz3d* window, const config::Scene& scene,
       scene_(scene),
       rest_positions_m_(std::move(rest_positions_m)),
       visual_(std::move(visual_surface)),
+      num_scene_nodes_(static_cast<int>(rest_positions_m_.cols())),
       options_(options) {
   // A visual surface that does not fit the body drawn (another scene's) is not used.
   if (!visual_.empty() && visual_.nodes.maxCoeff() >= rest_positions_m_.cols())
@@ -117,7 +118,7 @@ void ScenePainter::SetDisplacementReference(const hapsim_lcm::sim_frame_t& frame
   rest_positions_m_.resize(3, frame.num_nodes);
   for (int n = 0; n < frame.num_nodes; ++n)
     for (int d = 0; d < 3; ++d) rest_positions_m_(d, n) = frame.positions_W_m[n][d];
-  if (!visual_.empty() && visual_.nodes.maxCoeff() < frame.num_nodes)
+  if (!visual_.empty() && frame.num_nodes == num_scene_nodes_)
     fem::CalcEmbeddedPositions(visual_, rest_positions_m_.reshaped(), &visual_rest_m_);
 }
 
@@ -129,7 +130,7 @@ void ScenePainter::DrawBody(const hapsim_lcm::sim_frame_t& frame) {
     for (int d = 0; d < 3; ++d) x_nodes_m[3 * n + d] = frame.positions_W_m[n][d];
   // The points drawn and where they were at the displacement reference (empty: unknown).
   Eigen::VectorXd x_points_m, rest_points_m;
-  if (!visual_.empty() && visual_.nodes.maxCoeff() < num_nodes) {
+  if (!visual_.empty() && num_nodes == num_scene_nodes_) {  // not another scene's frame
     fem::CalcEmbeddedPositions(visual_, x_nodes_m, &x_points_m);
     rest_points_m = visual_rest_m_;
     body_triangles_ = visual_.triangles;

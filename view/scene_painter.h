@@ -85,6 +85,8 @@ class ScenePainter {
   const config::Scene& scene_;
   Matrix3Xd rest_positions_m_;
   fem::EmbeddedSurface visual_;
+  int num_scene_nodes_ = 0;        // the body's nodes: a frame with another count is not drawn
+                                   // with visual_ (it is another scene's)
   Eigen::VectorXd visual_rest_m_;  // (3P) the visual surface at the displacement reference
   PainterOptions options_;
   // The body's surface as last drawn (world) and the rigid objects' meshes (own frames), for the

@@ -77,5 +77,24 @@ TEST(FrictionWarmStart, ContactsWithoutBodyNodesOrFoundTwiceInEitherFrameStartAt
   EXPECT_THROW(start.Record(before, Eigen::VectorXd::Zero(8)), std::invalid_argument);
 }
 
+// On an embedded collision surface two contacts whose points lie in one tet share their first
+// nodes (the tet's); their surface points tell them apart, and each carries its own force.
+TEST(FrictionWarmStart, EmbeddedContactsInOneTetAreToldApartByTheirSurfacePoints) {
+  std::vector<Contact> contacts = {MakeContact({10, 11, 12}, {0, 0, 1}),
+                                   MakeContact({10, 11, 12}, {0, 0, 1})};
+  contacts[0].embedded = contacts[1].embedded = true;
+  contacts[0].surface_points = {3, -1, -1};
+  contacts[1].surface_points = {4, -1, -1};
+  Eigen::VectorXd lambda(6);
+  lambda << 1.0, 0.1, 0.0, 2.0, -0.2, 0.0;
+  FrictionWarmStart start;
+  start.Record(contacts, lambda);
+  const std::vector<Contact> swapped = {contacts[1], contacts[0]};
+  const Eigen::VectorXd started = start.Start(swapped);
+  EXPECT_EQ(start.num_carried(), 2);
+  EXPECT_LT((started.segment<3>(0) - lambda.segment<3>(3)).norm(), 1e-15);
+  EXPECT_LT((started.segment<3>(3) - lambda.segment<3>(0)).norm(), 1e-15);
+}
+
 }  // namespace
 }  // namespace hapsim::contact

@@ -154,5 +154,26 @@ TEST(SurfaceEmbeddingTest, MergingOffsetsNodesAndPointsAndFillsTheBoundary) {
   EXPECT_TRUE(MergeEmbeddedSurfaces({EmbeddedSurface()}, {boundary}, {0}).empty());
 }
 
+// Two small blocks a thousand kilometres apart: the search grid stays small (its cells grow with
+// the spread, at most ~8 per tet), and each point finds its own block.
+TEST(SurfaceEmbeddingTest, PiecesFarApartAreSearchedWithoutAHugeGrid) {
+  const TetMesh near = MakeBoxTetMesh({0.0, 0.0, 0.0}, {0.01, 0.01, 0.01}, {1, 1, 1});
+  TetMesh both = near;
+  both.rest_positions_m.resize(3, 2 * near.num_nodes());
+  both.rest_positions_m << near.rest_positions_m,
+      near.rest_positions_m.colwise() + Vector3d(1e6, 0.0, 0.0);
+  both.tets.resize(4, 2 * near.num_tets());
+  both.tets << near.tets, near.tets.array() + near.num_nodes();
+  Matrix3Xd points_m(3, 3);
+  points_m << 0.003, 1e6 + 0.007, 0.005, 0.004, 0.002, 0.005, 0.005, 0.006, 0.0103;
+  const Matrix3Xi triangle = (Matrix3Xi(3, 1) << 0, 1, 2).finished();
+  const EmbeddedSurface surface = EmbedSurface(both, points_m, triangle, 0.001);
+  EXPECT_LT(surface.nodes.col(0).maxCoeff(), near.num_nodes());
+  EXPECT_GE(surface.nodes.col(1).minCoeff(), near.num_nodes());
+  Eigen::VectorXd x_points_m;
+  CalcEmbeddedPositions(surface, Stacked(both.rest_positions_m), &x_points_m);
+  EXPECT_LT((x_points_m - Stacked(points_m)).cwiseAbs().maxCoeff(), 1e-9);
+}
+
 }  // namespace
 }  // namespace hapsim::fem
