@@ -164,6 +164,48 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   StampNewContactRows(&contact_rows_);  // last: the rows are complete
 }
 
+namespace {
+
+// The surface a body point p_W must not pass: its signed distance (< 0 inside), its closest
+// point, its outward normal there, and that surface's velocity at p_W.
+struct SanitySurface {
+  double distance_m;
+  Eigen::Vector3d closest_W_m, n_W, v_W_m_s;
+};
+
+// A point of an embedded collision surface, p = Σ w_k x_k (its nodes lie inside the body), moved
+// out of the surface `surface_of(p)` gives it when deeper than tolerance_m, by the least change
+// of its free nodes: Δx_k = w_k δ / Σ_free w_j² moves p by exactly δ; its closing velocity is
+// removed the same way. Returns whether it moved.
+template <typename SurfaceOf>
+bool MoveEmbeddedPointOut(const Contact& contact, const std::vector<std::uint8_t>& dof_is_fixed,
+                          double tolerance_m, const SurfaceOf& surface_of, fem::State* body) {
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero(), v_W = Eigen::Vector3d::Zero();
+  double free_weight_sq = 0.0;
+  for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k) {
+    const int node = contact.nodes[k];
+    p_W += contact.weights[k] * body->x_m.segment<3>(3 * node);
+    v_W += contact.weights[k] * body->v_m_s.segment<3>(3 * node);
+    if (!dof_is_fixed[3 * node]) free_weight_sq += contact.weights[k] * contact.weights[k];
+  }
+  const SanitySurface s = surface_of(contact, p_W);
+  if (s.distance_m >= -tolerance_m || !(free_weight_sq > 0.0)) return false;
+  const Eigen::Vector3d dx_W = s.closest_W_m - p_W;
+  const double closing = (v_W - s.v_W_m_s).dot(s.n_W);
+  const Eigen::Vector3d dv_W =
+      closing < 0.0 ? Eigen::Vector3d(-closing * s.n_W) : Eigen::Vector3d::Zero();
+  for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k) {
+    const int node = contact.nodes[k];
+    if (dof_is_fixed[3 * node]) continue;
+    const double share = contact.weights[k] / free_weight_sq;
+    body->x_m.segment<3>(3 * node) += share * dx_W;
+    body->v_m_s.segment<3>(3 * node) += share * dv_W;
+  }
+  return true;
+}
+
+}  // namespace
+
 int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,
                                double* max_object_penetration_m) const {
   *max_penetration_m = 0.0;
@@ -172,59 +214,30 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
   const Eigen::Isometry3d X_WT = CalcPose(tool);
   const Eigen::Isometry3d X_TW = X_WT.inverse();
   const Eigen::Vector3d w_W = CalcAngularVelocity(tool_, tool);
-  // The surface a body point p_W must not pass: its closest point, its outward normal there, and
-  // that surface's velocity at p_W (the tool's, or the rigid object's: zero for a fixed one).
-  struct Surface {
-    double distance_m;
-    Eigen::Vector3d closest_W_m, n_W, v_W_m_s;
-  };
+  // The tool's surface, or the rigid object's (moving: its velocity; fixed: zero).
   const auto surface_of = [&](const Contact& contact, const Eigen::Vector3d& p_W) {
     if (contact.rigid_object < 0) {
       const ToolDistance d = detector_->tool_distance().Calc(X_TW * p_W);
       *max_penetration_m = std::max(*max_penetration_m, -d.distance_m);
-      return Surface{d.distance_m, X_WT * d.closest_T_m, X_WT.linear() * d.normal_T,
-                     tool.v_W_m_s + w_W.cross(p_W - tool.x_W_m)};
+      return SanitySurface{d.distance_m, X_WT * d.closest_T_m, X_WT.linear() * d.normal_T,
+                           tool.v_W_m_s + w_W.cross(p_W - tool.x_W_m)};
     }
     const RigidObjectContacts::Penetration d = rigid_contacts_.CalcDeepest(p_W);
     *max_object_penetration_m = std::max(*max_object_penetration_m, -d.distance_m);
-    return Surface{d.distance_m, d.closest_W_m, d.normal_W,
-                   CalcObjectPointVelocity(d.object, p_W, tool)};
+    return SanitySurface{d.distance_m, d.closest_W_m, d.normal_W,
+                         CalcObjectPointVelocity(d.object, p_W, tool)};
   };
   int corrections = 0;
   for (const Contact& contact : contacts_) {
     if (contact.embedded) {
-      // The surface point p = Σ w_k x_k itself is tested (its nodes lie inside the body), and
-      // moved out by the least change of its free nodes: Δx_k = w_k δ / Σ_free w_j² moves p by
-      // exactly δ; its closing velocity is removed the same way.
-      Eigen::Vector3d p_W = Eigen::Vector3d::Zero(), v_W = Eigen::Vector3d::Zero();
-      double free_weight_sq = 0.0;
-      for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k) {
-        const int node = contact.nodes[k];
-        p_W += contact.weights[k] * body->x_m.segment<3>(3 * node);
-        v_W += contact.weights[k] * body->v_m_s.segment<3>(3 * node);
-        if (!body_->dof_is_fixed[3 * node])
-          free_weight_sq += contact.weights[k] * contact.weights[k];
-      }
-      const Surface s = surface_of(contact, p_W);
-      if (s.distance_m >= -options_.sanity_tolerance_m || !(free_weight_sq > 0.0)) continue;
-      const Eigen::Vector3d dx_W = s.closest_W_m - p_W;
-      const double closing = (v_W - s.v_W_m_s).dot(s.n_W);
-      const Eigen::Vector3d dv_W =
-          closing < 0.0 ? Eigen::Vector3d(-closing * s.n_W) : Eigen::Vector3d::Zero();
-      for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k) {
-        const int node = contact.nodes[k];
-        if (body_->dof_is_fixed[3 * node]) continue;
-        const double share = contact.weights[k] / free_weight_sq;
-        body->x_m.segment<3>(3 * node) += share * dx_W;
-        body->v_m_s.segment<3>(3 * node) += share * dv_W;
-      }
-      ++corrections;
+      corrections += MoveEmbeddedPointOut(contact, body_->dof_is_fixed, options_.sanity_tolerance_m,
+                                          surface_of, body);
       continue;
     }
     for (int k = 0; k < kMaxContactNodes; ++k) {
       const int node = contact.nodes[k];
       if (node < 0 || body_->dof_is_fixed[3 * node]) continue;
-      const Surface s = surface_of(contact, body->x_m.segment<3>(3 * node));
+      const SanitySurface s = surface_of(contact, body->x_m.segment<3>(3 * node));
       if (s.distance_m >= -options_.sanity_tolerance_m) continue;
       body->x_m.segment<3>(3 * node) = s.closest_W_m;
       // Remove the velocity that would carry the node back inside.

@@ -203,6 +203,112 @@ std::string NextSection(VtkCursor* cursor, const std::vector<std::string>& keywo
   return "";
 }
 
+// The points after POINTS n type, tagged by their index 0..n−1.
+std::vector<RawNode> ReadPoints(VtkCursor* cursor, bool binary) {
+  if (NextSection(cursor, {"POINTS"}).empty()) cursor->Fail("POINTS", "no POINTS section");
+  const long long num_points = cursor->ParseInteger(cursor->Token(), "POINTS", "the point count");
+  if (num_points <= 0) cursor->Fail("POINTS", "the grid has no points");
+  ValueReader points(cursor, binary, cursor->Token(), "POINTS");
+  points.CheckFits(num_points, 3);
+  if (!points.real()) cursor->Fail("POINTS", "point coordinates must be float or double");
+  std::vector<RawNode> nodes;
+  for (long long i = 0; i < num_points; ++i) {
+    Eigen::Vector3d p_m;
+    for (int k = 0; k < 3; ++k) p_m[k] = points.Real("a coordinate");
+    nodes.push_back({i, p_m, binary ? 0 : cursor->line()});
+  }
+  return nodes;
+}
+
+// Each cell's point indices, and the line it ends on (ASCII classic layout; else 0).
+struct Cells {
+  std::vector<std::vector<long long>> points;
+  std::vector<int> lines;
+};
+
+// Classic layout: CELLS n size, then n cells, each its point count and its indices (size values).
+void ReadClassicCells(VtkCursor* cursor, bool binary, long long count, long long size,
+                      Cells* cells) {
+  ValueReader values(cursor, binary, "int", "CELLS");
+  values.CheckFits(size);
+  long long read = 0;
+  for (long long c = 0; c < count; ++c) {
+    const long long num_points = values.Integer("a cell's point count");
+    if (num_points < 0 || num_points > size - read - 1)  // read < size here: no overflow
+      cursor->Fail("CELLS", "cell " + std::to_string(c) + " overruns the declared size " +
+                                std::to_string(size));
+    std::vector<long long> cell;
+    for (long long k = 0; k < num_points; ++k) cell.push_back(values.Integer("a point index"));
+    cells->points.push_back(std::move(cell));
+    cells->lines.push_back(binary ? 0 : cursor->line());
+    read += 1 + num_points;
+  }
+  if (read != size)
+    cursor->Fail("CELLS", "the cells hold " + std::to_string(read) + " values, not the declared " +
+                              std::to_string(size));
+}
+
+// Version 5.1: CELLS n_offsets n_connectivity, then OFFSETS type (n_offsets values, from 0 to
+// n_connectivity, not decreasing) and CONNECTIVITY type (n_connectivity point indices).
+void ReadOffsetCells(VtkCursor* cursor, bool binary, long long num_offsets,
+                     long long num_connectivity, Cells* cells) {
+  if (NextSection(cursor, {"OFFSETS"}).empty()) cursor->Fail("OFFSETS", "no OFFSETS array");
+  ValueReader offsets_reader(cursor, binary, cursor->Token(), "OFFSETS");
+  offsets_reader.CheckFits(num_offsets);
+  std::vector<long long> offsets;
+  for (long long i = 0; i < num_offsets; ++i)
+    offsets.push_back(offsets_reader.Integer("an offset"));
+  if (NextSection(cursor, {"CONNECTIVITY"}).empty())
+    cursor->Fail("CONNECTIVITY", "no CONNECTIVITY array");
+  ValueReader connectivity_reader(cursor, binary, cursor->Token(), "CONNECTIVITY");
+  connectivity_reader.CheckFits(num_connectivity);
+  std::vector<long long> connectivity;
+  for (long long i = 0; i < num_connectivity; ++i)
+    connectivity.push_back(connectivity_reader.Integer("a point index"));
+  if (offsets.empty() || offsets.front() != 0 || offsets.back() != num_connectivity)
+    cursor->Fail("OFFSETS", "offsets must run from 0 to the connectivity's size " +
+                                std::to_string(num_connectivity));
+  for (std::size_t c = 0; c + 1 < offsets.size(); ++c) {
+    if (offsets[c + 1] < offsets[c] || offsets[c + 1] > num_connectivity)
+      cursor->Fail("OFFSETS", "offsets must not decrease nor pass the connectivity's size");
+    cells->points.emplace_back(connectivity.begin() + offsets[c],
+                               connectivity.begin() + offsets[c + 1]);
+    cells->lines.push_back(0);  // the arrays give no line per cell
+  }
+}
+
+// CELL_TYPES n: the tetrahedra of `cells`; points, lines and surface cells skipped, any other
+// type refused.
+std::vector<RawTet> ReadTetrahedra(VtkCursor* cursor, bool binary, const Cells& cells) {
+  if (NextSection(cursor, {"CELL_TYPES"}).empty()) cursor->Fail("CELL_TYPES", "no CELL_TYPES");
+  const long long num_types = cursor->ParseInteger(cursor->Token(), "CELL_TYPES", "the type count");
+  if (num_types != static_cast<long long>(cells.points.size()))
+    cursor->Fail("CELL_TYPES", "gives " + std::to_string(num_types) + " types for " +
+                                   std::to_string(cells.points.size()) + " cells");
+  ValueReader types(cursor, binary, "int", "CELL_TYPES");
+  types.CheckFits(num_types);
+  std::vector<RawTet> tets;
+  for (long long c = 0; c < num_types; ++c) {
+    const long long type = types.Integer("a cell type");
+    const std::vector<long long>& points = cells.points[c];
+    if (type == kVtkTetra) {
+      if (points.size() != 4)
+        cursor->Fail("CELL_TYPES", "tetrahedron " + std::to_string(c) + " has " +
+                                       std::to_string(points.size()) + " points, not 4");
+      RawTet tet{c, {}, cells.lines[c]};
+      std::copy(points.begin(), points.end(), tet.nodes.begin());
+      tets.push_back(tet);
+    } else if (!IsSkippedCellType(type)) {
+      cursor->Fail("CELL_TYPES", "cell " + std::to_string(c) + " is of VTK type " +
+                                     std::to_string(type) +
+                                     ": not a linear tetrahedron (10), nor a point, line or "
+                                     "surface cell to skip; hapsim needs linear 4-node tetrahedra");
+    }
+  }
+  if (tets.empty()) cursor->Fail("CELL_TYPES", "the grid has no tetrahedra (VTK type 10)");
+  return tets;
+}
+
 }  // namespace
 
 TetMesh ReadVtkMesh(const std::string& path) {
@@ -225,99 +331,20 @@ TetMesh ReadVtkMesh(const std::string& path) {
   if (dataset != "UNSTRUCTURED_GRID")
     cursor.Fail("DATASET", "only UNSTRUCTURED_GRID holds tetrahedra, found '" + dataset + "'");
 
-  // POINTS n type
-  if (NextSection(&cursor, {"POINTS"}).empty()) cursor.Fail("POINTS", "no POINTS section");
-  const long long num_points = cursor.ParseInteger(cursor.Token(), "POINTS", "the point count");
-  if (num_points <= 0) cursor.Fail("POINTS", "the grid has no points");
-  ValueReader points(&cursor, binary, cursor.Token(), "POINTS");
-  points.CheckFits(num_points, 3);
-  if (!points.real()) cursor.Fail("POINTS", "point coordinates must be float or double");
-  std::vector<RawNode> nodes;
-  for (long long i = 0; i < num_points; ++i) {
-    Eigen::Vector3d p_m;
-    for (int k = 0; k < 3; ++k) p_m[k] = points.Real("a coordinate");
-    nodes.push_back({i, p_m, binary ? 0 : cursor.line()});
-  }
-
-  // CELLS: each cell's points (classic: count then indices; 5.1: offsets and connectivity).
+  const std::vector<RawNode> nodes = ReadPoints(&cursor, binary);
   if (NextSection(&cursor, {"CELLS"}).empty()) cursor.Fail("CELLS", "no CELLS section");
   const long long cells_a = cursor.ParseInteger(cursor.Token(), "CELLS", "the cell count");
   const long long cells_b = cursor.ParseInteger(cursor.Token(), "CELLS", "the cells' size");
-  std::vector<std::vector<long long>> cells;
-  std::vector<int> cell_lines;           // ASCII: the line each cell ends on (BINARY: 0)
   if (cells_a < 0 || cells_a > cells_b)  // each cell takes one value at least
     cursor.Fail("CELLS", "the cell count " + std::to_string(cells_a) +
                              " is more than the cells' size " + std::to_string(cells_b) +
                              " allows");
-  if (!layout_51) {
-    ValueReader values(&cursor, binary, "int", "CELLS");
-    values.CheckFits(cells_b);
-    long long read = 0;
-    for (long long c = 0; c < cells_a; ++c) {
-      const long long count = values.Integer("a cell's point count");
-      if (count < 0 || count > cells_b - read - 1)  // read < cells_b here: no overflow
-        cursor.Fail("CELLS", "cell " + std::to_string(c) + " overruns the declared size " +
-                                 std::to_string(cells_b));
-      std::vector<long long> cell;
-      for (long long k = 0; k < count; ++k) cell.push_back(values.Integer("a point index"));
-      cells.push_back(std::move(cell));
-      cell_lines.push_back(binary ? 0 : cursor.line());
-      read += 1 + count;
-    }
-    if (read != cells_b)
-      cursor.Fail("CELLS", "the cells hold " + std::to_string(read) + " values, not the declared " +
-                               std::to_string(cells_b));
-  } else {
-    // CELLS n_offsets n_connectivity, then OFFSETS type (n_offsets values), CONNECTIVITY type.
-    if (NextSection(&cursor, {"OFFSETS"}).empty()) cursor.Fail("OFFSETS", "no OFFSETS array");
-    ValueReader offsets_reader(&cursor, binary, cursor.Token(), "OFFSETS");
-    offsets_reader.CheckFits(cells_a);
-    std::vector<long long> offsets;
-    for (long long i = 0; i < cells_a; ++i) offsets.push_back(offsets_reader.Integer("an offset"));
-    if (NextSection(&cursor, {"CONNECTIVITY"}).empty())
-      cursor.Fail("CONNECTIVITY", "no CONNECTIVITY array");
-    ValueReader connectivity_reader(&cursor, binary, cursor.Token(), "CONNECTIVITY");
-    connectivity_reader.CheckFits(cells_b);
-    std::vector<long long> connectivity;
-    for (long long i = 0; i < cells_b; ++i)
-      connectivity.push_back(connectivity_reader.Integer("a point index"));
-    if (offsets.empty() || offsets.front() != 0 || offsets.back() != cells_b)
-      cursor.Fail("OFFSETS",
-                  "offsets must run from 0 to the connectivity's size " + std::to_string(cells_b));
-    for (std::size_t c = 0; c + 1 < offsets.size(); ++c) {
-      if (offsets[c + 1] < offsets[c] || offsets[c + 1] > cells_b)
-        cursor.Fail("OFFSETS", "offsets must not decrease nor pass the connectivity's size");
-      cells.emplace_back(connectivity.begin() + offsets[c], connectivity.begin() + offsets[c + 1]);
-      cell_lines.push_back(0);  // the arrays give no line per cell
-    }
-  }
-
-  // CELL_TYPES n: keep the tetrahedra; skip points, lines and surface cells; refuse other volumes.
-  if (NextSection(&cursor, {"CELL_TYPES"}).empty()) cursor.Fail("CELL_TYPES", "no CELL_TYPES");
-  const long long num_types = cursor.ParseInteger(cursor.Token(), "CELL_TYPES", "the type count");
-  if (num_types != static_cast<long long>(cells.size()))
-    cursor.Fail("CELL_TYPES", "gives " + std::to_string(num_types) + " types for " +
-                                  std::to_string(cells.size()) + " cells");
-  ValueReader types(&cursor, binary, "int", "CELL_TYPES");
-  types.CheckFits(num_types);
-  std::vector<RawTet> tets;
-  for (long long c = 0; c < num_types; ++c) {
-    const long long type = types.Integer("a cell type");
-    if (type == kVtkTetra) {
-      if (cells[c].size() != 4)
-        cursor.Fail("CELL_TYPES", "tetrahedron " + std::to_string(c) + " has " +
-                                      std::to_string(cells[c].size()) + " points, not 4");
-      RawTet tet{c, {}, cell_lines[c]};
-      std::copy(cells[c].begin(), cells[c].end(), tet.nodes.begin());
-      tets.push_back(tet);
-    } else if (!IsSkippedCellType(type)) {
-      cursor.Fail("CELL_TYPES", "cell " + std::to_string(c) + " is of VTK type " +
-                                    std::to_string(type) +
-                                    ": not a linear tetrahedron (10), nor a point, line or surface "
-                                    "cell to skip; hapsim needs linear 4-node tetrahedra");
-    }
-  }
-  if (tets.empty()) cursor.Fail("CELL_TYPES", "the grid has no tetrahedra (VTK type 10)");
+  Cells cells;
+  if (layout_51)
+    ReadOffsetCells(&cursor, binary, cells_a, cells_b, &cells);
+  else
+    ReadClassicCells(&cursor, binary, cells_a, cells_b, &cells);
+  const std::vector<RawTet> tets = ReadTetrahedra(&cursor, binary, cells);
   return internal::MakeCheckedTetMesh(nodes, path, "POINTS", tets, path, "CELLS");
 }
 
