@@ -250,20 +250,6 @@ std::vector<Probe> ReadProbes(const YamlMap& body) {
   return probes;
 }
 
-// `collision` or `visual`: a closed OBJ/STL surface the body's tets carry.
-std::optional<EmbeddedSurfaceSource> ReadEmbeddedSurface(const YamlMap& body,
-                                                         const std::string& key,
-                                                         const std::string& base_dir) {
-  const std::optional<YamlMap> map = body.FindMap(key);
-  if (!map) return std::nullopt;
-  map->CheckKeys({"file", "units", "transform"});
-  EmbeddedSurfaceSource surface;
-  surface.file = ResolveSurfaceFile(*map, "file", base_dir);
-  surface.transform = ReadMeshTransform(*map);
-  surface.location = LocationOf(*map);
-  return surface;
-}
-
 BodyScene ReadBody(const YamlMap& map, const std::string& base_dir) {
   map.CheckKeys({"mesh", "collision", "visual", "material", "elasticity", "integrator", "solver",
                  "fixed", "loads", "probes"});

@@ -88,6 +88,19 @@ std::string ResolveSurfaceFile(const YamlMap& map, const std::string& key,
   return path.string();
 }
 
+std::optional<EmbeddedSurfaceSource> ReadEmbeddedSurface(const YamlMap& body,
+                                                         const std::string& key,
+                                                         const std::string& base_dir) {
+  const std::optional<YamlMap> map = body.FindMap(key);
+  if (!map) return std::nullopt;
+  map->CheckKeys({"file", "units", "transform"});
+  EmbeddedSurfaceSource surface;
+  surface.file = ResolveSurfaceFile(*map, "file", base_dir);
+  surface.transform = ReadMeshTransform(*map);
+  surface.location = LocationOf(*map);
+  return surface;
+}
+
 namespace {
 
 // The one shape of tool.shape. A mesh is read here (errors in it name the mesh file and line).

@@ -2,6 +2,7 @@
 // Reading of the simulation sections of a scene file: tool, coupling, contact, haptic, device
 // (schema in config/scene.h). Internal to the scene loader (config/scene.cc).
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,12 @@ MeshTransform ReadMeshTransform(const YamlMap& mesh);
 // a body's `surface`.
 std::string ResolveSurfaceFile(const YamlMap& map, const std::string& key,
                                const std::string& base_dir);
+
+// A body's `collision` or `visual` entry, {file, units, transform}: a closed OBJ/STL surface its
+// tets carry (fem/surface_embedding.h); nullopt when the key is absent.
+std::optional<EmbeddedSurfaceSource> ReadEmbeddedSurface(const YamlMap& body,
+                                                         const std::string& key,
+                                                         const std::string& base_dir);
 
 // One `rigid` entry of `objects` (config/scene.h), named `name`.
 RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
