@@ -170,8 +170,7 @@ void CollisionDetector::ExpandEmbeddedContacts(std::vector<Contact>* contacts) c
         weights[slot] += w;
       }
     }
-    std::copy(contact.nodes.begin(), contact.nodes.begin() + 3, contact.surface_points.begin());
-    contact.nodes = nodes;
+    contact.nodes = nodes;  // surface_points keep the points (SetBodyNodes set them)
     contact.weights = weights;
     contact.embedded = true;
   }
@@ -304,10 +303,9 @@ void CollisionDetector::AddFeatureContacts(const Eigen::VectorXd& x_m,
     contact.p_body_W_m = best.closest.point;
     contact.n_W = -best.normal;
     contact.gap_m = best.gap_m;
-    for (int k = 0; k < 3; ++k) {
-      contact.nodes[k] = surface_triangles_(k, best_face);
-      contact.weights[k] = best.closest.weights[k];
-    }
+    const Eigen::Vector3i face = surface_triangles_.col(best_face);
+    const Vector3d& w = best.closest.weights;
+    contact.SetBodyNodes({face[0], face[1], face[2]}, {w[0], w[1], w[2]});
     contacts->push_back(contact);
   }
 }
@@ -347,10 +345,8 @@ void CollisionDetector::AddSphereFaceContacts(const Eigen::VectorXd& x_m,
     contact.p_body_W_m = closest.point;
     contact.n_W = -n_body;
     contact.gap_m = gap_m;
-    for (int k = 0; k < 3; ++k) {
-      contact.nodes[k] = tri[k];
-      contact.weights[k] = closest.weights[k];
-    }
+    const Vector3d& w = closest.weights;
+    contact.SetBodyNodes({tri[0], tri[1], tri[2]}, {w[0], w[1], w[2]});
     contacts->push_back(contact);
   }
 }

@@ -40,8 +40,9 @@ struct Contact {
   std::array<int, kMaxContactNodes> nodes = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
   std::array<double, kMaxContactNodes> weights = {};
   bool embedded = false;  // the body point lies on an embedded collision surface
-  // Embedded: the one to three points of the collision surface that carry the body point (before
-  // their tets' nodes replaced them), −1 unused: what names the contact from frame to frame.
+  // The one to three points of the surface the contact was found on (boundary nodes, or points of
+  // an embedded surface before their tets' nodes replaced them), −1 unused: what names the
+  // contact from frame to frame (FrictionWarmStart).
   std::array<int, 3> surface_points = {-1, -1, -1};
   bool on_tool = true;    // false: a body node against a rigid object
   int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none
@@ -52,6 +53,7 @@ struct Contact {
     weights.fill(0.0);
     std::copy(body_nodes.begin(), body_nodes.end(), nodes.begin());
     std::copy(body_weights.begin(), body_weights.end(), weights.begin());
+    std::copy(nodes.begin(), nodes.begin() + 3, surface_points.begin());
   }
 };
 

@@ -7,10 +7,10 @@
 namespace hapsim::contact {
 
 FrictionWarmStart::Identity FrictionWarmStart::IdentityOf(const Contact& contact) {
-  // An embedded contact's first nodes are its first point's tet's, shared by its neighbours: its
-  // surface points name it.
-  const int* names = contact.embedded ? contact.surface_points.data() : contact.nodes.data();
-  return {names[0], names[1], names[2], contact.rigid_object, contact.on_tool ? 1 : 0};
+  // Its surface points, not its nodes: an embedded contact's first nodes are its first point's
+  // tet's, which its neighbours share.
+  const std::array<int, 3>& points = contact.surface_points;
+  return {points[0], points[1], points[2], contact.rigid_object, contact.on_tool ? 1 : 0};
 }
 
 void FrictionWarmStart::Record(const std::vector<Contact>& contacts,
