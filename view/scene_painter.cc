@@ -185,12 +185,7 @@ std::string ScenePainter::DrawDepthCue(const hapsim_lcm::sim_frame_t& frame) {
   if (!scene_.tool || tool_mesh_.vertices_m.cols() == 0) return "";
   // The line starts under the tool's centre, on the tool's own lower surface (a probe's tip, the
   // middle of a lying scope's underside).
-  const cv::Affine3d pose = ToAffine(frame.x_W_m, frame.q_WT);
-  Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) X_WT.linear()(i, j) = pose.rotation()(i, j);
-    X_WT.translation()[i] = pose.translation()[i];
-  }
+  const Eigen::Isometry3d X_WT = ToIsometry(frame.x_W_m, frame.q_WT);
   const Matrix3Xd tool_W_m = X_WT * tool_mesh_.vertices_m;
   const Eigen::Vector3d down_W(0.0, 0.0, -1.0);
   const double inside_m = CastRay(X_WT.translation(), down_W, tool_W_m, tool_mesh_.triangles);
@@ -203,12 +198,9 @@ std::string ScenePainter::DrawDepthCue(const hapsim_lcm::sim_frame_t& frame) {
   const bool objects_posed = frame.num_objects == static_cast<int>(scene_.rigid_objects.size());
   for (size_t i = 0; i < scene_.rigid_objects.size(); ++i) {
     if (objects_posed && static_cast<int>(i) == frame.grabbed_object) continue;  // the tool's
-    Eigen::Isometry3d X_WO = scene_.rigid_objects[i].object.X_WO;
-    if (objects_posed) {
-      X_WO.translation() = Eigen::Map<const Eigen::Vector3d>(frame.object_x_W_m[i].data());
-      const std::vector<double>& q = frame.object_q_WO[i];
-      X_WO.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
-    }
+    const Eigen::Isometry3d X_WO =
+        objects_posed ? ToIsometry(frame.object_x_W_m[i].data(), frame.object_q_WO[i].data())
+                      : scene_.rigid_objects[i].object.X_WO;
     surfaces.push_back({scene_.rigid_objects[i].object.name, &object_meshes_[i].vertices_m,
                         &object_meshes_[i].triangles, X_WO});
   }

@@ -44,9 +44,15 @@ ToolShape InflateShape(ToolShape shape, double fraction) {
   return shape;
 }
 
+Eigen::Isometry3d ToIsometry(const double x_W_m[3], const double q[4]) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  X.translation() = Eigen::Vector3d(x_W_m[0], x_W_m[1], x_W_m[2]);
+  return X;
+}
+
 cv::Affine3d ToAffine(const double x_W_m[3], const double q[4]) {
-  const Eigen::Matrix3d R =
-      Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  const Eigen::Matrix3d R = ToIsometry(x_W_m, q).linear();
   cv::Matx33d rotation;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) rotation(i, j) = R(i, j);

@@ -12,7 +12,8 @@ namespace hapsim::view {
 
 cv::Vec3d ToVec(const Eigen::Vector3d& p);
 
-// The pose x, q (w, x, y, z) as viz wants it.
+// The pose x, q (w, x, y, z; normalised here) as Eigen and as viz want it.
+Eigen::Isometry3d ToIsometry(const double x_W_m[3], const double q[4]);
 cv::Affine3d ToAffine(const double x_W_m[3], const double q[4]);
 
 // A viz widget of `shape` (core/tool_shape.h) in its own frame; wireframe for the ghost.
