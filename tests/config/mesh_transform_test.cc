@@ -20,7 +20,7 @@
 namespace hapsim::config {
 namespace {
 namespace fs = std::filesystem;
-using test::ExpectError;
+using test::ExpectBodyMeshError;
 using test::ObjText;
 using test::TempFolder;
 
@@ -112,17 +112,13 @@ device:
 
 TEST_F(MeshTransformTest, RefusesABadTransformAtItsLineAndKey) {
   fem::WriteGmshMesh(fem::MakeBoxTetMesh({0, 0, 0}, {1, 1, 1}, {1, 1, 1}), PathOf("body.msh"), 4);
-  const auto expect_error = [&](const std::string& mesh, const std::string& key,
-                                const std::string& words) {
-    ExpectError("name: t\ntime: {dt_s: 0.01, num_steps: 1}\nbody:\n  mesh: " + mesh +
-                    "\n  material: {youngs_modulus_Pa: 1, poisson_ratio: 0.3, density_kg_m3: 1}\n",
-                "t.yaml", 4, key, words, folder_.path());
-  };
-  expect_error("{file: body.msh, transform: {scale: 0}}", "body.mesh.transform.scale", "> 0");
-  expect_error("{file: body.msh, transform: {scale: -2}}", "body.mesh.transform.scale", "> 0");
-  expect_error("{file: body.msh, units: inch}", "body.mesh.units", "mm");
-  expect_error("{box: {min_m: [0,0,0], max_m: [1,1,1], cells: [1,1,1]}, units: mm}",
-               "body.mesh.units", "box and ellipsoid are in metres");
+  ExpectBodyMeshError("{file: body.msh, transform: {scale: 0}}", "body.mesh.transform.scale", "> 0",
+                      folder_.path());
+  ExpectBodyMeshError("{file: body.msh, transform: {scale: -2}}", "body.mesh.transform.scale",
+                      "> 0", folder_.path());
+  ExpectBodyMeshError("{file: body.msh, units: inch}", "body.mesh.units", "mm", folder_.path());
+  ExpectBodyMeshError("{box: {min_m: [0,0,0], max_m: [1,1,1], cells: [1,1,1]}, units: mm}",
+                      "body.mesh.units", "box and ellipsoid are in metres", folder_.path());
 }
 
 }  // namespace

@@ -53,6 +53,15 @@ inline void ExpectError(const std::string& yaml, const std::string& label, int l
   EXPECT_NE(std::string(error->what()).find(message_part), std::string::npos) << error->what();
 }
 
+// A one-body scene whose `mesh:` (on line 4) is `mesh` throws an InputError at line 4 with `key`,
+// whose message contains `message_part` (ExpectError); the mesh's files resolve in base_dir.
+inline void ExpectBodyMeshError(const std::string& mesh, const std::string& key,
+                                const std::string& message_part, const std::string& base_dir) {
+  ExpectError("name: t\ntime: {dt_s: 0.01, num_steps: 1}\nbody:\n  mesh: " + mesh +
+                  "\n  material: {youngs_modulus_Pa: 1, poisson_ratio: 0.3, density_kg_m3: 1}\n",
+              "t.yaml", 4, key, message_part, base_dir);
+}
+
 // One kind of bad input: a scene with `find` replaced by `replace` must throw InputError at
 // `line` with `key`, and its message must contain `message_part`.
 struct BadCase {

@@ -19,7 +19,7 @@
 namespace hapsim::config {
 namespace {
 namespace fs = std::filesystem;
-using test::ExpectError;
+using test::ExpectBodyMeshError;
 using test::ObjText;
 using test::TempFolder;
 
@@ -100,22 +100,19 @@ body:
 }
 
 TEST_F(SurfaceMeshCacheTest, SceneErrorsNameLineAndKey) {
-  const auto expect_error = [&](const std::string& mesh_line, const std::string& key,
-                                const std::string& words) {
-    ExpectError("name: s\ntime: {dt_s: 0.01, num_steps: 1}\nbody:\n  mesh: " + mesh_line +
-                    "\n  material: {youngs_modulus_Pa: 1, poisson_ratio: 0.3, density_kg_m3: 1}\n",
-                "s.yaml", 4, key, words, folder_.path());
-  };
-  expect_error("{surface: organ.obj}", "body.mesh.cell_size_m", "missing");
-  expect_error("{surface: organ.obj, cell_size_m: 0}", "body.mesh.cell_size_m", "> 0");
-  expect_error("{surface: none.obj, cell_size_m: 0.01}", "body.mesh.surface", "no such file");
-  expect_error("{surface: organ.msh, cell_size_m: 0.01}", "body.mesh.surface", ".obj or an .stl");
-  expect_error("{box: {min_m: [0,0,0], max_m: [1,1,1], cells: [1,1,1]}, cell_size_m: 0.01}",
-               "body.mesh.cell_size_m", "surface mesh only");
-  expect_error(
+  ExpectBodyMeshError("{surface: organ.obj}", "body.mesh.cell_size_m", "missing", folder_.path());
+  ExpectBodyMeshError("{surface: organ.obj, cell_size_m: 0}", "body.mesh.cell_size_m", "> 0",
+                      folder_.path());
+  ExpectBodyMeshError("{surface: none.obj, cell_size_m: 0.01}", "body.mesh.surface", "no such file",
+                      folder_.path());
+  ExpectBodyMeshError("{surface: organ.msh, cell_size_m: 0.01}", "body.mesh.surface",
+                      ".obj or an .stl", folder_.path());
+  ExpectBodyMeshError("{box: {min_m: [0,0,0], max_m: [1,1,1], cells: [1,1,1]}, cell_size_m: 0.01}",
+                      "body.mesh.cell_size_m", "surface mesh only", folder_.path());
+  ExpectBodyMeshError(
       "{surface: organ.obj, cell_size_m: 0.01, refine: {near_m: [0,0,0], cell_size_m: 0.02, "
       "radius_m: 0.01}}",
-      "body.mesh.refine.cell_size_m", "must not exceed");
+      "body.mesh.refine.cell_size_m", "must not exceed", folder_.path());
 }
 
 }  // namespace

@@ -186,19 +186,28 @@ device:
     - {t_s: 0.8, position_m: [0.006, 0.001, 0.038]}
 )";
 
+// Writes the press scene's boundary into `folder` as the OBJ file `name`, its coordinates times
+// `scale` (a file in other units); returns its number of vertices.
+Eigen::Index WritePressBoundary(const config::test::TempFolder& folder, const std::string& name,
+                                double scale) {
+  const config::Scene plain = config::ParseScene(kPressScene, "press.yaml", folder.path());
+  const auto [vertices_m, triangles] = BoundaryAsSurface(config::MakeSceneBody(plain)->model);
+  std::ofstream((std::filesystem::path(folder.path()) / name).string())
+      << config::test::ObjText(scale * vertices_m, triangles);
+  return vertices_m.cols();
+}
+
 TEST(EmbeddedContactTest, ARunWithTheBoundaryAsItsCollisionSurfaceFeelsTheSame) {
   const config::test::TempFolder folder("embedded_press");
   const config::Scene plain = config::ParseScene(kPressScene, "press.yaml", folder.path());
   const config::Body plain_body = *config::MakeSceneBody(plain);
-  const auto [vertices_m, triangles] = BoundaryAsSurface(plain_body.model);
-  std::ofstream((std::filesystem::path(folder.path()) / "boundary.obj").string())
-      << config::test::ObjText(vertices_m, triangles);
+  const Eigen::Index num_vertices = WritePressBoundary(folder, "boundary.obj", 1.0);
   const std::string with_surface = config::test::Replace(
       kPressScene, "  solver:", "  collision: {file: boundary.obj}\n  solver:");
   const config::Scene embedded = config::ParseScene(with_surface, "press.yaml", folder.path());
   const config::Body embedded_body = *config::MakeSceneBody(embedded);
   ASSERT_FALSE(embedded_body.model.collision_surface.empty());
-  EXPECT_EQ(embedded_body.model.collision_surface.num_points(), vertices_m.cols());
+  EXPECT_EQ(embedded_body.model.collision_surface.num_points(), num_vertices);
 
   // The default, the paper's model, and penalty (contacts searched at 1 kHz on the frame's
   // surface, the tree refitted once a frame).
@@ -222,11 +231,7 @@ TEST(EmbeddedContactTest, ARunWithTheBoundaryAsItsCollisionSurfaceFeelsTheSame) 
 // the tets: refused at its key, naming the file; with the units it loads.
 TEST(EmbeddedContactTest, ASurfaceInOtherUnitsIsRefusedAtItsKeyUntilTheyAreGiven) {
   const config::test::TempFolder folder("embedded_units");
-  const config::Scene plain = config::ParseScene(kPressScene, "press.yaml", folder.path());
-  const config::Body plain_body = *config::MakeSceneBody(plain);
-  const auto [vertices_m, triangles] = BoundaryAsSurface(plain_body.model);
-  std::ofstream((std::filesystem::path(folder.path()) / "boundary_mm.obj").string())
-      << config::test::ObjText(1000.0 * vertices_m, triangles);
+  const Eigen::Index num_vertices = WritePressBoundary(folder, "boundary_mm.obj", 1000.0);
   const std::string without_units = config::test::Replace(
       kPressScene, "  solver:", "  collision: {file: boundary_mm.obj}\n  solver:");
   const config::Scene scene = config::ParseScene(without_units, "press.yaml", folder.path());
@@ -244,7 +249,7 @@ TEST(EmbeddedContactTest, ASurfaceInOtherUnitsIsRefusedAtItsKeyUntilTheyAreGiven
       kPressScene, "  solver:", "  collision: {file: boundary_mm.obj, units: mm}\n  solver:");
   const config::Body body =
       *config::MakeSceneBody(config::ParseScene(with_units, "press.yaml", folder.path()));
-  EXPECT_EQ(body.model.collision_surface.num_points(), vertices_m.cols());
+  EXPECT_EQ(body.model.collision_surface.num_points(), num_vertices);
 }
 
 }  // namespace
