@@ -82,6 +82,42 @@ class ModelReceiver {
   long rejected_ = 0;
 };
 
+// An overrun (a step that ended more than a period after its deadline) put down to one cause, the
+// first that holds, from the thread's counters around the step's work (ReadThreadCounters):
+//  - preempted: another task took the CPU during the work (an involuntary switch; only a task of
+//    higher priority can, for a SCHED_FIFO loop);
+//  - faulted: the work faulted memory in (page faults);
+//  - held off: the work's wall time exceeds its CPU time by more than half a period with neither:
+//    the hypervisor or interrupts took the CPU from the whole VM;
+//  - catching up: the step started behind, the step before it having ended after this one's
+//    deadline (one long step makes the next ones late too, until the loop is back on its clock);
+//  - woke late: the work was short but the wake-up came more than half a period late (the timer
+//    fired late, or the vCPU it fired on was not running);
+//  - own work: the step's computation itself.
+struct LateStepCauses {
+  long preempted = 0, faulted = 0, held_off = 0, catching_up = 0, woke_late = 0, own_work = 0;
+  double held_off_s = 0.0;  // the wall time the held-off steps spent off the CPU
+  void Add(bool started_behind, double wake_late_s, double work_wall_s,
+           const ThreadCounters& before, const ThreadCounters& after, double dt_s) {
+    const double off_cpu_s = work_wall_s - 1e-9 * static_cast<double>(after.cpu_ns - before.cpu_ns);
+    if (started_behind && work_wall_s < 0.5 * dt_s) {
+      ++catching_up;
+    } else if (after.involuntary_switches > before.involuntary_switches) {
+      ++preempted;
+    } else if (after.minor_faults + after.major_faults >
+               before.minor_faults + before.major_faults) {
+      ++faulted;
+    } else if (off_cpu_s > 0.5 * dt_s) {
+      ++held_off;
+      held_off_s += off_cpu_s;
+    } else if (wake_late_s > 0.5 * dt_s) {
+      ++woke_late;
+    } else {
+      ++own_work;
+    }
+  }
+};
+
 // Loop statistics, filled without allocation (buffers reserved for the whole run).
 struct LoopStats {
   std::vector<double> period_error_s;  // |period − Δt| per step
@@ -95,6 +131,15 @@ struct LoopStats {
   std::vector<double> model_latency_s;
   std::vector<double> model_ready_s;
   long overruns = 0, zeroed_steps = 0, passivity_alarms = 0, lcp_fallbacks = 0;
+  LateStepCauses late;  // why the overruns were late
+  // The slowest step's work and what its rows' solve did (hybrid and lcp modes).
+  struct {
+    double compute_s = 0.0;
+    long step = -1;
+    int rows = 0, iterations = 0, factorizations = 0;
+    bool new_model = false;
+  } slowest;
+  double steal_ms = -1.0;  // the hypervisor's steal from all CPUs over the loop (-1: unknown)
   double max_force_sent_N = 0.0;
   // Fade-out when the models stop (the visual process died): the step the last model arrived,
   // the last step with a non-zero force, and the largest force sent with a stale model.
@@ -295,6 +340,22 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver,
           {"compute_p50_us", 1e6 * Quantile(stats->compute_s, 0.5)},
           {"compute_max_us", 1e6 * Quantile(stats->compute_s, 1.0)},
           {"overruns", stats->overruns},
+          {"overrun_causes",
+           {{"preempted", stats->late.preempted},
+            {"page_faults", stats->late.faulted},
+            {"held_off_cpu", stats->late.held_off},
+            {"held_off_cpu_ms", 1e3 * stats->late.held_off_s},
+            {"catching_up", stats->late.catching_up},
+            {"woke_late", stats->late.woke_late},
+            {"own_work", stats->late.own_work}}},
+          {"vm_steal_ms", stats->steal_ms},
+          {"slowest_step",
+           {{"step", stats->slowest.step},
+            {"compute_us", 1e6 * stats->slowest.compute_s},
+            {"new_model", stats->slowest.new_model},
+            {"rows", stats->slowest.rows},
+            {"iterations", stats->slowest.iterations},
+            {"factorizations", stats->slowest.factorizations}}},
           {"zeroed_steps", stats->zeroed_steps},
           {"passivity_alarms", stats->passivity_alarms},
           {"lcp_fallback_steps", stats->lcp_fallbacks},
@@ -327,6 +388,14 @@ void PrintSummary(const nlohmann::json& summary, const LoopStats& stats,
       summary["model_latency"]["p50_ms"].get<double>(),
       summary["model_latency"]["p99_ms"].get<double>(),
       summary["model_ready"]["p99_ms"].get<double>(), stats.max_force_sent_N);
+  if (stats.overruns > 0)
+    std::printf(
+        "hapsim haptic: overruns: %ld own work (slowest step %.2f ms), %ld catching up after "
+        "them, %ld preempted, %ld page faults, %ld held off the CPU (%.1f ms; the VM's steal "
+        "over the loop %.0f ms), %ld woke late\n",
+        stats.late.own_work, 1e3 * stats.slowest.compute_s, stats.late.catching_up,
+        stats.late.preempted, stats.late.faulted, stats.late.held_off, 1e3 * stats.late.held_off_s,
+        stats.steal_ms, stats.late.woke_late);
   if (gate.num_foreign() > 0)
     std::printf(
         "hapsim haptic: ignored %ld messages of other runs on this LCM URL (first: run %s)\n",
@@ -429,10 +498,12 @@ void RunHaptic(const HapticCommandOptions& options) {
   stats.model_ready_s.reserve(num_steps);
   StepMessages step_messages(run_id);
   const std::int64_t dt_ns = std::llround(1e9 * loop_options.dt_s);
-  std::int64_t deadline_ns = MonotonicNs() + dt_ns, previous_start_ns = 0;
+  std::int64_t deadline_ns = MonotonicNs() + dt_ns, previous_start_ns = 0, previous_end_ns = 0;
   long step = 0;
+  const std::int64_t steal_before_ns = ReadStealNs();
   for (; step < num_steps && !g_stop_requested.load(); ++step) {
     SleepUntil(deadline_ns);
+    const ThreadCounters counters_before = ReadThreadCounters();
     const std::int64_t start_ns = MonotonicNs();
     const std::int64_t step_start_utime = WallMicros();
     const double period_s = step == 0 ? loop_options.dt_s : 1e-9 * (start_ns - previous_start_ns);
@@ -446,11 +517,30 @@ void RunHaptic(const HapticCommandOptions& options) {
     const device::HapticLoopOutput out = loop.Step(device.state, device.age_s, update);
     backend->Write(out.sent.force_W_N, out.sent.torque_W_N_m);
     stats.compute_s.push_back(1e-9 * (MonotonicNs() - start_ns));
+    if (stats.compute_s.back() > stats.slowest.compute_s) {
+      const device::HapticStep& haptic_step = loop.haptic_step();
+      stats.slowest = {stats.compute_s.back(),
+                       step,
+                       haptic_step.num_rows_in_use(),
+                       haptic_step.rows_solver().last_iterations(),
+                       haptic_step.rows_solver().last_num_factorizations(),
+                       update != nullptr};
+    }
     RecordStep(step, step_start_utime, update, out, loop_options.safety.model_stale_s, &stats);
     PublishStep(&lcm, run_id, step, device, loop, out, stats, period_s, &step_messages);
-    if (MonotonicNs() > deadline_ns + dt_ns) ++stats.overruns;
+    const std::int64_t end_ns = MonotonicNs();
+    if (end_ns > deadline_ns + dt_ns) {
+      ++stats.overruns;
+      stats.late.Add(previous_end_ns > deadline_ns, 1e-9 * (start_ns - deadline_ns),
+                     1e-9 * (end_ns - start_ns), counters_before, ReadThreadCounters(),
+                     loop_options.dt_s);
+    }
+    previous_end_ns = end_ns;
     deadline_ns += dt_ns;
   }
+  const std::int64_t steal_after_ns = ReadStealNs();
+  if (steal_before_ns >= 0 && steal_after_ns >= 0)
+    stats.steal_ms = 1e-6 * static_cast<double>(steal_after_ns - steal_before_ns);
   receive_thread.Stop();
   const nlohmann::json summary = Summarize(&stats, &receiver, gate, step, loop_options.dt_s,
                                            loop_options.safety.model_stale_s);

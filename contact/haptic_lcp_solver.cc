@@ -111,6 +111,7 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
         q(kMaxBorder),
         active(max_rows_in, 0),
         held(max_rows_in, 0),
+        refused(max_rows_in, 0),
         frame_active(max_rows_in, 0),
         r(max_rows_in),
         x(max_rows_in),
@@ -154,7 +155,8 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   void Deactivate(int i);
   bool SolveOnActiveSet();
   void CalcSlack();
-  bool RunActiveSet(double tolerance, int* iterations);
+  enum class End { kConverged, kFailed, kOutOfBudget };
+  End RunActiveSet(double tolerance, int max_solves, int* iterations);
   double CalcResidual(double dt_s) const;
   // Whether refactorising is cheaper than bordering `num_leaving` rows leaving the base at
   // once. Rough flop model: a border item costs a forward substitution and a row of P, ~2 k0²;
@@ -195,6 +197,8 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   // rows): always in the active set, their λ of either sign, never a complementarity test.
   std::vector<std::uint8_t> held;
   int num_held = 0;
+  // (max) rows refused entry since x last moved (RunActiveSet: z ≤ 0 on entering, round-off).
+  std::vector<std::uint8_t> refused;
   // (max) the frame's active rows as the rows last gave them (λ_frame > 0): unstamped rows are
   // the cached ones only if these match too, for they choose the held set.
   std::vector<std::uint8_t> frame_active;
@@ -439,15 +443,19 @@ void HapticLcpSolver::Workspace::CalcSlack() {
 }
 
 // The active-set iteration from the current active set, to complementarity within
-// `tolerance` (on w). Leaves x and w at the solution. Returns false if an equality solve failed
-// (singular W on the active set) or 3n + 10 rows entered without convergence.
-bool HapticLcpSolver::Workspace::RunActiveSet(double tolerance, int* iterations) {
+// `tolerance` (on w). Leaves x and w at the solution. Fails if an equality solve failed (singular
+// W on the active set) or 3n + 10 rows entered without convergence. With max_solves > 0, stops
+// once `*iterations` has reached it, at the top of an outer iteration: x is then feasible (≥ 0
+// off the held rows), optimal on its active set, and the set is kept for the next call.
+HapticLcpSolver::Workspace::End HapticLcpSolver::Workspace::RunActiveSet(double tolerance,
+                                                                         int max_solves,
+                                                                         int* iterations) {
   // Shrink the guessed set until its equality solution is positive: a feasible start for the
   // active-set iteration, optimal on its face. Many rows leaving at once (a poor guess for new
   // rows) are cheaper to refactorise than to border.
   while (true) {
     ++*iterations;
-    if (!SolveOnActiveSet()) return false;
+    if (!SolveOnActiveSet()) return End::kFailed;
     int num_leaving = 0;
     for (int i = 0; i < n; ++i) num_leaving += active[i] && !held[i] && !(z[i] > 0.0);
     if (num_leaving == 0) break;
@@ -459,18 +467,34 @@ bool HapticLcpSolver::Workspace::RunActiveSet(double tolerance, int* iterations)
 
   // Lawson–Hanson: the most violated row enters; solve on the set; step back along the segment
   // (ratio test) when an active x would turn negative, and drop the rows that reached zero.
+  //
+  // A row whose own z comes out ≤ 0 on entering cannot enter: in exact arithmetic the most
+  // violated row always gets z > 0 (W positive definite on the set), so this is round-off among
+  // nearly dependent rows (a probe on a few hundred of a fine surface's contacts). Entered, it
+  // would leave at once by the ratio test with x unchanged, and be the most violated again: the
+  // iteration would cycle to its entering limit (seen: 1,544 solves, 17 ms, in one 1 kHz step of
+  // a trainer session). Lawson & Hanson's NNLS refuses such a row (their step 6: set its w to 0
+  // and choose again); so does this, until x next moves. What is left violated only by refused
+  // rows is round-off: the residual test below judges it (and retries once from a fresh factor).
+  for (int i = 0; i < n; ++i) refused[i] = 0;
   for (int outer = 0;; ++outer) {
     CalcSlack();
     int entering = -1;
     double most_violated = -tolerance;
     for (int i = 0; i < n; ++i)
-      if (!active[i] && w[i] < most_violated) most_violated = w[i], entering = i;
-    if (entering < 0) return true;
-    if (outer == 3 * n + 10) return false;
+      if (!active[i] && !refused[i] && w[i] < most_violated) most_violated = w[i], entering = i;
+    if (entering < 0) return End::kConverged;
+    if (outer == 3 * n + 10) return End::kFailed;
+    if (max_solves > 0 && *iterations >= max_solves) return End::kOutOfBudget;
     Activate(entering);
-    while (true) {
+    for (bool entered = true;; entered = false) {
       ++*iterations;
-      if (!SolveOnActiveSet()) return false;
+      if (!SolveOnActiveSet()) return End::kFailed;
+      if (entered && !(z[entering] > 0.0)) {
+        Deactivate(entering);
+        refused[entering] = 1;
+        break;
+      }
       // Ratio test: the longest step along z − x keeping x ≥ 0. The row that blocks it is set
       // to zero explicitly (x + step (z − x) may round to a tiny positive value, and a row left
       // in the set that way would stall the iteration with ever smaller steps).
@@ -484,6 +508,8 @@ bool HapticLcpSolver::Workspace::RunActiveSet(double tolerance, int* iterations)
       }
       for (int i = 0; i < n; ++i)
         if (active[i]) x[i] += step * (z[i] - x[i]);
+      if (step > 0.0)
+        for (int i = 0; i < n; ++i) refused[i] = 0;
       if (blocking < 0) break;
       x[blocking] = 0.0;
       bool any_active = num_held > 0;  // held rows stay: solve on them again
@@ -516,9 +542,12 @@ double HapticLcpSolver::Workspace::CalcResidual(double dt_s) const {
   return scale > 0.0 ? residual / scale : residual;
 }
 
-HapticLcpSolver::HapticLcpSolver(int max_rows, int friction_sweeps, bool hold_frame_contacts)
-    : hold_frame_contacts_(hold_frame_contacts) {
+HapticLcpSolver::HapticLcpSolver(int max_rows, int friction_sweeps, bool hold_frame_contacts,
+                                 int max_solves_per_step)
+    : hold_frame_contacts_(hold_frame_contacts), max_solves_per_step_(max_solves_per_step) {
   if (max_rows < 0) throw std::invalid_argument("HapticLcpSolver: max_rows must be ≥ 0");
+  if (max_solves_per_step < 0)
+    throw std::invalid_argument("HapticLcpSolver: max_solves_per_step must be ≥ 0");
   if (friction_sweeps < 0)
     throw std::invalid_argument("HapticLcpSolver: friction_sweeps must be ≥ 0");
   ws_ = std::make_unique<Workspace>(max_rows);
@@ -570,6 +599,7 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   last_residual_ = 0.0;
   last_num_active_ = 0;
   last_num_factorizations_ = 0;
+  last_out_of_budget_ = false;
   ws.num_factorizations = 0;
   last_solved_ = false;
   last_was_friction_ = rows.rows_per_contact == 3 && friction_;
@@ -615,13 +645,18 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
       kEnteringTolerance * std::max(1.0, ws.r.head(n).lpNorm<Eigen::Infinity>());
   // One retry from a fresh factorisation should round-off in the border have spoilt the
   // complementarity (never seen in the tests; a guard for the real-time loop).
+  // A step out of its budget keeps its feasible iterate and is not retried: the next step
+  // goes on from its active set.
   bool converged = false;
+  last_out_of_budget_ = false;
   for (int attempt = 0; attempt < 2; ++attempt) {
     if (attempt == 1) ws.rebase_pending = true;
-    converged = ws.RunActiveSet(tolerance, &last_iterations_);
+    const Workspace::End end = ws.RunActiveSet(tolerance, max_solves_per_step_, &last_iterations_);
+    converged = end != Workspace::End::kFailed;
+    last_out_of_budget_ = end == Workspace::End::kOutOfBudget;
     if (!converged) break;
     last_residual_ = ws.CalcResidual(dt_s);
-    if (!(last_residual_ > kRetryResidual)) break;
+    if (last_out_of_budget_ || !(last_residual_ > kRetryResidual)) break;
   }
   last_num_factorizations_ = ws.num_factorizations;
   if (!converged) {

@@ -2,6 +2,8 @@
 
 #include <sched.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -9,6 +11,8 @@
 #include <csignal>
 #include <cstring>
 #include <ctime>
+#include <fstream>
+#include <sstream>
 
 namespace hapsim {
 
@@ -44,6 +48,34 @@ std::string RequestRealtime(int priority) {
   if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
     failed += (failed.empty() ? "" : "; ") + std::string("mlockall: ") + std::strerror(errno);
   return failed;
+}
+
+ThreadCounters ReadThreadCounters() {
+  ThreadCounters counters;
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  counters.cpu_ns = static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+  rusage usage{};
+  if (getrusage(RUSAGE_THREAD, &usage) == 0) {
+    counters.voluntary_switches = usage.ru_nvcsw;
+    counters.involuntary_switches = usage.ru_nivcsw;
+    counters.minor_faults = usage.ru_minflt;
+    counters.major_faults = usage.ru_majflt;
+  }
+  return counters;
+}
+
+std::int64_t ReadStealNs() {
+  // "cpu  user nice system idle iowait irq softirq steal ...", in clock ticks (proc(5)).
+  std::ifstream stat("/proc/stat");
+  std::string line, label;
+  if (!std::getline(stat, line)) return -1;
+  std::istringstream fields(line);
+  long long ticks[8];
+  fields >> label;
+  for (long long& t : ticks) fields >> t;
+  if (!fields || label != "cpu") return -1;
+  return ticks[7] * (1000000000LL / sysconf(_SC_CLK_TCK));
 }
 
 namespace {

@@ -22,6 +22,24 @@ void SleepUntil(std::int64_t deadline_ns);
 // caller warns and carries on with normal scheduling).
 std::string RequestRealtime(int priority);
 
+// What the kernel counted for the calling thread (getrusage RUSAGE_THREAD and its CPU clock).
+// Between two readings they say why a late 1 kHz step was late: another task took the CPU
+// (involuntary switches), the thread faulted memory in (page faults), or neither while the wall
+// clock ran on past the thread's CPU time: the CPU was taken from the whole VM (the hypervisor's
+// steal) or by interrupts, which no priority inside the guest can refuse.
+struct ThreadCounters {
+  std::int64_t cpu_ns = 0;  // CLOCK_THREAD_CPUTIME_ID
+  long voluntary_switches = 0;
+  long involuntary_switches = 0;
+  long minor_faults = 0;
+  long major_faults = 0;
+};
+ThreadCounters ReadThreadCounters();  // no allocation: safe in the 1 kHz loop
+
+// The time the hypervisor took from this VM's CPUs, summed over them (/proc/stat "steal"), ns;
+// -1 when it cannot be read. Allocates: call it before and after a loop, not in it.
+std::int64_t ReadStealNs();
+
 // SIGINT and SIGTERM set this flag (installed by InstallStopHandlers); loops poll it.
 extern std::atomic<bool> g_stop_requested;
 void InstallStopHandlers();

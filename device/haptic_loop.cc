@@ -44,7 +44,7 @@ void EnsureLcpSolver(const HapticLoopOptions& options, ContactModelUpdate* updat
       update->lcp_solver->friction_sweeps() != options.lcp_friction_sweeps ||
       update->lcp_solver->hold_frame_contacts() != hold)
     update->lcp_solver = std::make_unique<contact::HapticLcpSolver>(
-        options.lcp_max_rows, options.lcp_friction_sweeps, hold);
+        options.lcp_max_rows, options.lcp_friction_sweeps, hold, kLcpSolvesPerStep);
 }
 
 bool PrepareLcpUpdate(const ToolModel& tool, const CouplingParams& coupling,

@@ -80,6 +80,7 @@ class HapticLoop {
     return options_.mode == HapticMode::kGodObject ? proxy_tool_ : step_.tool_state();
   }
   long num_steps() const { return num_steps_; }
+  const HapticStep& haptic_step() const { return step_; }
 
  private:
   HapticLoopOptions options_;

@@ -17,7 +17,7 @@ HapticStep::HapticStep(ToolModel tool, const CouplingParams& coupling,
       gravity_m_s2_(gravity_m_s2),
       dt_s_(dt_s),
       tool_state_(initial_tool),
-      lcp_(lcp_max_rows, lcp_friction_sweeps, hold_frame_contacts),
+      lcp_(lcp_max_rows, lcp_friction_sweeps, hold_frame_contacts, kLcpSolvesPerStep),
       targets_(hold_frame_contacts ? std::max(lcp_max_rows, 0) : 0) {}
 
 void HapticStep::SetContactRows(const contact::ContactRows* rows,

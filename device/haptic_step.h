@@ -36,6 +36,14 @@ struct HapticOutput {
   bool lcp_fell_back = false;
 };
 
+// The work a 1 kHz step may spend on the rows' solve (lcp and hybrid modes): equality solves on
+// an active set (HapticLcpSolver's max_solves_per_step). At ~260 rows one costs ~14 µs on the AMD
+// EPYC VM, so a step at the budget took 0.56–0.63 ms in trainer sessions, within the period; a
+// solve that needs more goes on over the next steps. In a session's log (10,935 steps, replayed)
+// 4 consecutive steps reached it: a new frame's 259 rows of which 116 ended active, where the
+// unbounded solve had taken 127 solves and 1.8 ms in one step (issue 25 item 4).
+constexpr int kLcpSolvesPerStep = 32;
+
 class HapticStep {
  public:
   // lcp_max_rows: capacity of the rows' solver (0: no rows; memory ≈ 16 lcp_max_rows² bytes);
@@ -64,6 +72,10 @@ class HapticStep {
   // it must outlive its use) in place of the linear model and rows; nullptr: back to them.
   void SetGeometricContact(GeometricHapticContact* geometric) { geometric_ = geometric; }
   int lcp_max_rows() const { return lcp_.max_rows(); }
+  // The rows the last steps solved (0: none, the linear model) and the solver that solved them
+  // (its last_* counters describe the last Step): for the loop's account of its slowest steps.
+  int num_rows_in_use() const { return rows_ != nullptr ? static_cast<int>(rows_->num_rows()) : 0; }
+  const contact::HapticLcpSolver& rows_solver() const { return *solver_; }
   HapticOutput Step(const DeviceState& device);
 
   const ToolState& tool_state() const { return tool_state_; }
