@@ -3,7 +3,8 @@
 #  - the visual frame of each on one core: `hapsim sim scenes/<scene>.yaml` (linear mode, its
 #    scripted device), median and 95th percentile over the frames, contacts;
 #  - the haptic loop during a trainer session: tests/apps/train_test.sh (Xvfb, xdotool palpating
-#    both targets) keeps the session, whose haptic process wrote its summary.
+#    both targets) keeps the session, whose haptic process wrote its summary: timing, the
+#    overruns by cause (apps/haptic_command.cc LateStepCauses), the slowest step's solve.
 # Prints a Markdown table. Usage: scripts/bench_train.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -33,6 +34,14 @@ for scene in sys.argv[2:]:
 pe = summary["period_error"]
 print(f"| trainer session: haptic period error p50 / p99 / max | {pe['p50_us']:.1f} / {pe['p99_us']:.1f} / {pe['max_us']:.0f} us |")
 print(f"| ... overruns, zeroed steps, steps | {summary['overruns']}, {summary['zeroed_steps']}, {summary['steps']} |")
+causes = summary["overrun_causes"]
+print(f"| ... overruns by cause: own work / catching up / preempted / page faults / held off the CPU / woke late | "
+      f"{causes['own_work']} / {causes['catching_up']} / {causes['preempted']} / {causes['page_faults']} / "
+      f"{causes['held_off_cpu']} / {causes['woke_late']} |")
+print(f"| ... the VM's steal over the session (/proc/stat, 10 ms a tick) | {summary['vm_steal_ms']:.0f} ms |")
+slowest = summary["slowest_step"]
+print(f"| ... slowest step: compute, rows, equality solves, factorisations | {slowest['compute_us']:.0f} us, "
+      f"{slowest['rows']}, {slowest['iterations']}, {slowest['factorizations']} |")
 lat = summary["model_latency"]
 print(f"| ... model latency (publish to first use) p50 / p99 | {lat['p50_ms']:.2f} / {lat['p99_ms']:.2f} ms |")
 print(f"| ... haptic step compute p50 / max | {summary['compute_p50_us']:.1f} / {summary['compute_max_us']:.0f} us |")
