@@ -82,42 +82,6 @@ class ModelReceiver {
   long rejected_ = 0;
 };
 
-// An overrun (a step that ended more than a period after its deadline) put down to one cause, the
-// first that holds, from the thread's counters around the step's work (ReadThreadCounters):
-//  - preempted: another task took the CPU during the work (an involuntary switch; only a task of
-//    higher priority can, for a SCHED_FIFO loop);
-//  - faulted: the work faulted memory in (page faults);
-//  - held off: the work's wall time exceeds its CPU time by more than half a period with neither:
-//    the hypervisor or interrupts took the CPU from the whole VM;
-//  - catching up: the step started behind, the step before it having ended after this one's
-//    deadline (one long step makes the next ones late too, until the loop is back on its clock);
-//  - woke late: the work was short but the wake-up came more than half a period late (the timer
-//    fired late, or the vCPU it fired on was not running);
-//  - own work: the step's computation itself.
-struct LateStepCauses {
-  long preempted = 0, faulted = 0, held_off = 0, catching_up = 0, woke_late = 0, own_work = 0;
-  double held_off_s = 0.0;  // the wall time the held-off steps spent off the CPU
-  void Add(bool started_behind, double wake_late_s, double work_wall_s,
-           const ThreadCounters& before, const ThreadCounters& after, double dt_s) {
-    const double off_cpu_s = work_wall_s - 1e-9 * static_cast<double>(after.cpu_ns - before.cpu_ns);
-    if (started_behind && work_wall_s < 0.5 * dt_s) {
-      ++catching_up;
-    } else if (after.involuntary_switches > before.involuntary_switches) {
-      ++preempted;
-    } else if (after.minor_faults + after.major_faults >
-               before.minor_faults + before.major_faults) {
-      ++faulted;
-    } else if (off_cpu_s > 0.5 * dt_s) {
-      ++held_off;
-      held_off_s += off_cpu_s;
-    } else if (wake_late_s > 0.5 * dt_s) {
-      ++woke_late;
-    } else {
-      ++own_work;
-    }
-  }
-};
-
 // Loop statistics, filled without allocation (buffers reserved for the whole run).
 struct LoopStats {
   std::vector<double> period_error_s;  // |period − Δt| per step
@@ -342,7 +306,7 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver,
           {"overruns", stats->overruns},
           {"overrun_causes",
            {{"preempted", stats->late.preempted},
-            {"page_faults", stats->late.faulted},
+            {"page_faults", stats->late.page_faults},
             {"held_off_cpu", stats->late.held_off},
             {"held_off_cpu_ms", 1e3 * stats->late.held_off_s},
             {"catching_up", stats->late.catching_up},
@@ -394,8 +358,8 @@ void PrintSummary(const nlohmann::json& summary, const LoopStats& stats,
         "them, %ld preempted, %ld page faults, %ld held off the CPU (%.1f ms; the VM's steal "
         "over the loop %.0f ms), %ld woke late\n",
         stats.late.own_work, 1e3 * stats.slowest.compute_s, stats.late.catching_up,
-        stats.late.preempted, stats.late.faulted, stats.late.held_off, 1e3 * stats.late.held_off_s,
-        stats.steal_ms, stats.late.woke_late);
+        stats.late.preempted, stats.late.page_faults, stats.late.held_off,
+        1e3 * stats.late.held_off_s, stats.steal_ms, stats.late.woke_late);
   if (gate.num_foreign() > 0)
     std::printf(
         "hapsim haptic: ignored %ld messages of other runs on this LCM URL (first: run %s)\n",

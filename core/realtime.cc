@@ -65,6 +65,25 @@ ThreadCounters ReadThreadCounters() {
   return counters;
 }
 
+void LateStepCauses::Add(bool started_behind, double wake_late_s, double work_wall_s,
+                         const ThreadCounters& before, const ThreadCounters& after, double dt_s) {
+  const double off_cpu_s = work_wall_s - 1e-9 * static_cast<double>(after.cpu_ns - before.cpu_ns);
+  if (started_behind && work_wall_s < 0.5 * dt_s) {
+    ++catching_up;
+  } else if (after.involuntary_switches > before.involuntary_switches) {
+    ++preempted;
+  } else if (after.minor_faults + after.major_faults > before.minor_faults + before.major_faults) {
+    ++page_faults;
+  } else if (off_cpu_s > 0.5 * dt_s) {
+    ++held_off;
+    held_off_s += off_cpu_s;
+  } else if (wake_late_s > 0.5 * dt_s) {
+    ++woke_late;
+  } else {
+    ++own_work;
+  }
+}
+
 std::int64_t ReadStealNs() {
   // "cpu  user nice system idle iowait irq softirq steal ...", in clock ticks (proc(5)).
   std::ifstream stat("/proc/stat");

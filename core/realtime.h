@@ -36,6 +36,33 @@ struct ThreadCounters {
 };
 ThreadCounters ReadThreadCounters();  // no allocation: safe in the 1 kHz loop
 
+// An overrun (a step of a fixed-period loop that ended more than a period after its deadline) put
+// down to one cause, the first that holds, from the loop thread's counters around the step's work:
+//  - catching up: the step started behind, the step before it having ended after this one's
+//    deadline, and its own work was short (one long step makes the next ones late too, until the
+//    loop is back on its clock);
+//  - preempted: another task took the CPU during the work (an involuntary switch; for a
+//    SCHED_FIFO loop only a task of higher priority can);
+//  - page faults: the work faulted memory in;
+//  - held off: the work's wall time exceeds its CPU time by more than half a period with neither:
+//    the hypervisor (steal, not counted as CPU time with PARAVIRT_TIME_ACCOUNTING) or interrupts
+//    took the CPU from the whole VM;
+//  - woke late: the work was short but the wake-up came more than half a period late (the timer
+//    fired late, or the vCPU it fired on was not running);
+//  - own work: the step's computation itself.
+struct LateStepCauses {
+  long catching_up = 0, preempted = 0, page_faults = 0, held_off = 0, woke_late = 0, own_work = 0;
+  double held_off_s = 0.0;  // the wall time the held-off steps spent off the CPU
+  // started_behind: the previous step ended after this step's deadline; wake_late_s: this step's
+  // start minus its deadline; work_wall_s: its work's wall time, between the readings `before`
+  // and `after`; dt_s: the period.
+  void Add(bool started_behind, double wake_late_s, double work_wall_s,
+           const ThreadCounters& before, const ThreadCounters& after, double dt_s);
+  long total() const {
+    return catching_up + preempted + page_faults + held_off + woke_late + own_work;
+  }
+};
+
 // The time the hypervisor took from this VM's CPUs, summed over them (/proc/stat "steal"), ns;
 // -1 when it cannot be read. Allocates: call it before and after a loop, not in it.
 std::int64_t ReadStealNs();
