@@ -78,6 +78,7 @@ fem::EmbeddedSurface EmbedSurfaceFile(const EmbeddedSurfaceSource& source,
 
 Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
   fem::TetMesh mesh = MakeMesh(scene.mesh);
+  if (scene.quadratic) mesh = fem::MakeQuadraticMesh(mesh);
   std::vector<int> fixed_nodes;
   if (scene.fixed) {
     fixed_nodes =

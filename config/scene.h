@@ -261,6 +261,9 @@ struct EmbeddedSurfaceSource {
 
 struct BodyScene {
   MeshSource mesh;
+  // `element: p2`: quadratic tets (fem/quadratic_tet.h), a node added on every edge of the mesh;
+  // `p1` (the default): linear tets.
+  bool quadratic = false;
   std::optional<EmbeddedSurfaceSource> collision_surface;  // contacts found on it; else boundary
   std::optional<EmbeddedSurfaceSource> visual_surface;     // the viewer draws it; else boundary
   fem::Material material;

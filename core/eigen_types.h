@@ -14,5 +14,6 @@ using Matrix12d = Eigen::Matrix<double, 12, 12>;
 using Matrix3Xd = Eigen::Matrix<double, 3, Eigen::Dynamic>;
 using Matrix4Xi = Eigen::Matrix<int, 4, Eigen::Dynamic>;
 using Matrix3Xi = Eigen::Matrix<int, 3, Eigen::Dynamic>;
+using Matrix6Xi = Eigen::Matrix<int, 6, Eigen::Dynamic>;
 
 }  // namespace hapsim

@@ -39,9 +39,43 @@ void CalcElementRotations(const Model& model, const Eigen::VectorXd& x_m, Elasti
   CalcRotationsOfDeformation(rotations->data(), model.num_tets(), rotations->data());
 }
 
+namespace {
+
+// A quadratic tet's nodes at positions x (3N) and at rest.
+void GatherQuadratic(const Model& model, const Eigen::VectorXd& x_m, int t, P2Nodes* x_local_m,
+                     P2Nodes* X_local_m) {
+  for (int a = 0; a < kP2Nodes; ++a) {
+    const int node = model.mesh.node(a, t);
+    x_local_m->col(a) = x_m.segment<3>(3 * node);
+    X_local_m->col(a) = model.mesh.rest_positions_m.col(node);
+  }
+}
+
+// Quadratic tets: f_e = −R K_e (Rᵀ x_e − X_e) (fem/quadratic_tet.h), scattered.
+void AddQuadraticElasticForce(const Model& model, const Eigen::VectorXd& x_m,
+                              const std::vector<Eigen::Matrix3d>& rotations,
+                              Eigen::VectorXd* force_N) {
+  P2Nodes x_local_m, X_local_m;
+  for (int t = 0; t < model.num_tets(); ++t) {
+    GatherQuadratic(model, x_m, t, &x_local_m, &X_local_m);
+    const Eigen::Matrix3d& R = rotations[t];
+    const P2Nodes u_local_m = R.transpose() * x_local_m - X_local_m;
+    const P2Vector f_local_N =
+        model.quadratic_stiffness[t] * Eigen::Map<const P2Vector>(u_local_m.data());
+    for (int a = 0; a < kP2Nodes; ++a)
+      force_N->segment<3>(3 * model.mesh.node(a, t)) -= R * f_local_N.segment<3>(3 * a);
+  }
+}
+
+}  // namespace
+
 void CalcElasticForce(const Model& model, const Eigen::VectorXd& x_m,
                       const std::vector<Eigen::Matrix3d>& rotations, Eigen::VectorXd* force_N) {
   force_N->setZero(model.num_dofs());
+  if (model.is_quadratic()) {
+    AddQuadraticElasticForce(model, x_m, rotations, force_N);
+    return;
+  }
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
     const Eigen::Matrix3d& R = rotations[t];
@@ -58,6 +92,16 @@ void CalcElasticForce(const Model& model, const Eigen::VectorXd& x_m,
 double CalcElasticEnergy(const Model& model, const Eigen::VectorXd& x_m,
                          const std::vector<Eigen::Matrix3d>& rotations) {
   double energy_J = 0.0;
+  if (model.is_quadratic()) {
+    P2Nodes x_local_m, X_local_m;
+    for (int t = 0; t < model.num_tets(); ++t) {
+      GatherQuadratic(model, x_m, t, &x_local_m, &X_local_m);
+      const P2Nodes u_local_m = rotations[t].transpose() * x_local_m - X_local_m;
+      const Eigen::Map<const P2Vector> u(u_local_m.data());
+      energy_J += 0.5 * u.dot(model.quadratic_stiffness[t] * u);
+    }
+    return energy_J;
+  }
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
     const Eigen::Matrix3d strain =

@@ -7,6 +7,9 @@
 //   elastic force on node i             f_i = −V R_e σ b_i     ( = −R_e K_e (R_eᵀ x_e − X_e) )
 //   energy                              E_e = V (μ ε:ε + λ/2 tr(ε)²)
 // With R_e = I this is plain linear FEM, whose force is not invariant under rotation.
+// Quadratic tets (fem/quadratic_tet.h) take R_e from their corner tet, as here, and their force
+// f_e = −R_e K_e (R_eᵀ x_e − X_e) and energy from the stored K_e. CalcElementStress is the corner
+// tet's (the mean strain of a straight quadratic tet is not its corners'; for display only).
 
 #include <Eigen/Core>
 #include <vector>

@@ -22,6 +22,7 @@ Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& 
       Eigen::Map<const Eigen::VectorXd>(model.mesh.rest_positions_m.data(), 3 * num_nodes);
 
   model.tet_rest.resize(model.num_tets());
+  if (model.is_quadratic()) model.quadratic_stiffness.reserve(model.num_tets());
   model.node_mass_kg = Eigen::VectorXd::Zero(num_nodes);
   for (int t = 0; t < model.num_tets(); ++t) {
     const Eigen::Vector4i tet = model.mesh.tets.col(t);
@@ -36,8 +37,19 @@ Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& 
     rest.volume_m3 = rest_edges_m.determinant() / 6.0;
     rest.lame_mu_Pa = material.lame_mu_Pa();
     rest.lame_lambda_Pa = material.lame_lambda_Pa();
-    for (int a = 0; a < 4; ++a)
-      model.node_mass_kg[tet[a]] += material.density_kg_m3 * rest.volume_m3 / 4.0;
+    if (model.is_quadratic()) {
+      P2Nodes X_m;
+      for (int a = 0; a < kP2Nodes; ++a)
+        X_m.col(a) = model.mesh.rest_positions_m.col(model.mesh.node(a, t));
+      const QuadraticTetRest quadratic =
+          MakeQuadraticTetRest(X_m, rest.lame_mu_Pa, rest.lame_lambda_Pa, material.density_kg_m3);
+      model.quadratic_stiffness.push_back(quadratic.stiffness);
+      for (int a = 0; a < kP2Nodes; ++a)
+        model.node_mass_kg[model.mesh.node(a, t)] += quadratic.lumped_mass_kg[a];
+    } else {
+      for (int a = 0; a < 4; ++a)
+        model.node_mass_kg[tet[a]] += material.density_kg_m3 * rest.volume_m3 / 4.0;
+    }
   }
   model.dof_mass_kg = model.node_mass_kg.replicate(1, 3).transpose().reshaped();
 
@@ -60,18 +72,29 @@ Model MergeModels(const std::vector<Model>& models) {
       throw std::invalid_argument(
           "the deformable objects must share their Rayleigh damping (rayleigh_alpha_1_s, "
           "rayleigh_beta_s): one damping serves the implicit step's matrix");
+    if (model.is_quadratic() != models.front().is_quadratic())
+      throw std::invalid_argument(
+          "the deformable objects must all have linear tets or all quadratic ones (element)");
     num_nodes += model.num_nodes();
     num_tets += model.num_tets();
     num_faces += static_cast<int>(model.surface_triangles.cols());
   }
   merged.mesh.rest_positions_m.resize(3, num_nodes);
   merged.mesh.tets.resize(4, num_tets);
+  if (models.front().is_quadratic()) merged.mesh.edge_nodes.resize(6, num_tets);
   merged.surface_triangles.resize(3, num_faces);
   merged.node_mass_kg.resize(num_nodes);
   int node = 0, tet = 0, face = 0;
   for (const Model& model : models) {
     merged.mesh.rest_positions_m.middleCols(node, model.num_nodes()) = model.mesh.rest_positions_m;
     merged.mesh.tets.middleCols(tet, model.num_tets()) = model.mesh.tets.array() + node;
+    if (model.is_quadratic()) {
+      merged.mesh.edge_nodes.middleCols(tet, model.num_tets()) =
+          model.mesh.edge_nodes.array() + node;
+      merged.quadratic_stiffness.insert(merged.quadratic_stiffness.end(),
+                                        model.quadratic_stiffness.begin(),
+                                        model.quadratic_stiffness.end());
+    }
     merged.surface_triangles.middleCols(face, model.surface_triangles.cols()) =
         model.surface_triangles.array() + node;
     merged.node_mass_kg.segment(node, model.num_nodes()) = model.node_mass_kg;

@@ -12,6 +12,7 @@
 
 #include "core/eigen_types.h"
 #include "fem/material.h"
+#include "fem/quadratic_tet.h"
 #include "fem/surface_embedding.h"
 #include "fem/tet_mesh.h"
 
@@ -37,8 +38,14 @@ struct Model {
   // density are the tets' for a body of one material (a merged body's tets keep their own, in
   // tet_rest and node_mass_kg; this is the first object's).
   Material material;
-  std::vector<TetRestData> tet_rest;       // one per tet
-  Eigen::VectorXd node_mass_kg;            // (N) lumped mass: ρV/4 from each incident tet
+  // One per tet; for quadratic tets, its corner tet's (whose rotation is the element's).
+  std::vector<TetRestData> tet_rest;
+  // Quadratic tets only: each tet's stiffness K_e at rest (fem/quadratic_tet.h), node-major over
+  // mesh.node(0..9, t); 7.2 kB a tet. Empty for linear tets.
+  std::vector<P2Matrix> quadratic_stiffness;
+  // (N) lumped mass: ρV/4 from each incident linear tet; a quadratic tet's HRZ masses (1/36 of
+  // its ρV at a corner, 4/27 at an edge node for a straight one).
+  Eigen::VectorXd node_mass_kg;
   Eigen::VectorXd dof_mass_kg;             // (3N) node_mass_kg repeated per axis
   std::vector<std::uint8_t> dof_is_fixed;  // (3N) 1 for a Dirichlet (fixed) dof
   Eigen::VectorXd rest_positions_m;        // (3N) stacked rest positions X
@@ -46,6 +53,7 @@ struct Model {
   int num_nodes() const { return mesh.num_nodes(); }
   int num_dofs() const { return 3 * mesh.num_nodes(); }
   int num_tets() const { return mesh.num_tets(); }
+  bool is_quadratic() const { return mesh.is_quadratic(); }
   int num_fixed_nodes() const;
 };
 
@@ -56,8 +64,9 @@ Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& 
 // Several bodies as one (a scene's deformable objects): meshes side by side (nodes and tets of
 // model k after those of models 0..k−1), each tet with its own Lamé constants, each node its mass
 // and fixity. The objects do not touch each other through the FEM (their stiffness blocks are
-// disjoint); they meet only through contacts. Throws std::invalid_argument if `models` is empty
-// or their Rayleigh damping differs (one damping serves the implicit step's matrix).
+// disjoint); they meet only through contacts. Throws std::invalid_argument if `models` is empty,
+// their Rayleigh damping differs (one damping serves the implicit step's matrix) or they mix
+// linear and quadratic tets.
 Model MergeModels(const std::vector<Model>& models);
 
 // Nodes whose rest position lies in the axis-aligned box [min_m − tol, max_m + tol].

@@ -27,6 +27,16 @@ std::optional<ProbeBinding> BindProbe(const Model& model, const Eigen::Vector3d&
 Eigen::Vector3d CalcProbeDisplacement(const Model& model, const State& state,
                                       const ProbeBinding& probe) {
   Eigen::Vector3d u_m = Eigen::Vector3d::Zero();
+  if (model.is_quadratic()) {
+    // The quadratic tet's shape functions at the probe's barycentric coordinates in its corner
+    // tet, which are its reference coordinates ξ = (w_1, w_2, w_3) in a straight tet.
+    const Eigen::Matrix<double, kP2Nodes, 1> N = CalcP2ShapeFunctions(probe.barycentric.tail<3>());
+    for (int a = 0; a < kP2Nodes; ++a) {
+      const int node = model.mesh.node(a, probe.tet);
+      u_m += N[a] * (state.x_m.segment<3>(3 * node) - model.rest_positions_m.segment<3>(3 * node));
+    }
+    return u_m;
+  }
   for (int a = 0; a < 4; ++a) {
     const int node = model.mesh.tets(a, probe.tet);
     u_m += probe.barycentric[a] *

@@ -1,7 +1,8 @@
 #pragma once
 // Probes: material points of the body whose displacement is reported. A probe is bound once, at
 // rest, to the tet that contains it and its barycentric weights; it then moves with that tet
-// (linear interpolation of the node displacements, exact for the linear-tet field).
+// (linear interpolation of the node displacements, exact for the linear-tet field; for quadratic
+// tets the quadratic shape functions at the same coordinates, exact for a straight element's).
 
 #include <Eigen/Core>
 #include <optional>

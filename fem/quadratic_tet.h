@@ -39,6 +39,15 @@ inline constexpr int kP2Nodes = 10;
 inline constexpr std::array<std::array<int, 2>, 6> kP2EdgeCorners = {
     {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}}};
 
+// The edge k (0..5) joining corners i and j, either way round.
+constexpr int FindP2Edge(int i, int j) {
+  for (int k = 0; k < 6; ++k)
+    if ((kP2EdgeCorners[k][0] == i && kP2EdgeCorners[k][1] == j) ||
+        (kP2EdgeCorners[k][0] == j && kP2EdgeCorners[k][1] == i))
+      return k;
+  return -1;
+}
+
 using P2Nodes = Eigen::Matrix<double, 3, kP2Nodes>;       // node positions, columns
 using P2Vector = Eigen::Matrix<double, 3 * kP2Nodes, 1>;  // node-major, as the body's dofs
 using P2Matrix = Eigen::Matrix<double, 3 * kP2Nodes, 3 * kP2Nodes>;

@@ -18,16 +18,19 @@ int FindValueIndex(const Eigen::SparseMatrix<double>& A, int row, int col) {
 
 }  // namespace
 
-StiffnessAssembler::StiffnessAssembler(const Model& model) {
+StiffnessAssembler::StiffnessAssembler(const Model& model)
+    : nodes_per_tet_(model.mesh.nodes_per_tet()),
+      stride_(3 * nodes_per_tet_ * (nodes_per_tet_ + 1) / 2) {
   const int num_dofs = model.num_dofs();
+  const int n = nodes_per_tet_;
   std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(static_cast<size_t>(model.num_tets()) * 78);
+  entries.reserve(static_cast<size_t>(model.num_tets()) * (3 * n) * (3 * n + 1) / 2);
   for (int t = 0; t < model.num_tets(); ++t)
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b)
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b)
         for (int r = 0; r < 3; ++r)
           for (int c = 0; c < 3; ++c) {
-            const int row = 3 * model.mesh.tets(a, t) + r, col = 3 * model.mesh.tets(b, t) + c;
+            const int row = 3 * model.mesh.node(a, t) + r, col = 3 * model.mesh.node(b, t) + c;
             if (row >= col) entries.emplace_back(row, col, 0.0);
           }
   pattern_.resize(num_dofs, num_dofs);
@@ -36,16 +39,16 @@ StiffnessAssembler::StiffnessAssembler(const Model& model) {
 
   // Pair (a, b ≥ a) of a tet is block (low, high) of the lower triangle, low the larger node:
   // columns 3·high + c hold rows 3·low + r. For a = b only the rows r ≥ c exist, from the diagonal.
-  block_value_index_.resize(model.num_tets());
+  block_value_index_.resize(static_cast<size_t>(model.num_tets()) * stride_);
   for (int t = 0; t < model.num_tets(); ++t) {
+    int* index = block_value_index_.data() + static_cast<size_t>(t) * stride_;
     int pair = 0;
-    for (int a = 0; a < 4; ++a)
-      for (int b = a; b < 4; ++b, ++pair) {
-        const int na = model.mesh.tets(a, t), nb = model.mesh.tets(b, t);
+    for (int a = 0; a < n; ++a)
+      for (int b = a; b < n; ++b, ++pair) {
+        const int na = model.mesh.node(a, t), nb = model.mesh.node(b, t);
         const int low = std::max(na, nb), high = std::min(na, nb);
         for (int c = 0; c < 3; ++c)
-          block_value_index_[t][3 * pair + c] =
-              FindValueIndex(pattern_, 3 * low + (a == b ? c : 0), 3 * high + c);
+          index[3 * pair + c] = FindValueIndex(pattern_, 3 * low + (a == b ? c : 0), 3 * high + c);
       }
   }
   diagonal_value_index_.resize(num_dofs);
@@ -59,10 +62,37 @@ StiffnessAssembler::StiffnessAssembler(const Model& model) {
   }
 }
 
+namespace {
+
+// Adds the 3 × 3 block of node pair (a, b) at `column` (3 value indices, as block_value_index_):
+// its rows r ≥ c on the diagonal (a = b), else the block or its transpose, whichever lies in the
+// lower triangle (node_a > node_b: the block itself, at rows of a and columns of b).
+inline void AddBlock(const Eigen::Matrix3d& block, bool diagonal, bool a_is_lower,
+                     const int* column, double* values) {
+  if (diagonal) {
+    values[column[0]] += block(0, 0), values[column[0] + 1] += block(1, 0);
+    values[column[0] + 2] += block(2, 0);
+    values[column[1]] += block(1, 1), values[column[1] + 1] += block(2, 1);
+    values[column[2]] += block(2, 2);
+  } else if (a_is_lower) {
+    for (int col = 0; col < 3; ++col)
+      for (int row = 0; row < 3; ++row) values[column[col] + row] += block(row, col);
+  } else {
+    for (int col = 0; col < 3; ++col)
+      for (int row = 0; row < 3; ++row) values[column[col] + row] += block(col, row);
+  }
+}
+
+}  // namespace
+
 void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::Matrix3d>& rotations,
                                   double scale, Eigen::SparseMatrix<double>* K) const {
   double* values = K->valuePtr();
   std::fill(values, values + K->nonZeros(), 0.0);
+  if (model.is_quadratic()) {
+    AssembleQuadratic(model, rotations, scale, values);
+    return;
+  }
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
     const double mu_V = scale * rest.lame_mu_Pa * rest.volume_m3;
@@ -70,7 +100,7 @@ void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::M
     const Eigen::Matrix<double, 3, 4>& b = rest.shape_gradients_1_m;
     const Eigen::Matrix<double, 3, 4> c = rotations[t] * b;
     const Eigen::Matrix4d gram = b.transpose() * b;  // b_a · b_b
-    const std::array<int, 30>& index = block_value_index_[t];
+    const int* index = block_value_index_.data() + static_cast<size_t>(t) * stride_;
     // K_ab = V (μ c_b c_aᵀ + λ c_a c_bᵀ + μ (b_a·b_b) I): each pair is computed once (10 blocks,
     // not 16) and only its lower-triangle copy is stored.
     int pair = 0;
@@ -79,21 +109,28 @@ void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::M
         Eigen::Matrix3d block = mu_V * (c.col(bb) * c.col(a).transpose()) +
                                 lambda_V * (c.col(a) * c.col(bb).transpose());
         block.diagonal().array() += mu_V * gram(a, bb);
-        const int* column = index.data() + 3 * pair;
-        if (bb == a) {  // rows r ≥ c of the diagonal block
-          values[column[0]] += block(0, 0), values[column[0] + 1] += block(1, 0);
-          values[column[0] + 2] += block(2, 0);
-          values[column[1]] += block(1, 1), values[column[1] + 1] += block(2, 1);
-          values[column[2]] += block(2, 2);
-        } else if (model.mesh.tets(a, t) > model.mesh.tets(bb, t)) {  // K_ab at (node a, node b)
-          for (int col = 0; col < 3; ++col)
-            for (int row = 0; row < 3; ++row) values[column[col] + row] += block(row, col);
-        } else {  // K_ba = K_abᵀ at (node b, node a)
-          for (int col = 0; col < 3; ++col)
-            for (int row = 0; row < 3; ++row) values[column[col] + row] += block(col, row);
-        }
+        AddBlock(block, bb == a, model.mesh.tets(a, t) > model.mesh.tets(bb, t), index + 3 * pair,
+                 values);
       }
     }
+  }
+}
+
+// R K_e Rᵀ block by block, R K_ab Rᵀ for each of the 55 node pairs, from the stored K_e.
+void StiffnessAssembler::AssembleQuadratic(const Model& model,
+                                           const std::vector<Eigen::Matrix3d>& rotations,
+                                           double scale, double* values) const {
+  for (int t = 0; t < model.num_tets(); ++t) {
+    const Eigen::Matrix3d R = rotations[t];
+    const P2Matrix& K_e = model.quadratic_stiffness[t];
+    const int* index = block_value_index_.data() + static_cast<size_t>(t) * stride_;
+    int pair = 0;
+    for (int a = 0; a < kP2Nodes; ++a)
+      for (int b = a; b < kP2Nodes; ++b, ++pair) {
+        const Eigen::Matrix3d block = scale * (R * K_e.block<3, 3>(3 * a, 3 * b) * R.transpose());
+        AddBlock(block, b == a, model.mesh.node(a, t) > model.mesh.node(b, t), index + 3 * pair,
+                 values);
+      }
   }
 }
 

@@ -1,5 +1,7 @@
 #pragma once
 // Warped stiffness K = Σ_e R_e K_e R_eᵀ (DESIGN.md §2), assembled into a sparse pattern built once.
+// Linear tets as below; quadratic ones (fem/quadratic_tet.h) from their stored K_e, R K_ab Rᵀ for
+// each of the 55 node pairs of a tet.
 //
 // The 3×3 block of K_e coupling nodes a and b of a tet, from the shape gradients b_a, b_b, is
 //   K_ab = V [ μ (b_a·b_b) I + μ b_b b_aᵀ + λ b_a b_bᵀ ],
@@ -26,7 +28,8 @@ namespace hapsim::fem {
 
 class StiffnessAssembler {
  public:
-  // Builds the lower triangle (column-major) of the pattern of all node pairs sharing a tet.
+  // Builds the lower triangle (column-major) of the pattern of all node pairs sharing a tet (its 4
+  // corners, or all 10 nodes of a quadratic tet).
   explicit StiffnessAssembler(const Model& model);
 
   // Overwrites the values of *K (which must have this assembler's pattern; see MakeMatrix) with
@@ -42,12 +45,18 @@ class StiffnessAssembler {
   const std::vector<int>& diagonal_value_index() const { return diagonal_value_index_; }
 
  private:
+  void AssembleQuadratic(const Model& model, const std::vector<Eigen::Matrix3d>& rotations,
+                         double scale, double* values) const;
+
+  int nodes_per_tet_;
+  int stride_;  // entries of block_value_index_ per tet: 3 per node pair (30 linear, 165 quadratic)
   Eigen::SparseMatrix<double> pattern_;
-  // Per tet, per node pair p = (a, b ≥ a) in the order (0,0) (0,1) .. (3,3), and column c of its
-  // block in the lower triangle (columns of the smaller node, rows of the larger): the value index
-  // of the block's first row in that column; the other rows follow at + 1, + 2 because rows are
-  // sorted within a column. A diagonal block (a = b) holds rows r ≥ c, from the diagonal entry.
-  std::vector<std::array<int, 30>> block_value_index_;
+  // Per tet (stride_ entries), per node pair p = (a, b ≥ a) in the order (0,0) (0,1) .. (n−1,n−1),
+  // and column c of its block in the lower triangle (columns of the smaller node, rows of the
+  // larger): the value index of the block's first row in that column; the other rows follow at
+  // + 1, + 2 because rows are sorted within a column. A diagonal block (a = b) holds rows r ≥ c,
+  // from the diagonal entry.
+  std::vector<int> block_value_index_;
   std::vector<int> diagonal_value_index_;
 };
 

@@ -4,7 +4,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <unordered_map>
+#include <vector>
+
+#include "fem/quadratic_tet.h"
 
 namespace hapsim::fem {
 
@@ -57,9 +61,35 @@ TetMeshQuality CalcTetMeshQuality(const TetMesh& mesh) {
   return quality;
 }
 
+namespace {
+
+// A quadratic tet's edge nodes: indices in range, distinct, and a mapping that does not fold
+// (FindQuadraticTetProblem: an edge node far off its edge's midpoint).
+std::optional<std::string> FindEdgeNodeProblem(const TetMesh& mesh, int t) {
+  if (!mesh.is_quadratic()) return std::nullopt;
+  const std::string tet = "tet " + std::to_string(t);
+  P2Nodes X;
+  for (int a = 0; a < kP2Nodes; ++a) {
+    const int node = mesh.node(a, t);
+    if (node < 0 || node >= mesh.num_nodes())
+      return tet + " refers to node " + std::to_string(node) + ", but the mesh has " +
+             std::to_string(mesh.num_nodes()) + " nodes";
+    for (int b = 0; b < a; ++b)
+      if (mesh.node(b, t) == node) return tet + " uses node " + std::to_string(node) + " twice";
+    X.col(a) = mesh.rest_positions_m.col(node);
+  }
+  if (auto problem = FindQuadraticTetProblem(X)) return tet + ": " + *problem;
+  return std::nullopt;
+}
+
+}  // namespace
+
 std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet) {
   const int num_nodes = mesh.num_nodes();
   if (!mesh.rest_positions_m.allFinite()) return std::string("a node position is not finite");
+  if (mesh.is_quadratic() && mesh.edge_nodes.cols() != mesh.tets.cols())
+    return "the mesh has " + std::to_string(mesh.tets.cols()) + " tets but edge nodes for " +
+           std::to_string(mesh.edge_nodes.cols());
   for (int t = 0; t < mesh.num_tets(); ++t) {
     if (bad_tet) *bad_tet = t;
     const Eigen::Vector4i tet = mesh.tets.col(t);
@@ -79,6 +109,7 @@ std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet
              std::to_string(CalcSignedVolume(mesh.rest_positions_m, tet)) + " m^3)";
     if (quality <= kDegenerateTetQuality)
       return "tet " + std::to_string(t) + " is degenerate (zero volume)";
+    if (auto problem = FindEdgeNodeProblem(mesh, t)) return problem;
   }
   if (bad_tet) *bad_tet = -1;
   return std::nullopt;
@@ -88,7 +119,9 @@ Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh) {
   // For a positively oriented tet (a,b,c,d) these four faces have outward normals.
   static constexpr int kOutwardFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   struct FaceRecord {
-    std::array<int, 3> oriented;
+    std::array<int, 3> oriented;  // node indices
+    std::array<int, 3> corners;   // the same as corners 0..3 of `tet`
+    int tet = -1;
     int count = 0;
   };
   struct KeyHash {
@@ -107,6 +140,8 @@ Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh) {
       std::sort(key.begin(), key.end());
       FaceRecord& record = faces[key];
       record.oriented = oriented;
+      record.corners = {f[0], f[1], f[2]};
+      record.tet = t;
       ++record.count;
     }
   }
@@ -115,12 +150,54 @@ Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh) {
   for (const auto& [key, record] : faces)
     if (record.count == 1) keys.push_back(key);
   std::sort(keys.begin(), keys.end());
-  Matrix3Xi surface(3, static_cast<Eigen::Index>(keys.size()));
+  const int per_face = mesh.is_quadratic() ? 4 : 1;
+  Matrix3Xi surface(3, per_face * static_cast<Eigen::Index>(keys.size()));
   for (size_t i = 0; i < keys.size(); ++i) {
-    const auto& o = faces[keys[i]].oriented;
-    surface.col(static_cast<Eigen::Index>(i)) << o[0], o[1], o[2];
+    const FaceRecord& record = faces[keys[i]];
+    const auto& o = record.oriented;
+    const Eigen::Index column = per_face * static_cast<Eigen::Index>(i);
+    if (!mesh.is_quadratic()) {
+      surface.col(column) << o[0], o[1], o[2];
+      continue;
+    }
+    // e_k: the edge node between corners k and k + 1 of the oriented face.
+    int e[3];
+    for (int k = 0; k < 3; ++k)
+      e[k] =
+          mesh.edge_nodes(FindP2Edge(record.corners[k], record.corners[(k + 1) % 3]), record.tet);
+    surface.col(column) << o[0], e[0], e[2];
+    surface.col(column + 1) << e[0], o[1], e[1];
+    surface.col(column + 2) << e[2], e[1], o[2];
+    surface.col(column + 3) << e[0], e[1], e[2];
   }
   return surface;
+}
+
+TetMesh MakeQuadraticMesh(const TetMesh& linear) {
+  if (linear.is_quadratic()) return linear;
+  TetMesh mesh;
+  mesh.tets = linear.tets;
+  mesh.edge_nodes.resize(6, linear.num_tets());
+  std::unordered_map<std::uint64_t, int> node_of_edge;
+  node_of_edge.reserve(static_cast<size_t>(linear.num_tets()) * 2);
+  std::vector<Eigen::Vector3d> added;
+  const int num_corners = linear.num_nodes();
+  for (int t = 0; t < linear.num_tets(); ++t)
+    for (int k = 0; k < 6; ++k) {
+      const int a = linear.tets(kP2EdgeCorners[k][0], t), b = linear.tets(kP2EdgeCorners[k][1], t);
+      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) |
+                                static_cast<std::uint32_t>(std::max(a, b));
+      const auto [it, is_new] =
+          node_of_edge.emplace(key, num_corners + static_cast<int>(added.size()));
+      if (is_new)
+        added.push_back(0.5 * (linear.rest_positions_m.col(a) + linear.rest_positions_m.col(b)));
+      mesh.edge_nodes(k, t) = it->second;
+    }
+  mesh.rest_positions_m.resize(3, num_corners + static_cast<Eigen::Index>(added.size()));
+  mesh.rest_positions_m.leftCols(num_corners) = linear.rest_positions_m;
+  for (size_t i = 0; i < added.size(); ++i)
+    mesh.rest_positions_m.col(num_corners + static_cast<Eigen::Index>(i)) = added[i];
+  return mesh;
 }
 
 }  // namespace hapsim::fem

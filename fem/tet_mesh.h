@@ -1,5 +1,6 @@
 #pragma once
-// A linear tetrahedral mesh: rest node positions and tetrahedra. Plain data, built by the lattice
+// A tetrahedral mesh: rest node positions and tetrahedra, linear (4 nodes) or quadratic (10 nodes:
+// the 4 corners and a node on each edge, fem/quadratic_tet.h). Plain data, built by the lattice
 // mesher or read from Gmsh/TetGen files; fem::Model is built from it.
 
 #include <Eigen/Core>
@@ -13,9 +14,18 @@ namespace hapsim::fem {
 struct TetMesh {
   Matrix3Xd rest_positions_m;  // (3 x num_nodes) rest node positions, world frame, m
   Matrix4Xi tets;              // (4 x num_tets) node indices; positively oriented: V > 0 below
+  // Quadratic tets only: (6 x num_tets) the node on each edge, in kP2EdgeCorners' order
+  // (fem/quadratic_tet.h: (0,1) (1,2) (2,0) (3,0) (3,2) (3,1) of `tets`). Empty: linear tets.
+  // Edge nodes are nodes like the corners (any index); the corners alone make the linear tets that
+  // the element rotations, the BVH cells and the surface binding use.
+  Matrix6Xi edge_nodes;
 
   int num_nodes() const { return static_cast<int>(rest_positions_m.cols()); }
   int num_tets() const { return static_cast<int>(tets.cols()); }
+  bool is_quadratic() const { return edge_nodes.cols() > 0; }
+  int nodes_per_tet() const { return is_quadratic() ? 10 : 4; }
+  // Node a (0..nodes_per_tet() − 1) of tet t: a corner for a < 4, else edge node a − 4.
+  int node(int a, int t) const { return a < 4 ? tets(a, t) : edge_nodes(a - 4, t); }
 };
 
 // Signed volume V = (p1−p0)·((p2−p0)×(p3−p0)) / 6, m³. Positive for a right-handed tet.
@@ -49,7 +59,13 @@ constexpr double kDegenerateTetQuality = 1e-6;
 std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet = nullptr);
 
 // Boundary faces (faces used by exactly one tet), each oriented so that its normal
-// (q1−q0)×(q2−q0) points out of the body. Returns (3 x num_faces) node indices.
+// (q1−q0)×(q2−q0) points out of the body. Returns (3 x num_faces) node indices. A quadratic
+// mesh's boundary face is returned as its four sub-triangles through its edge nodes (corner,
+// edge, edge ×3 and the middle one), which the detector and the viewer use as any triangles.
 Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh);
+
+// The quadratic mesh of a linear one: a node added at the midpoint of every edge (shared by the
+// tets around it), numbered after the linear mesh's nodes in order of first appearance.
+TetMesh MakeQuadraticMesh(const TetMesh& linear);
 
 }  // namespace hapsim::fem

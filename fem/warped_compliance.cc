@@ -17,7 +17,8 @@ WarpedCompliance::WarpedCompliance(const Model& model, const TimeStepper& steppe
   if (!factor_.Factorize(stepper.MakeRestSystemMatrix()))
     throw std::runtime_error("WarpedCompliance: the rest system matrix is not positive definite");
   for (int e = 0; e < model.num_tets(); ++e)
-    for (int k = 0; k < 4; ++k) node_tets_[model.mesh.tets(k, e)].push_back(e);
+    for (int k = 0; k < model.mesh.nodes_per_tet(); ++k)
+      node_tets_[model.mesh.node(k, e)].push_back(e);
 }
 
 void WarpedCompliance::HoldColumnsOf(const std::vector<int>& frame_nodes) {
