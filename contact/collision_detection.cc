@@ -87,6 +87,8 @@ CollisionDetector::CollisionDetector(const fem::Model& body, const ToolShape& to
       node_visited_(embedded_.empty() ? body.num_nodes() : embedded_.num_points(), 0),
       node_in_contact_(node_visited_.size(), 0) {
   CheckOptions(options_);
+  if (body.is_quadratic() && embedded_.empty())
+    quadratic_ = std::make_unique<QuadraticSurface>(surface_triangles_, body.num_nodes());
   if (tool.kind == ToolShape::Kind::kMesh)
     for (Eigen::Index i = 0; i < tool.mesh.vertices_m.cols(); ++i)
       mesh_box_T_m_.extend(Vector3d(tool.mesh.vertices_m.col(i)));
@@ -134,6 +136,8 @@ void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
   MergeDuplicates(first_feature_contact, contacts);
   statistics_.num_contacts_after_merge = static_cast<int>(contacts->size());
   if (!embedded_.empty()) ExpandEmbeddedContacts(contacts);
+  if (quadratic_)
+    for (Contact& contact : *contacts) quadratic_->Reweight(&contact);
 }
 
 void CollisionDetector::Refit(const Eigen::VectorXd& x_m) {

@@ -55,9 +55,11 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <memory>
 #include <vector>
 
 #include "contact/contact.h"
+#include "contact/quadratic_surface.h"
 #include "contact/surface_bvh.h"
 #include "contact/tool_distance.h"
 #include "core/tool_shape.h"
@@ -152,6 +154,9 @@ class CollisionDetector {
   DetectionOptions options_;
   int num_body_nodes_ = 0;
   fem::EmbeddedSurface embedded_;  // the body's collision surface; empty: its boundary
+  // Quadratic tets' boundary (no embedded surface): contacts re-weighted by the faces' quadratic
+  // shape functions (contact/quadratic_surface.h); null otherwise.
+  std::unique_ptr<QuadraticSurface> quadratic_;
   Matrix3Xi surface_triangles_;    // the boundary's faces (node indices) or the embedded surface's
   Eigen::VectorXd points_start_m_, points_end_m_;  // embedded: the points, (3P) world, m
   ToolDistanceField tool_distance_;
