@@ -258,13 +258,6 @@ BodyScene ReadBody(const YamlMap& map, const std::string& base_dir) {
   body.quadratic = map.GetEnumOr<bool>("element", {{"p1", false}, {"p2", true}}, false);
   body.collision_surface = ReadEmbeddedSurface(map, "collision", base_dir);
   body.visual_surface = ReadEmbeddedSurface(map, "visual", base_dir);
-  // The surface binding (fem/surface_embedding.h) weighs a point by its linear tet's corners; a
-  // quadratic tet's surface point needs its edge nodes too, not done yet.
-  for (const char* key : {"collision", "visual"})
-    if (body.quadratic && map.Has(key))
-      map.FailKey(key,
-                  "not yet with element: p2 (surfaces are bound to linear tets); use p1, or "
-                  "leave it out: a p2 body is drawn and touched on its own curved boundary");
   body.material = ReadMaterial(map.GetMap("material"));
   body.options = ReadFemOptions(map);
   if (const std::optional<YamlMap> fixed = map.FindMap("fixed")) {

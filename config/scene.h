@@ -262,7 +262,8 @@ struct EmbeddedSurfaceSource {
 struct BodyScene {
   MeshSource mesh;
   // `element: p2`: quadratic tets (fem/quadratic_tet.h), a node added on every edge of the mesh;
-  // `p1` (the default): linear tets.
+  // `p1` (the default): linear tets. A mesh file of 10-node tets (Gmsh type 11) is quadratic
+  // whatever this says.
   bool quadratic = false;
   std::optional<EmbeddedSurfaceSource> collision_surface;  // contacts found on it; else boundary
   std::optional<EmbeddedSurfaceSource> visual_surface;     // the viewer draws it; else boundary

@@ -41,6 +41,7 @@ std::string Encode(const GmshVolumeMesh& mesh) {
   AppendArray(&bytes, mesh.coordinates_m);
   AppendArray(&bytes, mesh.tet_tags);
   AppendArray(&bytes, mesh.tet_nodes);
+  AppendArray(&bytes, std::vector<std::uint64_t>{mesh.nodes_per_tet});
   AppendArray(&bytes, std::vector<char>(mesh.error.begin(), mesh.error.end()));
   return bytes;
 }
@@ -61,13 +62,18 @@ bool ReadArray(const std::string& bytes, size_t* at, std::vector<T>* values) {
 bool Decode(const std::string& bytes, GmshVolumeMesh* mesh) {
   size_t at = 0;
   std::vector<char> error;
+  std::vector<std::uint64_t> nodes_per_tet;
   const bool whole =
       ReadArray(bytes, &at, &mesh->node_tags) && ReadArray(bytes, &at, &mesh->coordinates_m) &&
       ReadArray(bytes, &at, &mesh->tet_tags) && ReadArray(bytes, &at, &mesh->tet_nodes) &&
-      ReadArray(bytes, &at, &error) && at == bytes.size();
+      ReadArray(bytes, &at, &nodes_per_tet) && ReadArray(bytes, &at, &error) &&
+      at == bytes.size() && nodes_per_tet.size() == 1 &&
+      (nodes_per_tet[0] == 4 || nodes_per_tet[0] == 10);
+  if (!whole) return false;
+  mesh->nodes_per_tet = nodes_per_tet[0];
   mesh->error.assign(error.begin(), error.end());
-  return whole && mesh->coordinates_m.size() == 3 * mesh->node_tags.size() &&
-         mesh->tet_nodes.size() == 4 * mesh->tet_tags.size();
+  return mesh->coordinates_m.size() == 3 * mesh->node_tags.size() &&
+         mesh->tet_nodes.size() == mesh->nodes_per_tet * mesh->tet_tags.size();
 }
 
 [[noreturn]] void RunChild(int fd, const std::function<GmshVolumeMesh()>& work) {
@@ -197,10 +203,12 @@ TetMesh MakeTetMeshFromGmsh(const GmshVolumeMesh& made, const std::string& label
                 0};
   std::vector<RawTet> tets(made.tet_tags.size());
   for (size_t e = 0; e < tets.size(); ++e) {
+    const int n = static_cast<int>(made.nodes_per_tet);
     tets[e].tag = static_cast<long long>(made.tet_tags[e]);
-    for (int k = 0; k < 4; ++k)
-      tets[e].nodes[k] = static_cast<long long>(made.tet_nodes[4 * e + k]);
+    for (int k = 0; k < n; ++k)
+      tets[e].nodes[k] = static_cast<long long>(made.tet_nodes[n * e + k]);
     tets[e].line = 0;
+    tets[e].num_nodes = n;
   }
   return MakeCheckedTetMesh(nodes, label, key, tets, label, key);
 }

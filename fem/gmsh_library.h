@@ -5,6 +5,7 @@
 // so the callers run these in a child process (RunGmshInChildProcess), after their own checks.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -15,13 +16,15 @@
 
 namespace hapsim::fem::internal {
 
-// What Gmsh made: node tags and coordinates (x y z per node), tet tags and their 4 node tags each.
+// What Gmsh made: node tags and coordinates (x y z per node), tet tags and their 4 (or 10) node
+// tags each.
 // On failure `error` holds Gmsh's message and the tets are empty.
 struct GmshVolumeMesh {
   std::vector<std::size_t> node_tags;
   std::vector<double> coordinates_m;
   std::vector<std::size_t> tet_tags;
-  std::vector<std::size_t> tet_nodes;
+  std::vector<std::size_t> tet_nodes;  // nodes_per_tet per tet (Gmsh's order)
+  std::uint64_t nodes_per_tet = 4;     // 4, or 10 for second-order tets (type 11)
   std::string error;
 };
 

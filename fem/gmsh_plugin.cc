@@ -118,22 +118,27 @@ GmshVolumeMesh ReadTets(const std::string& path) {
     gmsh::open(path);
     std::vector<int> volume_types;
     gmsh::model::mesh::getElementTypes(volume_types, 3);
-    constexpr int kGmshTet = 4;
+    constexpr int kGmshTet = 4, kGmshTet10 = 11;
+    int tet_type = kGmshTet;
     for (int type : volume_types)
-      if (type != kGmshTet) {
+      if (type == kGmshTet10 && volume_types.size() == 1) {
+        tet_type = kGmshTet10;
+        result.nodes_per_tet = 10;
+      } else if (type != kGmshTet) {
         std::string name;
         int dim = 0, order = 0, num_nodes = 0, num_primary = 0;
         std::vector<double> local;
         gmsh::model::mesh::getElementProperties(type, name, dim, order, num_nodes, local,
                                                 num_primary);
         result.error = "it holds " + name + " elements (Gmsh type " + std::to_string(type) +
-                       "); hapsim takes linear tetrahedra (type 4) only";
+                       "); hapsim takes tetrahedra of 4 nodes (type 4) or of 10 (type 11), "
+                       "not both";
         return result;
       }
     std::vector<double> parametric;
     gmsh::model::mesh::getNodes(result.node_tags, result.coordinates_m, parametric, -1, -1,
                                 /*includeBoundary=*/false, /*returnParametricCoord=*/false);
-    gmsh::model::mesh::getElementsByType(kGmshTet, result.tet_tags, result.tet_nodes);
+    gmsh::model::mesh::getElementsByType(tet_type, result.tet_tags, result.tet_nodes);
   } catch (...) {
     result = GmshVolumeMesh{};
     result.error = "Gmsh: " + GmshSession::LastError();

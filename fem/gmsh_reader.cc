@@ -24,7 +24,11 @@ using internal::ReadTetsWithGmsh;
 using internal::RunGmshInChildProcess;
 using Tokens = std::vector<std::string>;
 
-constexpr int kGmshTet4 = 4;  // Gmsh element type of the linear 4-node tetrahedron
+constexpr int kGmshTet4 = 4;    // Gmsh element type of the linear 4-node tetrahedron
+constexpr int kGmshTet10 = 11;  // and of the quadratic 10-node one (fem/quadratic_tet.h's order)
+
+// The tetrahedra this reader takes, and their node counts (0: another type).
+int TetNodeCount(long long type) { return type == kGmshTet4 ? 4 : type == kGmshTet10 ? 10 : 0; }
 
 // kLibrary: a format this reader leaves to Gmsh's own (MSH 1, binary, 4.0).
 enum class MshVersion { k2, k41, kLibrary };
@@ -48,7 +52,7 @@ struct GmshContent {
   std::vector<std::pair<std::string, int>> single_sections;
 };
 
-// Names the Gmsh volume element types other than the 4-node tet, nullptr for other types.
+// Names the Gmsh volume element types other than the 4- and 10-node tets, nullptr for other types.
 const char* OtherVolumeElementName(long long type) {
   struct TypeName {
     int type;
@@ -56,10 +60,10 @@ const char* OtherVolumeElementName(long long type) {
   };
   static constexpr TypeName kVolumeTypes[] = {
       {5, "8-node hexahedron"},    {6, "6-node prism"},         {7, "5-node pyramid"},
-      {11, "10-node tetrahedron"}, {12, "27-node hexahedron"},  {13, "18-node prism"},
-      {14, "14-node pyramid"},     {17, "20-node hexahedron"},  {18, "15-node prism"},
-      {19, "13-node pyramid"},     {29, "20-node tetrahedron"}, {30, "35-node tetrahedron"},
-      {31, "56-node tetrahedron"}, {92, "64-node hexahedron"},  {93, "125-node hexahedron"}};
+      {12, "27-node hexahedron"},  {13, "18-node prism"},       {14, "14-node pyramid"},
+      {17, "20-node hexahedron"},  {18, "15-node prism"},       {19, "13-node pyramid"},
+      {29, "20-node tetrahedron"}, {30, "35-node tetrahedron"}, {31, "56-node tetrahedron"},
+      {92, "64-node hexahedron"},  {93, "125-node hexahedron"}};
   for (const TypeName& entry : kVolumeTypes)
     if (entry.type == type) return entry.name;
   return nullptr;
@@ -80,9 +84,11 @@ bool IsLowerDimensionalType(long long type) {
 
 [[noreturn]] void FailUnknownType(const MeshTextReader& reader, const Section& section,
                                   long long type) {
-  reader.Fail(section.key(), "element type " + std::to_string(type) +
-                                 " is not a Gmsh element type this reader knows (4: tetrahedron; "
-                                 "points, lines, triangles and quadrangles are skipped)");
+  reader.Fail(section.key(),
+              "element type " + std::to_string(type) +
+                  " is not a Gmsh element type this reader knows (4 and 11: tetrahedra "
+                  "of 4 and 10 nodes; points, lines, triangles and quadrangles are "
+                  "skipped)");
 }
 
 [[noreturn]] void FailUnsupportedVolume(const MeshTextReader& reader, const Section& section,
@@ -91,8 +97,8 @@ bool IsLowerDimensionalType(long long type) {
   reader.Fail(section.key(),
               "unsupported volume element " + std::string(name ? name : "type") + " (type " +
                   std::to_string(type) +
-                  "); hapsim reads only linear 4-node tetrahedra (type 4): mesh with "
-                  "Mesh.ElementOrder = 1 and a tetrahedral 3D algorithm");
+                  "); hapsim reads tetrahedra of 4 nodes (type 4) or 10 (type 11): mesh with "
+                  "a tetrahedral 3D algorithm and Mesh.ElementOrder 1 or 2");
 }
 
 // Reads the tokens of the next entry of `section`; `expected` names it for messages (e.g.
@@ -224,19 +230,21 @@ void ReadElementsV2(MeshTextReader* reader, const Section& section, GmshContent*
     const long long tag = ParseTag(*reader, section, tokens[0], "the element tag");
     const long long type = reader->ParseInteger(tokens[1], section.key(), "the element type");
     const int num_tags = ParseCount(*reader, section, tokens[2], "the number of tags");
-    if (type != kGmshTet4) {
+    const int num_nodes = TetNodeCount(type);
+    if (num_nodes == 0) {
       if (OtherVolumeElementName(type)) FailUnsupportedVolume(*reader, section, type);
       if (!IsLowerDimensionalType(type)) FailUnknownType(*reader, section, type);
       ++content->num_other_elements;
       continue;
     }
-    ExpectTokenCount(
-        *reader, section, tokens, 3 + static_cast<size_t>(num_tags) + 4,
-        "elm-number 4 number-of-tags, " + std::to_string(num_tags) + " tag(s), 4 node tags");
-    RawTet tet{tag, {}, reader->line_number()};
+    ExpectTokenCount(*reader, section, tokens, 3 + static_cast<size_t>(num_tags) + num_nodes,
+                     "elm-number " + std::to_string(type) + " number-of-tags, " +
+                         std::to_string(num_tags) + " tag(s), " + std::to_string(num_nodes) +
+                         " node tags");
+    RawTet tet{tag, {}, reader->line_number(), num_nodes};
     for (int k = 0; k < num_tags; ++k)
       reader->ParseInteger(tokens[3 + k], section.key(), "an element tag (physical/elementary)");
-    for (int a = 0; a < 4; ++a)
+    for (int a = 0; a < num_nodes; ++a)
       tet.nodes[a] = ParseTag(*reader, section, tokens[3 + num_tags + a], "a node tag");
     content->tets.push_back(tet);
   }
@@ -288,9 +296,10 @@ void ReadElementBlockV41(MeshTextReader* reader, const Section& section, int cou
   const long long type = reader->ParseInteger(tokens[2], section.key(), "the element type");
   const int n = ParseCount(*reader, section, tokens[3], "the number of elements in the block");
   const int block_line = reader->line_number();
-  if (type != kGmshTet4 && (dim == 3 || OtherVolumeElementName(type)))
+  const int num_nodes = TetNodeCount(type);
+  if (num_nodes == 0 && (dim == 3 || OtherVolumeElementName(type)))
     FailUnsupportedVolume(*reader, section, type);
-  if (type != kGmshTet4 && !IsLowerDimensionalType(type)) FailUnknownType(*reader, section, type);
+  if (num_nodes == 0 && !IsLowerDimensionalType(type)) FailUnknownType(*reader, section, type);
   if (n > count - *total)
     reader->Fail(section.key(), "this block brings the element total to " +
                                     std::to_string(static_cast<long long>(*total) + n) +
@@ -298,13 +307,14 @@ void ReadElementBlockV41(MeshTextReader* reader, const Section& section, int cou
   for (int i = 0; i < n; ++i) {
     tokens = ReadEntry(reader, section, "element " + OrdinalOf(i, n, block_line));
     const long long tag = ParseTag(*reader, section, tokens[0], "the element tag");
-    if (type != kGmshTet4) {
+    if (num_nodes == 0) {
       ++content->num_other_elements;
       continue;
     }
-    ExpectTokenCount(*reader, section, tokens, 5, "elementTag and 4 node tags");
-    RawTet tet{tag, {}, reader->line_number()};
-    for (int a = 0; a < 4; ++a)
+    ExpectTokenCount(*reader, section, tokens, 1 + static_cast<size_t>(num_nodes),
+                     "elementTag and " + std::to_string(num_nodes) + " node tags");
+    RawTet tet{tag, {}, reader->line_number(), num_nodes};
+    for (int a = 0; a < num_nodes; ++a)
       tet.nodes[a] = ParseTag(*reader, section, tokens[1 + a], "a node tag");
     content->tets.push_back(tet);
   }
@@ -393,7 +403,7 @@ TetMesh ReadWithGmshLibrary(const std::string& path) {
   if (!made.error.empty()) throw InputError(path, 0, "", "Gmsh's reader refused it: " + made.error);
   if (made.tet_tags.empty())
     throw InputError(path, 0, "$Elements",
-                     "no 4-node tetrahedra (type 4): is this a surface mesh? (generate a volume "
+                     "no tetrahedra (type 4 or 11): is this a surface mesh? (generate a volume "
                      "mesh: gmsh -3)");
   return MakeTetMeshFromGmsh(made, path, "");
 }
@@ -415,7 +425,7 @@ TetMesh ReadGmshMesh(const std::string& path) {
   if (content.elements_line == 0) reader.Fail("$Elements", "the file has no $Elements section");
   if (content.tets.empty())
     throw InputError(path, content.elements_line, "$Elements",
-                     "no 4-node tetrahedra (type 4) among the " +
+                     "no tetrahedra (type 4 or 11) among the " +
                          std::to_string(content.num_other_elements) +
                          " elements: is this a surface mesh? (generate a volume mesh: gmsh -3)");
   return internal::MakeCheckedTetMesh(content.nodes, path, "$Nodes", content.tets, path,

@@ -11,10 +11,12 @@
 // reported at the file's last line, with the message naming the line the section started on.
 //
 // What every reader returns (the conventions callers may rely on):
-//   - Only linear 4-node tetrahedra are kept. Points, lines and surface elements are skipped;
-//     other volume elements (hexahedra, prisms, pyramids, higher-order tets) throw, since
-//     silently dropping them would leave holes in the body.
-//   - Node indices are compact 0..N-1 and cover only the nodes used by some tet, in the order in
+//   - Only tetrahedra are kept: linear 4-node ones, or (Gmsh type 11) quadratic 10-node ones,
+//     whose edge nodes go to TetMesh::edge_nodes (a file may not mix the two). Points, lines and
+//     surface elements are skipped; other volume elements (hexahedra, prisms, pyramids, tets of
+//     order 3 and up) throw, since silently dropping them would leave holes in the body.
+//   - Node indices are compact 0..N-1 and cover only the nodes used by some tet (edge nodes too),
+//   in the order in
 //     which those nodes appear in the file's node section (file tags/indices are not kept).
 //   - Every tet is positively oriented (CalcSignedVolume > 0). A file whose tets are all
 //     negatively oriented (another generator's convention) is flipped tet by tet (indices 2 and 3

@@ -13,6 +13,7 @@
 
 #include "core/error.h"
 #include "fem/mesh_io.h"
+#include "fem/quadratic_tet.h"
 
 namespace hapsim::fem::internal {
 namespace {
@@ -151,6 +152,11 @@ void CheckAndOrientTets(const std::vector<RawTet>& raw_tets, const std::string& 
   }
   if (num_negative == num_tets) {  // the file's convention is the opposite of ours
     mesh->tets.row(2).swap(mesh->tets.row(3));
+    // Corners 2 and 3 swapped: edges (1,2) and (3,1), and (2,0) and (3,0), trade places.
+    if (mesh->is_quadratic()) {
+      mesh->edge_nodes.row(1).swap(mesh->edge_nodes.row(5));
+      mesh->edge_nodes.row(2).swap(mesh->edge_nodes.row(3));
+    }
     return;
   }
   const bool negative_is_minority = 2 * num_negative <= num_tets;
@@ -181,10 +187,17 @@ TetMesh MakeCheckedTetMesh(const std::vector<RawNode>& nodes, const std::string&
                        "duplicate element tag " + std::to_string(tet.tag) + " (first on line " +
                            std::to_string(it->second) + ")");
   }
-  std::vector<std::array<int, 4>> tet_nodes(tets.size());  // positions in `nodes`
+  const int nodes_per_tet = tets.front().num_nodes;
+  std::vector<std::array<int, 10>> tet_nodes(tets.size());  // positions in `nodes`
   std::vector<bool> used(nodes.size(), false);
   for (size_t t = 0; t < tets.size(); ++t) {
-    for (int a = 0; a < 4; ++a) {
+    if (tets[t].num_nodes != nodes_per_tet)
+      throw InputError(tet_file, tets[t].line, tet_key,
+                       "tetrahedron " + std::to_string(tets[t].tag) + " has " +
+                           std::to_string(tets[t].num_nodes) + " nodes where the first has " +
+                           std::to_string(nodes_per_tet) +
+                           ": a mesh is all linear (4-node) or all quadratic (10-node) tets");
+    for (int a = 0; a < nodes_per_tet; ++a) {
       const long long tag = tets[t].nodes[a];
       const auto it = index_of_tag.find(tag);
       if (it == index_of_tag.end())
@@ -210,10 +223,24 @@ TetMesh MakeCheckedTetMesh(const std::vector<RawNode>& nodes, const std::string&
   for (size_t i = 0; i < nodes.size(); ++i)
     if (used[i]) mesh.rest_positions_m.col(compact[i]) = nodes[i].p_m;
   mesh.tets.resize(4, static_cast<Eigen::Index>(tets.size()));
+  if (nodes_per_tet == kP2Nodes) mesh.edge_nodes.resize(6, static_cast<Eigen::Index>(tets.size()));
   for (size_t t = 0; t < tets.size(); ++t)
-    for (int a = 0; a < 4; ++a)
-      mesh.tets(a, static_cast<Eigen::Index>(t)) = compact[tet_nodes[t][a]];
+    for (int a = 0; a < nodes_per_tet; ++a) {
+      const int node = compact[tet_nodes[t][a]];
+      if (a < 4)
+        mesh.tets(a, static_cast<Eigen::Index>(t)) = node;
+      else
+        mesh.edge_nodes(a - 4, static_cast<Eigen::Index>(t)) = node;
+    }
   CheckAndOrientTets(tets, tet_file, tet_key, &mesh);
+  if (mesh.is_quadratic())
+    for (int t = 0; t < mesh.num_tets(); ++t) {
+      P2Nodes X_m;
+      for (int a = 0; a < kP2Nodes; ++a) X_m.col(a) = mesh.rest_positions_m.col(mesh.node(a, t));
+      if (const auto problem = FindQuadraticTetProblem(X_m))
+        throw InputError(tet_file, tets[t].line, tet_key,
+                         "tetrahedron " + std::to_string(tets[t].tag) + ": " + *problem);
+    }
   HAPSIM_INVARIANT(!FindRestMeshProblem(mesh).has_value());
   return mesh;
 }

@@ -56,16 +56,20 @@ struct RawNode {
   int line;
 };
 struct RawTet {
-  long long tag;                   // element tag/number, for messages
-  std::array<long long, 4> nodes;  // node tags as in the file
+  long long tag;  // element tag/number, for messages
+  // Node tags as in the file: the 4 corners, then for a 10-node (quadratic) tet its 6 edge nodes
+  // in Gmsh's order (fem/quadratic_tet.h).
+  std::array<long long, 10> nodes;
   int line;
+  int num_nodes = 4;  // 4 or 10
 };
 
 // Turns what a reader parsed into a TetMesh following the conventions at the top of this file:
 // resolves node tags (duplicate tag -> error in node_file, missing tag -> error in tet_file),
 // compacts nodes, checks for repeated nodes in a tet, degenerate and inverted tets, and flips an
-// all-negative mesh. `tets` must be non-empty. Errors are thrown at the entry's source line with
-// `node_key`/`tet_key` as key.
+// all-negative mesh. 10-node tets give a quadratic mesh (all of them: a file may not mix the two),
+// whose edge nodes must not fold their tet (FindQuadraticTetProblem). `tets` must be non-empty.
+// Errors are thrown at the entry's source line with `node_key`/`tet_key` as key.
 TetMesh MakeCheckedTetMesh(const std::vector<RawNode>& nodes, const std::string& node_file,
                            const std::string& node_key, const std::vector<RawTet>& tets,
                            const std::string& tet_file, const std::string& tet_key);

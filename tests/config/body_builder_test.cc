@@ -7,6 +7,8 @@
 
 #include "config/scene.h"
 #include "core/error.h"
+#include "fem/probe.h"
+#include "fem/state.h"
 
 namespace hapsim::config {
 namespace {
@@ -89,6 +91,43 @@ TEST(BodyBuilder, ProbeOutsideTheBodyIsAnErrorAtItsLine) {
   std::string yaml = kScene;
   yaml.replace(yaml.find("[0.2, 0.1, 0.1]}"), 15, "[0.3, 0.1, 0.1]");
   ExpectErrorAt(yaml, 17, "body.probes[1]");
+}
+
+// element: p2 (issue 27): the same scene as quadratic tets. The fixed box holds the edge nodes on
+// the x = 0 face too (counted here from the mesh), the totals are the same closed forms, and the
+// probes move with a rigid translation.
+TEST(BodyBuilder, QuadraticTetsKeepTheTotalsAndTheProbes) {
+  std::string yaml = kScene;
+  yaml.replace(yaml.find("  mesh:"), 7, "  element: p2\n  mesh:");
+  const Body body = MakeTestBody(yaml);
+  ASSERT_TRUE(body.model.is_quadratic());
+  const double mass_kg = 500.0 * 0.2 * 0.1 * 0.1;
+  EXPECT_NEAR(body.model.node_mass_kg.sum(), mass_kg, 1e-12);
+  Eigen::Vector3d total_N = Eigen::Vector3d::Zero();
+  for (int n = 0; n < body.model.num_nodes(); ++n)
+    total_N += body.external_force_N.segment<3>(3 * n);
+  EXPECT_NEAR(total_N.z(), -10.0 * mass_kg - 2.0, 1e-12);
+  int on_clamped_face = 0;
+  for (int n = 0; n < body.model.num_nodes(); ++n)
+    on_clamped_face += body.model.mesh.rest_positions_m(0, n) < 1e-9;
+  EXPECT_EQ(body.model.num_fixed_nodes(), on_clamped_face);
+  EXPECT_GT(on_clamped_face, 9);  // more than the linear face's 3 × 3 corners
+  fem::State state;
+  state.x_m = body.model.rest_positions_m;
+  for (int n = 0; n < body.model.num_nodes(); ++n)
+    state.x_m.segment<3>(3 * n) += Eigen::Vector3d(0.01, -0.02, 0.03);
+  for (const BoundProbe& probe : body.probes)
+    EXPECT_LT((fem::CalcProbeDisplacement(body.model, state, probe.binding) -
+               Eigen::Vector3d(0.01, -0.02, 0.03))
+                  .norm(),
+              1e-12);
+}
+
+TEST(BodyBuilder, QuadraticTetsRefuseAnEmbeddedSurfaceAtItsLine) {
+  std::string yaml = kScene;
+  yaml.replace(yaml.find("  mesh:"), 7,
+               "  element: p2\n  visual: {file: scenes/meshes/liver.obj}\n  mesh:");
+  ExpectErrorAt(yaml, 6, "body.visual");
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "fem/quadratic_tet.h"
 
 namespace hapsim::fem {
 namespace {
@@ -334,6 +335,56 @@ TEST_F(MeshIoTest, ReadsGmsh22WithSparseTagsAndMixedElements) {
   ExpectSameMesh(mesh, ReadGmshMesh(Write("crlf.msh", crlf)));
 }
 
+// Second-order tets (type 11) as Gmsh makes them: a box meshed by the Gmsh API with
+// Mesh.ElementOrder 2, written as ASCII 2.2 and 4.1 (read here) and binary 4.1 (read by Gmsh's
+// own reader in a child process). Every edge of a box is straight, so Gmsh puts each edge node at
+// its edge's midpoint: that every edge node lands on the midpoint of the corners our order
+// (fem/quadratic_tet.h kP2EdgeCorners) pairs it with checks the order, which nothing else here
+// fixes. The three files give the same mesh.
+TEST_F(MeshIoTest, ReadsGmshSecondOrderTetsInItsNodeOrder) {
+  gmsh::initialize(0, nullptr, false);
+  gmsh::option::setNumber("General.Terminal", std::getenv("HAPSIM_GMSH_VERBOSE") ? 1 : 0);
+  gmsh::model::add("box");
+  gmsh::model::occ::addBox(0, 0, 0, 0.02, 0.01, 0.01);
+  gmsh::model::occ::synchronize();
+  gmsh::option::setNumber("Mesh.MeshSizeMax", 0.006);
+  gmsh::model::mesh::generate(3);
+  gmsh::model::mesh::setOrder(2);
+  const std::vector<std::tuple<double, int, std::string>> files = {
+      {2.2, 0, "p2_v22.msh"}, {4.1, 0, "p2_v41.msh"}, {4.1, 1, "p2_v41_binary.msh"}};
+  for (const auto& [version, binary, name] : files) {
+    gmsh::option::setNumber("Mesh.MshFileVersion", version);
+    gmsh::option::setNumber("Mesh.Binary", binary);
+    gmsh::write(PathOf(name));
+  }
+  gmsh::finalize();
+  TetMesh first;
+  for (const auto& [version, binary, name] : files) {
+    SCOPED_TRACE(name);
+    const TetMesh mesh = ReadGmshMesh(PathOf(name));
+    ASSERT_TRUE(mesh.is_quadratic());
+    ASSERT_GT(mesh.num_tets(), 10);
+    EXPECT_FALSE(FindRestMeshProblem(mesh).has_value());
+    double worst_m = 0.0;
+    for (int t = 0; t < mesh.num_tets(); ++t)
+      for (int k = 0; k < 6; ++k) {
+        const Eigen::Vector3d midpoint =
+            0.5 * (mesh.rest_positions_m.col(mesh.tets(kP2EdgeCorners[k][0], t)) +
+                   mesh.rest_positions_m.col(mesh.tets(kP2EdgeCorners[k][1], t)));
+        worst_m =
+            std::max(worst_m, (mesh.rest_positions_m.col(mesh.edge_nodes(k, t)) - midpoint).norm());
+      }
+    EXPECT_LT(worst_m, 1e-12);
+    if (first.num_tets() == 0) {
+      first = mesh;
+    } else {
+      EXPECT_EQ(mesh.tets, first.tets);
+      EXPECT_EQ(mesh.edge_nodes, first.edge_nodes);
+      EXPECT_LT((mesh.rest_positions_m - first.rest_positions_m).cwiseAbs().maxCoeff(), 1e-15);
+    }
+  }
+}
+
 TEST_F(MeshIoTest, AllNegativeFileIsFlippedToPositive) {
   // Both tets of kGmsh22 with two nodes swapped: every tet is negatively oriented.
   std::string text = Replace(kGmsh22, "1 3 7 8 9", "1 3 8 7 9");
@@ -416,7 +467,7 @@ TEST_F(MeshIoTest, MalformedGmshReportsTheLine) {
       {"version 3", R(base, "2.2 0 8", "3.0 0 8"), 2, "$MeshFormat", "unsupported MSH version"},
       // Declared 4.0 or binary, they go to Gmsh's own reader, which finds a 2.2 ASCII body.
       {"version 4.0", R(base, "2.2 0 8", "4 0 8"), 0, nullptr, "Gmsh's reader refused it"},
-      {"binary", R(base, "2.2 0 8", "2.2 1 8"), 0, nullptr, "no 4-node tetrahedra"},
+      {"binary", R(base, "2.2 0 8", "2.2 1 8"), 0, nullptr, "no tetrahedra (type 4 or 11)"},
       {"not msh", "solid cube\nendsolid\n", 1, "$MeshFormat", "not a Gmsh MSH file"},
       {"empty", "", 0, "$MeshFormat", "empty"},
       {"count too large", short_count, LineOf(base, "$EndNodes"), "$Nodes", "fewer entries"},
@@ -430,7 +481,8 @@ TEST_F(MeshIoTest, MalformedGmshReportsTheLine) {
        "$Elements", "node 13"},
       {"duplicate node tag", R(base, "12 0 0 -1", "8 0 0 -1"), LineOf(base, "12 0 0 -1"), "$Nodes",
        "duplicate node tag 8"},
-      {"no tetrahedra", no_tets, LineOf(base, "$Elements"), "$Elements", "no 4-node tetrahedra"},
+      {"no tetrahedra", no_tets, LineOf(base, "$Elements"), "$Elements",
+       "no tetrahedra (type 4 or 11)"},
       {"hexahedra", hexes, LineOf(v41, "3 4 4 2"), "$Elements", "8-node hexahedron"},
       {"short tet line", R(base, "1 3 7 8 9", "1 3 7 8"), LineOf(base, "1 3 7 8 9"), "$Elements",
        "expected 9 values"},
@@ -462,6 +514,50 @@ TEST_F(MeshIoTest, MalformedGmshReportsTheLine) {
   };
   for (size_t i = 0; i < cases.size(); ++i)
     ExpectInputError(Write("bad" + std::to_string(i) + ".msh", cases[i].text), cases[i]);
+}
+
+// One second-order tet of the unit corner: its edge nodes at the midpoints (Gmsh's order).
+constexpr char kGmshTet10[] = R"($MeshFormat
+2.2 0 8
+$EndMeshFormat
+$Nodes
+10
+1 0 0 0
+2 1 0 0
+3 0 1 0
+4 0 0 1
+5 0.5 0 0
+6 0.5 0.5 0
+7 0 0.5 0
+8 0 0 0.5
+9 0 0.5 0.5
+10 0.5 0 0.5
+$EndNodes
+$Elements
+2
+1 11 2 0 1 1 2 3 4 5 6 7 8 9 10
+2 2 2 0 1 1 2 3
+$EndElements
+)";
+
+TEST_F(MeshIoTest, SecondOrderTetsAreCheckedAtTheirLine) {
+  const TetMesh mesh = ReadGmshMesh(Write("tet10.msh", kGmshTet10));
+  ASSERT_TRUE(mesh.is_quadratic());
+  EXPECT_EQ(mesh.num_nodes(), 10);
+  // Swapping two corners (and the edge nodes with them) gives a negative tet, flipped to ours.
+  const std::string negative = Replace(kGmshTet10, "1 2 3 4 5 6 7 8 9 10", "1 2 4 3 5 10 8 7 9 6");
+  const TetMesh flipped = ReadGmshMesh(Write("tet10_negative.msh", negative));
+  EXPECT_FALSE(FindRestMeshProblem(flipped).has_value());
+  const std::vector<MalformedCase> cases = {
+      {"edge node at 0.8 of its edge", Replace(kGmshTet10, "5 0.5 0 0", "5 0.8 0 0"),
+       LineOf(kGmshTet10, "1 11 2"), "$Elements", "edge node is far off its edge's midpoint"},
+      {"a 10-node and a 4-node tet", Replace(kGmshTet10, "2 2 2 0 1 1 2 3", "2 4 2 0 1 1 2 3 4"),
+       LineOf(kGmshTet10, "2 2 2 0 1"), "$Elements", "all linear (4-node) or all quadratic"},
+      {"short 10-node line", Replace(kGmshTet10, "8 9 10\n", "8 9\n"), LineOf(kGmshTet10, "1 11 2"),
+       "$Elements", "10 node tags"},
+  };
+  for (size_t i = 0; i < cases.size(); ++i)
+    ExpectInputError(Write("bad_tet10_" + std::to_string(i) + ".msh", cases[i].text), cases[i]);
 }
 
 TEST_F(MeshIoTest, InvertedMinorityIsReportedEvenWhenPositiveIsTheMinority) {

@@ -18,7 +18,8 @@ inline void CheckReadTetMesh(const fem::TetMesh& mesh) {
   std::vector<bool> used(static_cast<size_t>(mesh.num_nodes()), false);
   for (int t = 0; t < mesh.num_tets(); ++t) {
     const Eigen::Vector4i tet = mesh.tets.col(t);
-    for (int a = 0; a < 4; ++a) used[static_cast<size_t>(tet[a])] = true;
+    for (int a = 0; a < mesh.nodes_per_tet(); ++a)
+      used[static_cast<size_t>(mesh.node(a, t))] = true;
     // FindRestMeshProblem compares the quality with a threshold, which a NaN quality (volume and
     // edge lengths overflowing to inf) passes; the FEM would then divide by an inf volume.
     const double volume_m3 = fem::CalcSignedVolume(mesh.rest_positions_m, tet);
