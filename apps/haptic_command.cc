@@ -307,6 +307,7 @@ nlohmann::json Summarize(LoopStats* stats, ModelReceiver* receiver,
           {"overrun_causes",
            {{"preempted", stats->late.preempted},
             {"page_faults", stats->late.page_faults},
+            {"blocked", stats->late.blocked},
             {"held_off_cpu", stats->late.held_off},
             {"held_off_cpu_ms", 1e3 * stats->late.held_off_s},
             {"catching_up", stats->late.catching_up},
@@ -355,10 +356,10 @@ void PrintSummary(const nlohmann::json& summary, const LoopStats& stats,
   if (stats.overruns > 0)
     std::printf(
         "hapsim haptic: overruns: %ld own work (slowest step %.2f ms), %ld catching up after "
-        "them, %ld preempted, %ld page faults, %ld held off the CPU (%.1f ms; the VM's steal "
-        "over the loop %.0f ms), %ld woke late\n",
+        "them, %ld preempted, %ld page faults, %ld blocked, %ld held off the CPU (%.1f ms; the "
+        "VM's steal over the loop %.0f ms), %ld woke late\n",
         stats.late.own_work, 1e3 * stats.slowest.compute_s, stats.late.catching_up,
-        stats.late.preempted, stats.late.page_faults, stats.late.held_off,
+        stats.late.preempted, stats.late.page_faults, stats.late.blocked, stats.late.held_off,
         1e3 * stats.late.held_off_s, stats.steal_ms, stats.late.woke_late);
   if (gate.num_foreign() > 0)
     std::printf(

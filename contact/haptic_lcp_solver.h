@@ -38,8 +38,8 @@
 
 namespace hapsim::contact {
 
-// The LCP above, exactly (to round-off), at 1 kHz and without heap allocation after
-// construction.
+// The LCP above, exactly (to round-off; within a step's budget of equality solves when one is
+// set, see the constructor), at 1 kHz and without heap allocation after construction.
 //
 // Caching and warm start. The solver keeps a copy of the last rows it was given and compares
 // each call's rows with it bitwise (memcmp, ~2 µs at n = 125). Unchanged rows (the haptic steps
@@ -115,8 +115,10 @@ class HapticLcpSolver {
   // T_c = J_ωᵀλ (N m, about the tool's COM), world. Returns false, with zero force and torque,
   // if rows.num_rows() > max_rows(), the rows are friction rows and the solver has no friction
   // solve, are inconsistent in size (HasConsistentShape), not finite or
-  // W_body not symmetric, or the active-set iteration failed (singular W, or no convergence
-  // within 3n + 10 entering rows); never allocates, never throws.
+  // W_body not symmetric, or the active-set iteration failed (singular W, no convergence within
+  // 3n + 10 entering or refused rows, or a complementarity residual past 1e-2 after its retry);
+  // never allocates, never throws. With max_solves_per_step, a call may return true before
+  // complementarity: last_out_of_budget() says so, and its λ is feasible.
   //
   // targets, if given (≥ num_rows entries, the first num_rows read): this step's b − body
   // velocity per row in place of rows.body_rhs, for a caller whose targets move between frames

@@ -74,6 +74,8 @@ void LateStepCauses::Add(bool started_behind, double wake_late_s, double work_wa
     ++preempted;
   } else if (after.minor_faults + after.major_faults > before.minor_faults + before.major_faults) {
     ++page_faults;
+  } else if (after.voluntary_switches > before.voluntary_switches) {
+    ++blocked;
   } else if (off_cpu_s > 0.5 * dt_s) {
     ++held_off;
     held_off_s += off_cpu_s;

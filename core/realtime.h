@@ -44,6 +44,8 @@ ThreadCounters ReadThreadCounters();  // no allocation: safe in the 1 kHz loop
 //  - preempted: another task took the CPU during the work (an involuntary switch; for a
 //    SCHED_FIFO loop only a task of higher priority can);
 //  - page faults: the work faulted memory in;
+//  - blocked: the thread gave the CPU up during the work (a voluntary switch: a lock, a full
+//    socket buffer, any system call that waits);
 //  - held off: the work's wall time exceeds its CPU time by more than half a period with neither:
 //    the hypervisor (steal, not counted as CPU time with PARAVIRT_TIME_ACCOUNTING) or interrupts
 //    took the CPU from the whole VM;
@@ -51,7 +53,8 @@ ThreadCounters ReadThreadCounters();  // no allocation: safe in the 1 kHz loop
 //    fired late, or the vCPU it fired on was not running);
 //  - own work: the step's computation itself.
 struct LateStepCauses {
-  long catching_up = 0, preempted = 0, page_faults = 0, held_off = 0, woke_late = 0, own_work = 0;
+  long catching_up = 0, preempted = 0, page_faults = 0, blocked = 0, held_off = 0, woke_late = 0,
+       own_work = 0;
   double held_off_s = 0.0;  // the wall time the held-off steps spent off the CPU
   // started_behind: the previous step ended after this step's deadline; wake_late_s: this step's
   // start minus its deadline; work_wall_s: its work's wall time, between the readings `before`
@@ -59,7 +62,7 @@ struct LateStepCauses {
   void Add(bool started_behind, double wake_late_s, double work_wall_s,
            const ThreadCounters& before, const ThreadCounters& after, double dt_s);
   long total() const {
-    return catching_up + preempted + page_faults + held_off + woke_late + own_work;
+    return catching_up + preempted + page_faults + blocked + held_off + woke_late + own_work;
   }
 };
 

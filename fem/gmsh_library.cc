@@ -23,9 +23,9 @@
 namespace hapsim::fem::internal {
 namespace {
 
-// The child's answer on the pipe: the four arrays, each as its length then its elements (size_t
-// and double as the machine has them: both ends are this program), then the error's length and
-// bytes.
+// The child's answer on the pipe: the four arrays and the nodes per tet, each as its length then
+// its elements (size_t, double and uint64 as the machine has them: both ends are this program),
+// then the error's length and bytes.
 void Append(std::string* bytes, const void* data, size_t size) {
   if (size > 0) bytes->append(static_cast<const char*>(data), size);  // data may be null at 0
 }

@@ -15,9 +15,9 @@
 //     whose edge nodes go to TetMesh::edge_nodes (a file may not mix the two). Points, lines and
 //     surface elements are skipped; other volume elements (hexahedra, prisms, pyramids, tets of
 //     order 3 and up) throw, since silently dropping them would leave holes in the body.
-//   - Node indices are compact 0..N-1 and cover only the nodes used by some tet (edge nodes too),
-//   in the order in
-//     which those nodes appear in the file's node section (file tags/indices are not kept).
+//   - Node indices are compact 0..N-1 and cover only the nodes used by some tet (edge nodes
+//     too), in the order in which those nodes appear in the file's node section (file
+//     tags/indices are not kept).
 //   - Every tet is positively oriented (CalcSignedVolume > 0). A file whose tets are all
 //     negatively oriented (another generator's convention) is flipped tet by tet (indices 2 and 3
 //     swapped). Mixed orientations throw at the first tet of the minority orientation (ties count

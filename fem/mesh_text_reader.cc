@@ -241,6 +241,12 @@ TetMesh MakeCheckedTetMesh(const std::vector<RawNode>& nodes, const std::string&
         throw InputError(tet_file, tets[t].line, tet_key,
                          "tetrahedron " + std::to_string(tets[t].tag) + ": " + *problem);
     }
+  // What is left for FindRestMeshProblem to find (tets that disagree on an edge's node) is an
+  // input error too, at the line of the tet it names.
+  int bad_tet = -1;
+  if (const auto problem = FindRestMeshProblem(mesh, &bad_tet))
+    throw InputError(tet_file, bad_tet >= 0 ? tets[static_cast<size_t>(bad_tet)].line : 0, tet_key,
+                     *problem + " (tet numbers count the file's tetrahedra from 0)");
   HAPSIM_INVARIANT(!FindRestMeshProblem(mesh).has_value());
   return mesh;
 }

@@ -1,7 +1,7 @@
 #pragma once
 // The 10-node (quadratic, P2) tetrahedron (issue 27): shape functions, quadrature, the element
-// stiffness and mass at rest, and its corotational force. The first step of `element: p2`; the
-// body, the stepper and contact still run on linear tets.
+// stiffness and mass at rest, and its corotational force. A body of them (`element: p2`,
+// fem/model.h) stores each tet's K_e and HRZ masses from here.
 //
 // Nodes, in Gmsh's order for its element type 11: the corners 0–3, then one node on each edge,
 //   4: (0,1)  5: (1,2)  6: (2,0)  7: (3,0)  8: (3,2)  9: (3,1).
@@ -57,7 +57,7 @@ struct QuadraturePoint {
   Eigen::Vector3d xi;
   double weight;
 };
-// 14 points, positive weights, exact for polynomials of degree ≤ 5 (Walkington's rule).
+// 14 points, positive weights, exact for polynomials of degree ≤ 5 (a symmetric rule).
 const std::array<QuadraturePoint, 14>& P2Quadrature();
 
 // N_a(ξ) for the ten nodes.

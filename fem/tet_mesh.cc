@@ -82,6 +82,39 @@ std::optional<std::string> FindEdgeNodeProblem(const TetMesh& mesh, int t) {
   return std::nullopt;
 }
 
+// A quadratic mesh whose tets agree on their edge nodes: an edge has one node, shared by every
+// tet around it, which is no tet's corner and no other edge's node. Otherwise the body is cracked
+// along that edge (each tet would bend it its own way).
+std::optional<std::string> FindSharedEdgeProblem(const TetMesh& mesh, int* bad_tet) {
+  std::vector<std::uint8_t> is_corner(static_cast<size_t>(mesh.num_nodes()), 0);
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    for (int a = 0; a < 4; ++a) is_corner[static_cast<size_t>(mesh.tets(a, t))] = 1;
+  std::unordered_map<std::uint64_t, int> node_of_edge;
+  std::unordered_map<int, std::uint64_t> edge_of_node;
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    for (int k = 0; k < 6; ++k) {
+      if (bad_tet) *bad_tet = t;
+      const int a = mesh.tets(kP2EdgeCorners[k][0], t), b = mesh.tets(kP2EdgeCorners[k][1], t);
+      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) |
+                                static_cast<std::uint32_t>(std::max(a, b));
+      const int node = mesh.edge_nodes(k, t);
+      const std::string edge = "edge (" + std::to_string(a) + ", " + std::to_string(b) + ")";
+      if (is_corner[static_cast<size_t>(node)])
+        return "tet " + std::to_string(t) + " puts node " + std::to_string(node) + " on its " +
+               edge + ", but it is another tet's corner";
+      const auto [at_edge, new_edge] = node_of_edge.emplace(key, node);
+      if (!new_edge && at_edge->second != node)
+        return "tet " + std::to_string(t) + " puts node " + std::to_string(node) + " on " + edge +
+               ", which another tet gives node " + std::to_string(at_edge->second) +
+               ": the mesh is cracked along it";
+      const auto [at_node, new_node] = edge_of_node.emplace(node, key);
+      if (!new_node && at_node->second != key)
+        return "tet " + std::to_string(t) + " puts node " + std::to_string(node) + " on " + edge +
+               ", but another tet has it on another edge";
+    }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet) {
@@ -111,6 +144,8 @@ std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet
       return "tet " + std::to_string(t) + " is degenerate (zero volume)";
     if (auto problem = FindEdgeNodeProblem(mesh, t)) return problem;
   }
+  if (mesh.is_quadratic())
+    if (auto problem = FindSharedEdgeProblem(mesh, bad_tet)) return problem;
   if (bad_tet) *bad_tet = -1;
   return std::nullopt;
 }

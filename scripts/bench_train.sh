@@ -35,9 +35,9 @@ pe = summary["period_error"]
 print(f"| trainer session: haptic period error p50 / p99 / max | {pe['p50_us']:.1f} / {pe['p99_us']:.1f} / {pe['max_us']:.0f} us |")
 print(f"| ... overruns, zeroed steps, steps | {summary['overruns']}, {summary['zeroed_steps']}, {summary['steps']} |")
 causes = summary["overrun_causes"]
-print(f"| ... overruns by cause: own work / catching up / preempted / page faults / held off the CPU / woke late | "
+print(f"| ... overruns by cause: own work / catching up / preempted / page faults / blocked / held off the CPU / woke late | "
       f"{causes['own_work']} / {causes['catching_up']} / {causes['preempted']} / {causes['page_faults']} / "
-      f"{causes['held_off_cpu']} / {causes['woke_late']} |")
+      f"{causes['blocked']} / {causes['held_off_cpu']} / {causes['woke_late']} |")
 print(f"| ... the VM's steal over the session (/proc/stat, 10 ms a tick) | {summary['vm_steal_ms']:.0f} ms |")
 slowest = summary["slowest_step"]
 print(f"| ... slowest step: compute, rows, equality solves, factorisations | {slowest['compute_us']:.0f} us, "

@@ -88,6 +88,12 @@ TEST(LateStepCauses, PutsEachOverrunDownToTheFirstCauseThatHolds) {
   // Faults without a switch.
   causes.Add(false, 0.0, 1.5e-3, start, Counters(1.0002, 10, 101), kDt);
   EXPECT_EQ(causes.page_faults, 1);
+  // A voluntary switch (the thread waited), no preemption, no fault: blocked, not held off.
+  ThreadCounters waited = Counters(1.0004, 10, 100);
+  waited.voluntary_switches = start.voluntary_switches + 1;
+  causes.Add(false, 0.0, 3e-3, start, waited, kDt);
+  EXPECT_EQ(causes.blocked, 1);
+  EXPECT_EQ(causes.held_off, 0);
   // Wall time 3 ms, CPU time 0.4 ms, no switch, no fault: held off the CPU for 2.6 ms.
   causes.Add(false, 0.0, 3e-3, start, Counters(1.0004, 10, 100), kDt);
   EXPECT_EQ(causes.held_off, 1);
@@ -98,7 +104,7 @@ TEST(LateStepCauses, PutsEachOverrunDownToTheFirstCauseThatHolds) {
   // On time, on the CPU all along, and long: the step's own work.
   causes.Add(false, 0.1e-3, 1.2e-3, start, Counters(1.0012, 10, 100), kDt);
   EXPECT_EQ(causes.own_work, 1);
-  EXPECT_EQ(causes.total(), 7);
+  EXPECT_EQ(causes.total(), 8);
 }
 
 }  // namespace

@@ -540,6 +540,48 @@ $Elements
 $EndElements
 )";
 
+// Two second-order tets sharing the face (1, 2, 3): the second's edge nodes on that face are the
+// first's (7, 6, 5 in its own order), three more below. Node 15 sits where node 7 does.
+constexpr char kGmshTwoTet10[] = R"($MeshFormat
+2.2 0 8
+$EndMeshFormat
+$Nodes
+15
+1 0 0 0
+2 1 0 0
+3 0 1 0
+4 0 0 1
+5 0.5 0 0
+6 0.5 0.5 0
+7 0 0.5 0
+8 0 0 0.5
+9 0 0.5 0.5
+10 0.5 0 0.5
+11 0 0 -1
+12 0 0 -0.5
+13 0.5 0 -0.5
+14 0 0.5 -0.5
+15 0 0.5 0
+$EndNodes
+$Elements
+2
+1 11 2 0 1 1 2 3 4 5 6 7 8 9 10
+2 11 2 0 1 1 3 2 11 7 6 5 12 13 14
+$EndElements
+)";
+
+TEST_F(MeshIoTest, SecondOrderTetsMustShareTheirEdgeNodes) {
+  const TetMesh mesh = ReadGmshMesh(Write("two_tet10.msh", kGmshTwoTet10));
+  ASSERT_TRUE(mesh.is_quadratic());
+  EXPECT_EQ(mesh.num_nodes(), 14);                        // node 15 is used by no tet
+  EXPECT_EQ(ExtractBoundarySurface(mesh).cols(), 4 * 6);  // the shared face is inside
+  // The second tet with node 15 in place of node 7: the two give edge (1, 3) different nodes.
+  const std::string cracked = Replace(kGmshTwoTet10, "1 3 2 11 7 6 5", "1 3 2 11 15 6 5");
+  ExpectInputError(
+      Write("cracked_tet10.msh", cracked),
+      {"cracked", cracked, LineOf(kGmshTwoTet10, "2 11 2 0 1"), "$Elements", "cracked along it"});
+}
+
 TEST_F(MeshIoTest, SecondOrderTetsAreCheckedAtTheirLine) {
   const TetMesh mesh = ReadGmshMesh(Write("tet10.msh", kGmshTet10));
   ASSERT_TRUE(mesh.is_quadratic());
