@@ -163,6 +163,8 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   void CalcSlack();
   enum class End { kConverged, kFailed, kOutOfBudget };
   End RunActiveSet(double tolerance, int max_solves, int* iterations);
+  bool ShrinkToFeasible(int* iterations);
+  bool EnterRow(int entering, int* iterations);
   double CalcResidual(double dt_s) const;
   // Whether refactorising is cheaper than bordering `num_leaving` rows leaving the base at
   // once. Rough flop model: a border item costs a forward substitution and a row of P, ~2 k0²;
@@ -450,20 +452,13 @@ void HapticLcpSolver::Workspace::CalcSlack() {
   w.head(n) -= r.head(n);
 }
 
-// The active-set iteration from the current active set, to complementarity within
-// `tolerance` (on w). Leaves x and w at the solution. Fails if an equality solve failed (singular
-// W on the active set) or 3n + 10 rows entered without convergence. With max_solves > 0, stops
-// once `*iterations` has reached it, at the top of an outer iteration: x is then feasible (≥ 0
-// off the held rows), optimal on its active set, and the set is kept for the next call.
-HapticLcpSolver::Workspace::End HapticLcpSolver::Workspace::RunActiveSet(double tolerance,
-                                                                         int max_solves,
-                                                                         int* iterations) {
-  // Shrink the guessed set until its equality solution is positive: a feasible start for the
-  // active-set iteration, optimal on its face. Many rows leaving at once (a poor guess for new
-  // rows) are cheaper to refactorise than to border.
+// Shrinks the guessed set until its equality solution is positive: a feasible start for the
+// active-set iteration, optimal on its face. Many rows leaving at once (a poor guess for new rows)
+// are cheaper to refactorise than to border. False if an equality solve failed.
+bool HapticLcpSolver::Workspace::ShrinkToFeasible(int* iterations) {
   while (true) {
     ++*iterations;
-    if (!SolveOnActiveSet()) return End::kFailed;
+    if (!SolveOnActiveSet()) return false;
     int num_leaving = 0;
     for (int i = 0; i < n; ++i) num_leaving += active[i] && !held[i] && !(z[i] > 0.0);
     if (num_leaving == 0) break;
@@ -472,9 +467,75 @@ HapticLcpSolver::Workspace::End HapticLcpSolver::Workspace::RunActiveSet(double 
       if (active[i] && !held[i] && !(z[i] > 0.0)) Deactivate(i);
   }
   x.head(n) = z.head(n);
+  return true;
+}
 
-  // Lawson–Hanson: the most violated row enters; solve on the set; step back along the segment
-  // (ratio test) when an active x would turn negative, and drop the rows that reached zero.
+// One Lawson–Hanson entry: row `entering` joins the set; solve on it; step back along the segment
+// (ratio test) when an active x would turn negative and drop the rows that reached zero, until the
+// step is whole. A row that cannot enter (RunActiveSet) is refused instead. False if an equality
+// solve failed otherwise.
+bool HapticLcpSolver::Workspace::EnterRow(int entering, int* iterations) {
+  Activate(entering);
+  // A full border puts the entering row into a fresh factorisation (Rebase), which clears the set
+  // if it fails: keep the set to put back.
+  const bool rebase_with_entering = rebase_pending;
+  if (rebase_with_entering) std::copy_n(active.begin(), n, active_before_rebase.begin());
+  for (bool entered = true;; entered = false) {
+    ++*iterations;
+    if (!SolveOnActiveSet()) {
+      if (!(entered && rebase_with_entering)) return false;
+      std::copy_n(active_before_rebase.begin(), n, active.begin());
+      active[entering] = 0;
+      refused[entering] = 1;
+      rebase_pending = true;
+      return true;
+    }
+    if (entered && !(z[entering] > 0.0)) {
+      Deactivate(entering);
+      refused[entering] = 1;
+      return true;
+    }
+    // Ratio test: the longest step along z − x keeping x ≥ 0. The row that blocks it is set to
+    // zero explicitly (x + step (z − x) may round to a tiny positive value, and a row left in the
+    // set that way would stall the iteration with ever smaller steps).
+    double step = 1.0;
+    int blocking = -1;
+    for (int i = 0; i < n; ++i) {
+      if (!active[i] || held[i] || z[i] > 0.0) continue;
+      const double decrease = x[i] - z[i];
+      const double ratio = decrease > 0.0 ? x[i] / decrease : 0.0;
+      if (ratio < step) step = ratio, blocking = i;
+    }
+    for (int i = 0; i < n; ++i)
+      if (active[i]) x[i] += step * (z[i] - x[i]);
+    if (step > 0.0)
+      for (int i = 0; i < n; ++i) refused[i] = 0;
+    if (blocking < 0) return true;
+    x[blocking] = 0.0;
+    bool any_active = num_held > 0;  // held rows stay: solve on them again
+    for (int i = 0; i < n; ++i) {
+      if (!active[i] || held[i]) continue;
+      if (x[i] > 0.0) {
+        any_active = true;
+      } else {
+        x[i] = 0.0;
+        Deactivate(i);
+      }
+    }
+    if (!any_active) return true;
+  }
+}
+
+// The active-set iteration from the current active set, to complementarity within
+// `tolerance` (on w). Leaves x and w at the solution. Fails if an equality solve failed (singular
+// W on the active set) or 3n + 10 rows entered without convergence. With max_solves > 0, stops
+// once `*iterations` has reached it, at the top of an outer iteration: x is then feasible (≥ 0
+// off the held rows), optimal on its active set, and the set is kept for the next call.
+HapticLcpSolver::Workspace::End HapticLcpSolver::Workspace::RunActiveSet(double tolerance,
+                                                                         int max_solves,
+                                                                         int* iterations) {
+  if (!ShrinkToFeasible(iterations)) return End::kFailed;
+  // Lawson–Hanson: the most violated row enters (EnterRow), until none is violated.
   //
   // A row whose own z comes out ≤ 0 on entering cannot enter: in exact arithmetic the most
   // violated row always gets z > 0 (W positive definite on the set), so this is round-off among
@@ -497,55 +558,7 @@ HapticLcpSolver::Workspace::End HapticLcpSolver::Workspace::RunActiveSet(double 
     if (entering < 0) return End::kConverged;
     if (outer == 3 * n + 10) return End::kFailed;
     if (max_solves > 0 && *iterations >= max_solves) return End::kOutOfBudget;
-    Activate(entering);
-    // A full border puts the entering row into a fresh factorisation (Rebase), which clears the
-    // set if it fails: keep the set to put back.
-    const bool rebase_with_entering = rebase_pending;
-    if (rebase_with_entering) std::copy_n(active.begin(), n, active_before_rebase.begin());
-    for (bool entered = true;; entered = false) {
-      ++*iterations;
-      if (!SolveOnActiveSet()) {
-        if (!(entered && rebase_with_entering)) return End::kFailed;
-        std::copy_n(active_before_rebase.begin(), n, active.begin());
-        active[entering] = 0;
-        refused[entering] = 1;
-        rebase_pending = true;
-        break;
-      }
-      if (entered && !(z[entering] > 0.0)) {
-        Deactivate(entering);
-        refused[entering] = 1;
-        break;
-      }
-      // Ratio test: the longest step along z − x keeping x ≥ 0. The row that blocks it is set
-      // to zero explicitly (x + step (z − x) may round to a tiny positive value, and a row left
-      // in the set that way would stall the iteration with ever smaller steps).
-      double step = 1.0;
-      int blocking = -1;
-      for (int i = 0; i < n; ++i) {
-        if (!active[i] || held[i] || z[i] > 0.0) continue;
-        const double decrease = x[i] - z[i];
-        const double ratio = decrease > 0.0 ? x[i] / decrease : 0.0;
-        if (ratio < step) step = ratio, blocking = i;
-      }
-      for (int i = 0; i < n; ++i)
-        if (active[i]) x[i] += step * (z[i] - x[i]);
-      if (step > 0.0)
-        for (int i = 0; i < n; ++i) refused[i] = 0;
-      if (blocking < 0) break;
-      x[blocking] = 0.0;
-      bool any_active = num_held > 0;  // held rows stay: solve on them again
-      for (int i = 0; i < n; ++i) {
-        if (!active[i] || held[i]) continue;
-        if (x[i] > 0.0) {
-          any_active = true;
-        } else {
-          x[i] = 0.0;
-          Deactivate(i);
-        }
-      }
-      if (!any_active) break;
-    }
+    if (!EnterRow(entering, iterations)) return End::kFailed;
   }
 }
 

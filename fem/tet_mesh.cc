@@ -63,6 +63,12 @@ TetMeshQuality CalcTetMeshQuality(const TetMesh& mesh) {
 
 namespace {
 
+// The edge between nodes a and b, either way round, as a hash key.
+std::uint64_t UndirectedEdgeKey(int a, int b) {
+  return (static_cast<std::uint64_t>(std::min(a, b)) << 32) |
+         static_cast<std::uint32_t>(std::max(a, b));
+}
+
 // A quadratic tet's edge nodes: indices in range, distinct, and a mapping that does not fold
 // (FindQuadraticTetProblem: an edge node far off its edge's midpoint).
 std::optional<std::string> FindEdgeNodeProblem(const TetMesh& mesh, int t) {
@@ -95,8 +101,7 @@ std::optional<std::string> FindSharedEdgeProblem(const TetMesh& mesh, int* bad_t
     for (int k = 0; k < 6; ++k) {
       if (bad_tet) *bad_tet = t;
       const int a = mesh.tets(kP2EdgeCorners[k][0], t), b = mesh.tets(kP2EdgeCorners[k][1], t);
-      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) |
-                                static_cast<std::uint32_t>(std::max(a, b));
+      const std::uint64_t key = UndirectedEdgeKey(a, b);
       const int node = mesh.edge_nodes(k, t);
       const std::string edge = "edge (" + std::to_string(a) + ", " + std::to_string(b) + ")";
       if (is_corner[static_cast<size_t>(node)])
@@ -150,13 +155,33 @@ std::optional<std::string> FindRestMeshProblem(const TetMesh& mesh, int* bad_tet
   return std::nullopt;
 }
 
+namespace {
+
+// For a positively oriented tet (a,b,c,d) these four faces have outward normals.
+constexpr int kOutwardFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+// Face `face` (kOutwardFaces) of quadratic tet t as its four sub-triangles, from `column` on:
+// (o0 e0 e2) (e0 o1 e1) (e2 e1 o2) (e0 e1 e2), with o its corners as oriented and e_k the edge
+// node between o_k and o_(k+1) (contact/quadratic_surface.h reads this layout).
+void WriteSubTriangles(const TetMesh& mesh, int t, int face, Eigen::Index column,
+                       Matrix3Xi* surface) {
+  const int* f = kOutwardFaces[face];
+  int o[3], e[3];
+  for (int k = 0; k < 3; ++k) {
+    o[k] = mesh.tets(f[k], t);
+    e[k] = mesh.edge_nodes(FindP2Edge(f[k], f[(k + 1) % 3]), t);
+  }
+  surface->col(column) << o[0], e[0], e[2];
+  surface->col(column + 1) << e[0], o[1], e[1];
+  surface->col(column + 2) << e[2], e[1], o[2];
+  surface->col(column + 3) << e[0], e[1], e[2];
+}
+
+}  // namespace
+
 Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh) {
-  // For a positively oriented tet (a,b,c,d) these four faces have outward normals.
-  static constexpr int kOutwardFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   struct FaceRecord {
-    std::array<int, 3> oriented;  // node indices
-    std::array<int, 3> corners;   // the same as corners 0..3 of `tet`
-    int tet = -1;
+    int tet = -1, face = -1;  // a tet holding it and its face there (kOutwardFaces)
     int count = 0;
   };
   struct KeyHash {
@@ -168,15 +193,13 @@ Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh) {
   std::unordered_map<std::array<int, 3>, FaceRecord, KeyHash> faces;
   faces.reserve(static_cast<size_t>(mesh.num_tets()) * 4);
   for (int t = 0; t < mesh.num_tets(); ++t) {
-    for (const auto& f : kOutwardFaces) {
-      const std::array<int, 3> oriented = {mesh.tets(f[0], t), mesh.tets(f[1], t),
-                                           mesh.tets(f[2], t)};
-      std::array<int, 3> key = oriented;
+    for (int face = 0; face < 4; ++face) {
+      const int* f = kOutwardFaces[face];
+      std::array<int, 3> key = {mesh.tets(f[0], t), mesh.tets(f[1], t), mesh.tets(f[2], t)};
       std::sort(key.begin(), key.end());
       FaceRecord& record = faces[key];
-      record.oriented = oriented;
-      record.corners = {f[0], f[1], f[2]};
       record.tet = t;
+      record.face = face;
       ++record.count;
     }
   }
@@ -189,21 +212,14 @@ Matrix3Xi ExtractBoundarySurface(const TetMesh& mesh) {
   Matrix3Xi surface(3, per_face * static_cast<Eigen::Index>(keys.size()));
   for (size_t i = 0; i < keys.size(); ++i) {
     const FaceRecord& record = faces[keys[i]];
-    const auto& o = record.oriented;
     const Eigen::Index column = per_face * static_cast<Eigen::Index>(i);
-    if (!mesh.is_quadratic()) {
-      surface.col(column) << o[0], o[1], o[2];
-      continue;
+    if (mesh.is_quadratic()) {
+      WriteSubTriangles(mesh, record.tet, record.face, column, &surface);
+    } else {
+      const int* f = kOutwardFaces[record.face];
+      surface.col(column) << mesh.tets(f[0], record.tet), mesh.tets(f[1], record.tet),
+          mesh.tets(f[2], record.tet);
     }
-    // e_k: the edge node between corners k and k + 1 of the oriented face.
-    int e[3];
-    for (int k = 0; k < 3; ++k)
-      e[k] =
-          mesh.edge_nodes(FindP2Edge(record.corners[k], record.corners[(k + 1) % 3]), record.tet);
-    surface.col(column) << o[0], e[0], e[2];
-    surface.col(column + 1) << e[0], o[1], e[1];
-    surface.col(column + 2) << e[2], e[1], o[2];
-    surface.col(column + 3) << e[0], e[1], e[2];
   }
   return surface;
 }
@@ -220,8 +236,7 @@ TetMesh MakeQuadraticMesh(const TetMesh& linear) {
   for (int t = 0; t < linear.num_tets(); ++t)
     for (int k = 0; k < 6; ++k) {
       const int a = linear.tets(kP2EdgeCorners[k][0], t), b = linear.tets(kP2EdgeCorners[k][1], t);
-      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) |
-                                static_cast<std::uint32_t>(std::max(a, b));
+      const std::uint64_t key = UndirectedEdgeKey(a, b);
       const auto [it, is_new] =
           node_of_edge.emplace(key, num_corners + static_cast<int>(added.size()));
       if (is_new)
