@@ -124,6 +124,32 @@ void RecordPeriod(long step, double period_s, double dt_s, LoopStats* stats) {
   }
 }
 
+// The step's work time (from its start to the force written), and what the slowest step's rows'
+// solve did. No allocation: compute_s is reserved for the run.
+void RecordCompute(long step, double compute_s, const device::HapticLoop& loop, bool new_model,
+                   LoopStats* stats) {
+  stats->compute_s.push_back(compute_s);
+  if (compute_s <= stats->slowest.compute_s) return;
+  const device::HapticStep& haptic_step = loop.haptic_step();
+  stats->slowest = {compute_s,
+                    step,
+                    haptic_step.num_rows_in_use(),
+                    haptic_step.rows_solver().last_iterations(),
+                    haptic_step.rows_solver().last_num_factorizations(),
+                    new_model};
+}
+
+// A step that ended more than a period after its deadline is an overrun, put down to its cause
+// (LateStepCauses) from the thread's counters at its start and now. Times in ns, monotonic.
+void RecordOverrun(std::int64_t deadline_ns, std::int64_t dt_ns, std::int64_t previous_end_ns,
+                   std::int64_t start_ns, std::int64_t end_ns, const ThreadCounters& at_start,
+                   LoopStats* stats) {
+  if (end_ns <= deadline_ns + dt_ns) return;
+  ++stats->overruns;
+  stats->late.Add(previous_end_ns > deadline_ns, 1e-9 * (start_ns - deadline_ns),
+                  1e-9 * (end_ns - start_ns), at_start, ReadThreadCounters(), 1e-9 * dt_ns);
+}
+
 // What the step did: the model it took (if any) and its latency, the force sent, the alarms.
 void RecordStep(long step, std::int64_t step_start_utime, const device::ContactModelUpdate* update,
                 const device::HapticLoopOutput& out, double model_stale_s, LoopStats* stats) {
@@ -481,25 +507,11 @@ void RunHaptic(const HapticCommandOptions& options) {
         step == 0 && first_model != nullptr ? first_model : mailbox.TakeNewest();
     const device::HapticLoopOutput out = loop.Step(device.state, device.age_s, update);
     backend->Write(out.sent.force_W_N, out.sent.torque_W_N_m);
-    stats.compute_s.push_back(1e-9 * (MonotonicNs() - start_ns));
-    if (stats.compute_s.back() > stats.slowest.compute_s) {
-      const device::HapticStep& haptic_step = loop.haptic_step();
-      stats.slowest = {stats.compute_s.back(),
-                       step,
-                       haptic_step.num_rows_in_use(),
-                       haptic_step.rows_solver().last_iterations(),
-                       haptic_step.rows_solver().last_num_factorizations(),
-                       update != nullptr};
-    }
+    RecordCompute(step, 1e-9 * (MonotonicNs() - start_ns), loop, update != nullptr, &stats);
     RecordStep(step, step_start_utime, update, out, loop_options.safety.model_stale_s, &stats);
     PublishStep(&lcm, run_id, step, device, loop, out, stats, period_s, &step_messages);
     const std::int64_t end_ns = MonotonicNs();
-    if (end_ns > deadline_ns + dt_ns) {
-      ++stats.overruns;
-      stats.late.Add(previous_end_ns > deadline_ns, 1e-9 * (start_ns - deadline_ns),
-                     1e-9 * (end_ns - start_ns), counters_before, ReadThreadCounters(),
-                     loop_options.dt_s);
-    }
+    RecordOverrun(deadline_ns, dt_ns, previous_end_ns, start_ns, end_ns, counters_before, &stats);
     previous_end_ns = end_ns;
     deadline_ns += dt_ns;
   }
