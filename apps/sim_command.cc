@@ -77,7 +77,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
     out << "t_s,coupling_ms,free_tool_ms,free_fem_ms,detection_ms,response_ms,model_ms,sanity_ms,"
            "total_ms,candidates,contacts,active,solver_iterations,solver_residual,"
            "sanity_corrections,max_penetration_m,rigid_contacts,max_object_penetration_m,"
-           "tool_x_m,tool_y_m,tool_z_m,contact_force_x_N,contact_force_y_N,contact_force_z_N\n";
+           "tool_x_m,tool_y_m,tool_z_m,contact_force_x_N,contact_force_y_N,contact_force_z_N,"
+           "compliance_ms,solve_ms,correction_ms\n";
     for (const device::FrameSample& f : record.frames) {
       const contact::VisualFrameStats& s = f.stats;
       out << f.t_s << ',' << 1e3 * s.coupling_s << ',' << 1e3 * s.free_tool_s << ','
@@ -88,7 +89,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
           << s.max_penetration_m << ',' << s.num_rigid_contacts << ',' << s.max_object_penetration_m
           << ',' << f.tool_x_W_m.x() << ',' << f.tool_x_W_m.y() << ',' << f.tool_x_W_m.z() << ','
           << f.contact_force_W_N.x() << ',' << f.contact_force_W_N.y() << ','
-          << f.contact_force_W_N.z() << '\n';
+          << f.contact_force_W_N.z() << ',' << 1e3 * s.compliance_s << ',' << 1e3 * s.solve_s << ','
+          << 1e3 * s.correction_s << '\n';
     }
   });
 }

@@ -42,7 +42,7 @@ struct Contact {
   bool embedded = false;  // the body point lies on an embedded collision surface
   // The one to three points of the surface the contact was found on (boundary nodes, or points of
   // an embedded surface before their tets' nodes replaced them), −1 unused: what names the
-  // contact from frame to frame (FrictionWarmStart).
+  // contact from frame to frame (ImpulseWarmStart).
   std::array<int, 3> surface_points = {-1, -1, -1};
   bool on_tool = true;    // false: a body node against a rigid object
   int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none

@@ -231,6 +231,10 @@ bool StepToward(const Eigen::VectorXd& z, const std::vector<Eigen::Index>& free_
 // back along the segment (ratio test) when a free λ would turn negative. Finite and exact to
 // round-off, unlike Gauss–Seidel, which crawls when many contacts are nearly redundant (a stiff
 // body under a flat tool: W is close to the rank-6 tool part).
+// Started from a λ ≥ 0 (the last frame's, ImpulseWarmStart), its positive rows form the first free
+// set: the method only needs a feasible start whose positive rows are the free ones, and every
+// step from there lowers the objective as from zero, so it ends at the same solution. A press
+// then enters its loaded rows in one go instead of one an iteration.
 ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
                                   const ContactSolveOptions& options, Eigen::VectorXd* lambda) {
   const Eigen::Index n = rhs.size();
@@ -241,9 +245,23 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
   M.diagonal().array() += 1e-10 * M.diagonal().cwiseAbs().maxCoeff();
   const double tolerance = options.tolerance * std::max(1.0, rhs.lpNorm<Eigen::Infinity>());
   FreeSet free_set(M);
-  lambda->setZero(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if ((*lambda)[i] > 0.0)
+      free_set.Add(i);
+    else
+      (*lambda)[i] = 0.0;
+  }
+  // The equality on the free rows, stepping back while a free λ would turn negative. Then w, the
+  // slack: only free rows carry λ, so O(n k), not O(n²).
+  Eigen::VectorXd w(n);
+  const auto solve_free_set = [&] {
+    while (!free_set.rows().empty() && !StepToward(free_set.Solve(rhs), free_set.rows(), lambda))
+      free_set.RemoveNonPositive(lambda);
+    w = -rhs;  // w = Mλ − rhs
+    for (Eigen::Index row : free_set.rows()) w += (*lambda)[row] * M.col(row);
+  };
+  solve_free_set();
   ContactSolveReport report;
-  Eigen::VectorXd w = -rhs;  // w = Mλ − rhs
   for (; report.iterations < 3 * n + 10; ++report.iterations) {
     Eigen::Index entering = -1;
     double most_violated = -tolerance;
@@ -251,11 +269,7 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
       if (!free_set.contains(i) && w[i] < most_violated) most_violated = w[i], entering = i;
     if (entering < 0) break;
     free_set.Add(entering);
-    while (!free_set.rows().empty() && !StepToward(free_set.Solve(rhs), free_set.rows(), lambda))
-      free_set.RemoveNonPositive(lambda);
-    // Only free rows carry λ: O(n k), not O(n²).
-    w = -rhs;
-    for (Eigen::Index row : free_set.rows()) w += (*lambda)[row] * M.col(row);
+    solve_free_set();
   }
   report.residual = CalcNormalResidual(W, rhs, dt_s, 1, *lambda);
   report.converged = report.residual <= std::max(options.tolerance, 1e-9);

@@ -45,8 +45,11 @@ struct ContactSolveReport {
   int newton_steps = 0;  // kFriction, FrictionMethod::kWorkingSet: Newton steps tried (kept or not)
 };
 
-// Solves for the impulses λ (rows). On entry *lambda is the initial guess for Gauss–Seidel
-// (warm start; resized and zeroed if its size is wrong). rows_per_contact must be 3 for kFriction.
+// Solves for the impulses λ (rows). On entry *lambda is a start (resized and zeroed if its size
+// is wrong): Gauss–Seidel's initial guess for kFriction; for kUnilateral the rows with λ > 0
+// start in the active set at those λ (negative entries are taken as 0); kEquality ignores it.
+// The unilateral and the friction solves return the same solution from any start, to their
+// tolerances. rows_per_contact must be 3 for kFriction.
 // friction_per_contact, if given (kFriction; one μ ≥ 0 per contact), replaces
 // options.friction_coefficient contact by contact (a rigid object's own μ).
 ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,

@@ -51,6 +51,7 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
           options.response.solve.law == ContactLaw::kFriction &&
           std::any_of(options.rigid_objects.begin(), options.rigid_objects.end(),
                       [](const RigidObject& o) { return o.friction_coefficient.has_value(); })),
+      impulse_start_(rows_per_contact_),
       rigid_contacts_(options.rigid_objects, tool_.shape, options.detection.margin_m) {
   if ((body == nullptr) != (fem_options == nullptr))
     throw std::invalid_argument("VisualFrame: give both the body and its FEM options, or neither");
@@ -107,7 +108,7 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   for (const Contact& contact : contacts_) stats.num_rigid_contacts += contact.rigid_object >= 0;
   stats.detection_s = stage.Lap();
   // 5. Constraint solve and post-collision state of tool and body.
-  SolveResponse(*tool, *body);
+  SolveResponse(*tool, *body, &stats);
   stats.solve = last_solve_;
   const Eigen::Isometry3d X_WT_start = CalcPose(*tool);
   AdvanceTool(tool_, options_.dt_s, dv_tool_, dL_tool_, tool);
@@ -153,7 +154,8 @@ ContactJacobian VisualFrame::CalcJacobian(const std::vector<Contact>& contacts,
                              body_ ? body_->dof_is_fixed : kNoDofs);
 }
 
-void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
+void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
+                                VisualFrameStats* stats) {
   const double dt = options_.dt_s;
   const Eigen::Vector3d v_free = tool.v_W_m_s + dv_tool_;
   const Eigen::Vector3d w_free = tool_system_.M_inv_W * (tool.L_W_kg_m2_s + dL_tool_);
@@ -179,6 +181,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
       c_object;
   b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
   const int num_rows = jacobian_.num_rows();
+  Stopwatch stage;
   if (!stepper_)
     W_body_.setZero(num_rows, num_rows);  // rigid objects only: nothing yields
   else if (warped_compliance_)
@@ -187,18 +190,17 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
     W_body_ = stepper_->CalcCompliance(jacobian_.J_u);
   if (haptic_compliance_)
     W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
+  stats->compliance_s = stage.Lap();
   Eigen::MatrixXd W = W_body_;
   AddToolDelassus(jacobian_, tool_system_, &W);
-  if (rows_per_contact_ == 3) {
-    SetFrictionCoefficients();
-    lambda_ = friction_start_.Start(contacts_);
-  } else {
-    lambda_.setZero(jacobian_.num_rows());  // the active-set solve starts from zero anyway
-  }
+  if (rows_per_contact_ == 3) SetFrictionCoefficients();
+  const bool warm = options_.response.solve.law != ContactLaw::kEquality;
+  lambda_ = warm ? impulse_start_.Start(contacts_) : Eigen::VectorXd::Zero(num_rows);
   last_solve_ =
       SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve, &lambda_,
                            objects_have_own_friction_ ? &mu_per_contact_ : nullptr);
-  if (rows_per_contact_ == 3) friction_start_.Record(contacts_, lambda_);
+  if (warm) impulse_start_.Record(contacts_, lambda_);
+  stats->solve_s = stage.Lap();
   // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.
   dv_tool_ += tool_system_.A_v.inverse() * (dt * jacobian_.J_v.transpose() * lambda_);
   dL_tool_ += tool_system_.A_L.inverse() * (dt * jacobian_.J_w.transpose() * lambda_);
@@ -212,6 +214,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body) {
   } else {
     du_contact_.resize(0);  // nothing was added to du_body_: nothing to take off next frame
   }
+  stats->correction_s = stage.Lap();
   c_post_ = c_free + dt * MultiplyByImpulses(W, lambda_);
 }
 

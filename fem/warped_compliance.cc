@@ -127,6 +127,11 @@ void GroupRows(const Eigen::SparseMatrix<double>& J_u, std::vector<RowGroup>* gr
 // (3 · nodes × rows), each entry adding 3 of C's columns times its G; then W(:, c) = U Q(:, c),
 // each row gathering its entries' 3 values from the column Q(:, c), which stays in cache. Only the
 // lower triangle is computed; C₀_aa is a float solve's, not exactly symmetric, so W mirrors it.
+// Both passes are written as column sums and short dot products, not as products of Eigen blocks:
+// a block product of run-time width goes through Eigen's general product dispatch, which on
+// block_press's ~210 rows cost more than the arithmetic, and a group of one row (normal rows
+// alone) would multiply all three columns of its G (block_press, hybrid, frames with ≥ 200
+// contacts: both compliances 0.75 → 0.52 ms a frame).
 Eigen::MatrixXd MultiplyByEntries(Eigen::Index num_rows, const std::vector<RowGroup>& groups,
                                   const std::vector<GroupEntry>& entries,
                                   const Eigen::Ref<const Eigen::MatrixXd>& C) {
@@ -134,23 +139,40 @@ Eigen::MatrixXd MultiplyByEntries(Eigen::Index num_rows, const std::vector<RowGr
   for (const RowGroup& h : groups)
     for (size_t i = 0; i < h.num_entries; ++i) {
       const GroupEntry& b = entries[h.first_entry + i];
-      Q.middleCols(h.first_row, h.num_rows).noalias() +=
-          C.middleCols<3>(b.block) * b.G.leftCols(h.num_rows);
+      for (int k = 0; k < h.num_rows; ++k)
+        Q.col(h.first_row + k).noalias() += b.G(0, k) * C.col(b.block) +
+                                            b.G(1, k) * C.col(b.block + 1) +
+                                            b.G(2, k) * C.col(b.block + 2);
     }
-  Eigen::MatrixXd W(num_rows, num_rows);
-  for (size_t h = 0; h < groups.size(); ++h)
-    for (Eigen::Index c = groups[h].first_row; c < groups[h].first_row + groups[h].num_rows; ++c) {
-      const auto q = Q.col(c);
-      for (size_t g = h; g < groups.size(); ++g) {
-        const RowGroup& group = groups[g];
-        Eigen::Vector3d w = Eigen::Vector3d::Zero();
-        for (size_t i = 0; i < group.num_entries; ++i) {
-          const GroupEntry& a = entries[group.first_entry + i];
-          w.noalias() += a.G.transpose() * q.segment<3>(a.block);
-        }
-        W.col(c).segment(group.first_row, group.num_rows) = w.head(group.num_rows);
+  // Each row's entries side by side (a group's entries once for each of its rows, with that
+  // row's weights), so that W(r, c) is one short sum.
+  struct RowEntry {
+    int block;
+    double g0, g1, g2;
+  };
+  std::vector<RowEntry> row_entries;
+  std::vector<size_t> first_of_row(num_rows + 1);
+  for (const RowGroup& group : groups)
+    for (int k = 0; k < group.num_rows; ++k) {
+      first_of_row[group.first_row + k] = row_entries.size();
+      for (size_t i = 0; i < group.num_entries; ++i) {
+        const GroupEntry& a = entries[group.first_entry + i];
+        row_entries.push_back({a.block, a.G(0, k), a.G(1, k), a.G(2, k)});
       }
     }
+  first_of_row[num_rows] = row_entries.size();
+  Eigen::MatrixXd W(num_rows, num_rows);
+  for (Eigen::Index c = 0; c < num_rows; ++c) {
+    const double* q = Q.col(c).data();
+    for (Eigen::Index r = c; r < num_rows; ++r) {
+      double sum = 0.0;
+      for (size_t e = first_of_row[r]; e < first_of_row[r + 1]; ++e) {
+        const RowEntry& a = row_entries[e];
+        sum += a.g0 * q[a.block] + a.g1 * q[a.block + 1] + a.g2 * q[a.block + 2];
+      }
+      W(r, c) = sum;
+    }
+  }
   W.triangularView<Eigen::StrictlyUpper>() = W.transpose();
   return W;
 }

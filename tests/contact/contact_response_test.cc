@@ -208,6 +208,45 @@ TEST(ContactResponse, ActiveSetMatchesEnumeratedLcpOnAnUnsymmetricW) {
   EXPECT_GT(left_rows, 0);
 }
 
+// The active-set solve started from a λ (the last frame's, contact/impulse_warm_start.h): from the
+// solution's own rows it needs no entering row; from a start with wrong rows (rows the solution
+// leaves at zero, rows missing, negative entries, wild magnitudes) it still ends at the enumerated
+// solution. Fails if the start's rows were kept without the equality solve and the ratio test.
+TEST(ContactResponse, ActiveSetFromAnyStartEndsAtTheEnumeratedLcp) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int wrong_starts = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 10;
+    Eigen::MatrixXd B(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) B(i, j) = normal(rng);
+    const Eigen::MatrixXd W = B * B.transpose() / n + 0.05 * Eigen::MatrixXd::Identity(n, n);
+    Eigen::VectorXd rhs(n);
+    for (int i = 0; i < n; ++i) rhs[i] = 1e-3 * normal(rng);
+    const Eigen::VectorXd exact = SolveLcpByEnumeration(W, rhs);
+    const double tolerance = 1e-7 * std::max(1e-9, exact.norm());
+
+    Eigen::VectorXd from_solution = exact;
+    const ContactSolveOptions options{ContactLaw::kUnilateral};
+    const ContactSolveReport settled =
+        SolveContactImpulses(W, rhs, kDt_s, 1, options, &from_solution);
+    EXPECT_EQ(settled.iterations, 0) << trial;
+    EXPECT_LT((from_solution - exact).norm(), tolerance) << trial;
+
+    Eigen::VectorXd start(n);
+    for (int i = 0; i < n; ++i)
+      start[i] = uniform(rng) < 0.5 ? 0.0 : 10.0 * normal(rng) * exact.norm();
+    wrong_starts += ((start.array() > 0.0) != (exact.array() > 0.0)).any();
+    Eigen::VectorXd lambda = start;
+    const ContactSolveReport report = SolveContactImpulses(W, rhs, kDt_s, 1, options, &lambda);
+    EXPECT_TRUE(report.converged) << trial;
+    EXPECT_LT((lambda - exact).norm(), tolerance) << trial;
+  }
+  EXPECT_GT(wrong_starts, 30);
+}
+
 TEST(ContactResponse, CoulombFrictionSticksInsideTheConeAndSlidesOnIt) {
   // One contact whose rows are decoupled (W diagonal): the closed form is λ_n = rhs_n/(ΔtW_nn),
   // λ_t = rhs_t/(ΔtW_tt) if |λ_t| ≤ μλ_n (stick), else μλ_n along it (slide).

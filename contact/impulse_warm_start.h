@@ -1,11 +1,15 @@
 #pragma once
-// The frame friction solve's start from the impulses of the frame before (issue 25 item 2).
+// The frame's contact solve's start from the impulses of the frame before: the friction solve's
+// (issue 25 item 2) and the unilateral active-set solve's (item 3).
 //
 // A press changes the contact impulses slowly from one visual frame to the next, but the frame
 // detects its contacts anew, in a new order, with tangents chosen from the new normals. A cold
 // start (λ = 0) made SolveFrictionOnWorkingSet find the loaded contacts and their stick/slip
 // states again every frame: a median of 34 sweeps a solve on block_press_friction, 17.5 with
-// this start (frames.csv's solver_iterations, 2026-11-27).
+// this start (frames.csv's solver_iterations, 2026-11-27). The unilateral active-set solve
+// entered its ~70 loaded rows one at a time, each entry an equality solve and a pass over every
+// row's slack (block_press, ≥ 200 contacts: 70 iterations a frame); started from the last frame's
+// loaded rows, it factors them at once and only corrects the difference.
 // This carries a contact's impulse over when the new frame has a contact of the same identity:
 // the same body nodes (on an embedded collision surface: the same surface points; weights may
 // differ), the same rigid object, the same side (on the tool or not). The normal impulse is kept;
@@ -21,20 +25,23 @@
 
 #include <Eigen/Core>
 #include <array>
-#include <map>
+#include <utility>
 #include <vector>
 
 #include "contact/contact.h"
 
 namespace hapsim::contact {
 
-class FrictionWarmStart {
+class ImpulseWarmStart {
  public:
-  // Keeps the contact forces λ (3 rows per contact: normal, t1, t2; N) the frame solved for
+  // rows_per_contact: 1 (normal rows alone) or 3 (normal, t1, t2).
+  explicit ImpulseWarmStart(int rows_per_contact = 3);
+
+  // Keeps the contact forces λ (rows_per_contact rows a contact; N) the frame solved for
   // `contacts`.
   void Record(const std::vector<Contact>& contacts, const Eigen::VectorXd& lambda);
 
-  // λ to start this frame's solve with (3 rows per contact), from the recorded frame.
+  // λ to start this frame's solve with (rows_per_contact rows a contact), from the recorded frame.
   Eigen::VectorXd Start(const std::vector<Contact>& contacts);
 
   // Contacts of the last Start that found a recorded impulse.
@@ -51,7 +58,8 @@ class FrictionWarmStart {
     Eigen::Vector3d tangential_W_N = Eigen::Vector3d::Zero();
     bool ambiguous = false;  // the identity was found twice in the recorded frame
   };
-  std::map<Identity, Force> recorded_;
+  int rows_per_contact_;
+  std::vector<std::pair<Identity, Force>> recorded_;  // sorted by identity
   int num_carried_ = 0;
 };
 

@@ -1,6 +1,7 @@
-// FrictionWarmStart: a contact found again next frame starts from the force it carried, whatever
-// the new order and tangents; other contacts start from zero.
-#include "contact/friction_warm_start.h"
+// ImpulseWarmStart: a contact found again next frame starts from the force it carried, whatever
+// the new order and tangents (or, with normal rows alone, its normal force); other contacts start
+// from zero.
+#include "contact/impulse_warm_start.h"
 
 #include <gtest/gtest.h>
 
@@ -27,13 +28,13 @@ Eigen::Vector3d WorldForce(const Contact& contact, const Eigen::VectorXd& lambda
   return lambda[3 * i] * contact.n_W + lambda[3 * i + 1] * t1 + lambda[3 * i + 2] * t2;
 }
 
-TEST(FrictionWarmStart, CarriesEachContactsForceToItsNewRowsAndTangents) {
+TEST(ImpulseWarmStart, CarriesEachContactsForceToItsNewRowsAndTangents) {
   const std::vector<Contact> before = {MakeContact({4, -1, -1}, {0, 0, 1}),
                                        MakeContact({7, 8, 9}, {0.1, 0, 1}),
                                        MakeContact({2, -1, -1}, {0, 0, 1}, /*object=*/0)};
   Eigen::VectorXd lambda(9);
   lambda << 1.5, 0.2, -0.1, 0.7, 0.0, 0.3, 2.0, -0.4, 0.05;
-  FrictionWarmStart start;
+  ImpulseWarmStart start;
   start.Record(before, lambda);
 
   // Next frame: another order, node 4's normal turned by 0.2 rad about x (the same
@@ -58,11 +59,11 @@ TEST(FrictionWarmStart, CarriesEachContactsForceToItsNewRowsAndTangents) {
   EXPECT_LT((WorldForce(after[2], started, 2) - (lambda[0] * turned + projected)).norm(), 1e-14);
 }
 
-TEST(FrictionWarmStart, ContactsWithoutBodyNodesOrFoundTwiceInEitherFrameStartAtZero) {
+TEST(ImpulseWarmStart, ContactsWithoutBodyNodesOrFoundTwiceInEitherFrameStartAtZero) {
   const std::vector<Contact> before = {MakeContact({-1, -1, -1}, {0, 0, 1}, 1),  // tool on object
                                        MakeContact({3, -1, -1}, {0, 0, 1}),
                                        MakeContact({3, -1, -1}, {1, 0, 0})};  // node 3 twice
-  FrictionWarmStart start;
+  ImpulseWarmStart start;
   start.Record(before, Eigen::VectorXd::Constant(9, 1.0));
   const Eigen::VectorXd started = start.Start(before);
   EXPECT_EQ(start.num_carried(), 0);
@@ -79,7 +80,7 @@ TEST(FrictionWarmStart, ContactsWithoutBodyNodesOrFoundTwiceInEitherFrameStartAt
 
 // On an embedded collision surface two contacts whose points lie in one tet share their first
 // nodes (the tet's); their surface points tell them apart, and each carries its own force.
-TEST(FrictionWarmStart, EmbeddedContactsInOneTetAreToldApartByTheirSurfacePoints) {
+TEST(ImpulseWarmStart, EmbeddedContactsInOneTetAreToldApartByTheirSurfacePoints) {
   std::vector<Contact> contacts = {MakeContact({10, 11, 12}, {0, 0, 1}),
                                    MakeContact({10, 11, 12}, {0, 0, 1})};
   contacts[0].embedded = contacts[1].embedded = true;
@@ -87,13 +88,30 @@ TEST(FrictionWarmStart, EmbeddedContactsInOneTetAreToldApartByTheirSurfacePoints
   contacts[1].surface_points = {4, -1, -1};
   Eigen::VectorXd lambda(6);
   lambda << 1.0, 0.1, 0.0, 2.0, -0.2, 0.0;
-  FrictionWarmStart start;
+  ImpulseWarmStart start;
   start.Record(contacts, lambda);
   const std::vector<Contact> swapped = {contacts[1], contacts[0]};
   const Eigen::VectorXd started = start.Start(swapped);
   EXPECT_EQ(start.num_carried(), 2);
   EXPECT_LT((started.segment<3>(0) - lambda.segment<3>(3)).norm(), 1e-15);
   EXPECT_LT((started.segment<3>(3) - lambda.segment<3>(0)).norm(), 1e-15);
+}
+
+// Normal rows alone (the unilateral law): one number a contact, carried by identity as with three.
+TEST(ImpulseWarmStart, NormalRowsAloneCarryTheNormalForce) {
+  const std::vector<Contact> before = {MakeContact({4, -1, -1}, {0, 0, 1}),
+                                       MakeContact({7, 8, 9}, {0.1, 0, 1}),
+                                       MakeContact({5, -1, -1}, {0, 0, 1})};
+  ImpulseWarmStart start(1);
+  start.Record(before, Eigen::Vector3d(1.5, 0.0, 0.7));
+  const std::vector<Contact> after = {before[2], MakeContact({6, -1, -1}, {0, 0, 1}), before[0],
+                                      before[1]};
+  const Eigen::VectorXd started = start.Start(after);
+  ASSERT_EQ(started.size(), 4);
+  EXPECT_EQ(start.num_carried(), 3);  // node 5's zero is carried too
+  EXPECT_EQ(started, Eigen::Vector4d(0.7, 0.0, 1.5, 0.0));
+  EXPECT_THROW(start.Record(before, Eigen::VectorXd::Zero(9)), std::invalid_argument);
+  EXPECT_THROW(ImpulseWarmStart(2), std::invalid_argument);
 }
 
 }  // namespace
