@@ -43,12 +43,14 @@ import time
 from matplotlib.ticker import FuncFormatter
 
 from beam_theory import H_M, L_M, LOADS, references
-from cantilever_report import is_base, markdown, mesh_label
-from common import BenchError, draw_pareto, plt, save_figure
+from cantilever_report import is_base, markdown, mesh_label, quadratic_markdown
+from common import REPO, BenchError, draw_pareto, plt, save_figure
 
 SCENE = "scenes/cantilever.yaml"
+BEAM_SURFACE = "scenes/meshes/beam.obj"  # the same beam as a closed surface
 ELASTICITIES = ["linear", "corotational"]
 COLORS = {"linear": "C0", "corotational": "C3"}
+P2_COLOR = "C2"
 # name: (beam axis, its direction ±1 from the clamp at 0, unit load direction, legend).
 # "x" is the scene as written; "reversed" runs only with an odd cell count along the beam (with an
 # even one it is the mirror image of "x"), compared with "x" on the same odd lattice.
@@ -72,8 +74,17 @@ def plan(quick):
     return [20, 40, 60, 80, 120], [20, 40, 80]
 
 
-def variant_edits(n, m, orientation, elasticity, g):
-    """Scene edits: n cells along the beam, m (even: the tip's centre is a node) across."""
+def quadratic_plan(quick):
+    """Cells along the beam of the quadratic element's lattices (n × n/10 × n/10, down to 1), and
+    the cell sizes of the unstructured meshes both elements run on (issue 27's third target)."""
+    if quick:
+        return [10, 20], [0.025]
+    return [10, 20, 30, 40], [0.025, 0.0167, 0.0125]
+
+
+def variant_edits(n, m, orientation, elasticity, g, element="p1"):
+    """Scene edits: n cells along the beam, m (even: the tip's centre is a node; with quadratic
+    tets an edge node is one too) across."""
     axis, sign, load, _ = ORIENTATIONS[orientation]
     lo, hi, cells = [-0.5 * H_M] * 3, [0.5 * H_M] * 3, [m] * 3
     fixed_lo, fixed_hi, probe = [-0.03] * 3, [0.03] * 3, [0.0] * 3
@@ -81,7 +92,7 @@ def variant_edits(n, m, orientation, elasticity, g):
     fixed_lo[axis], fixed_hi[axis], probe[axis] = -0.001, 0.001, sign * L_M
     return {"gravity_m_s2": [round(g * c, 12) + 0.0 for c in load],
             "body.mesh.box": {"min_m": lo, "max_m": hi, "cells": cells},
-            "body.elasticity": elasticity,
+            "body.elasticity": elasticity, "body.element": element,
             "body.fixed": {"min_m": fixed_lo, "max_m": fixed_hi},
             "body.probes": [{"name": "tip_center", "position_m": probe}]}
 
@@ -107,13 +118,21 @@ def settling(folder):
     return max(math.dist(t, final) for t in tail) / size
 
 
-def fem_run(bench, n, m, orientation, elasticity, load, refs):
-    label = f"cantilever_{load}_{orientation}_{n}x{m}_{elasticity}"
-    edits = variant_edits(n, m, orientation, elasticity, LOADS[load]["g"])
+def fem_run(bench, n, m, orientation, elasticity, load, refs, element="p1", cell_size_m=None):
+    """One settled run. cell_size_m: the beam's closed surface (scenes/meshes/beam.obj) filled
+    with unstructured tets of that size by Gmsh instead of the n × m × m lattice (n, m: 0)."""
+    label = f"cantilever_{load}_{orientation}_{n}x{m}_{elasticity}" + (
+        "" if element == "p1" else f"_{element}")
+    edits = variant_edits(n or 1, m or 1, orientation, elasticity, LOADS[load]["g"], element)
+    if cell_size_m is not None:
+        label = f"cantilever_{load}_unstructured_{1e3 * cell_size_m:g}mm_{elasticity}_{element}"
+        edits["body.mesh"] = {"surface": os.path.join(REPO, BEAM_SURFACE),
+                              "cell_size_m": cell_size_m}
     scene = bench.scene_variant(SCENE, edits, label)
     folder = os.path.dirname(bench.path("runs", label, "summary.json"))
-    bench.progress(f"cantilever: {load} load, {orientation}, {elasticity}, "
-                   f"{n}×{m}×{m} ({5 * n * m * m} tets)")
+    bench.progress(f"cantilever: {load} load, {orientation}, {elasticity}, {element}, "
+                   + (f"{n}×{m}×{m} ({5 * n * m * m} tets)" if cell_size_m is None else
+                      f"unstructured, {1e3 * cell_size_m:g} mm"))
     bench.hapsim_run("fem", scene, "--out", folder)
     with open(os.path.join(folder, "summary.json")) as f:
         summary = json.load(f)
@@ -130,8 +149,9 @@ def fem_run(bench, n, m, orientation, elasticity, load, refs):
         error = abs(vertical_error)
     else:
         error = math.hypot(axial - ref_axial, along - ref_along) / math.hypot(ref_axial, ref_along)
-    return {"load": load, "orientation": orientation, "elasticity": elasticity,
-            "cells": edits["body.mesh.box"]["cells"], "n": n, "m": m, "tets": summary["num_tets"],
+    return {"load": load, "orientation": orientation, "elasticity": elasticity, "element": element,
+            "cells": edits["body.mesh.box"]["cells"] if cell_size_m is None else None, "n": n,
+            "m": m, "cell_size_m": cell_size_m, "tets": summary["num_tets"],
             "nodes": summary["num_nodes"], "steps": summary["num_steps"],
             "mean_ms": summary["timings"]["total"]["mean_ms"],
             "median_ms": summary["timings"]["total"]["median_ms"],
@@ -188,6 +208,15 @@ def chart_pareto(bench, runs):
                 axis.annotate(mesh_label(r), (x, y), textcoords="offset points",
                               xytext=(5, -11) if below else (-5, 5), fontsize=7,
                               ha="left" if below else "right", color=COLORS[elasticity])
+        quadratic = [r for r in runs if r["load"] == load and r["element"] == "p2"
+                     and r["cell_size_m"] is None]
+        if quadratic:
+            xy = [(r["mean_ms"], 100.0 * r["relative_error"]) for r in quadratic]
+            draw_pareto(axis, xy, [""] * len(xy), color=P2_COLOR, marker="s",
+                        name="corotational, quadratic tets")
+            for (x, y), r in zip(xy, quadratic):
+                axis.annotate(mesh_label(r), (x, y), textcoords="offset points", xytext=(5, 5),
+                              fontsize=7, color=P2_COLOR)
         axis.set(xscale="log", yscale="log", xlabel="mean FEM step (ms)",
                  ylabel="tip error against beam theory (%)",
                  title=f"{LOADS[load]['title']}\n(labels: lattice cells; lines: Pareto fronts)")
@@ -206,7 +235,8 @@ def chart_pareto(bench, runs):
                        "x): "
                        "left the small load against Euler–Bernoulli + Timoshenko, right the large "
                        "load against the elastica (axial and vertical), linear and corotational, "
-                       "with each elasticity's Pareto front."}
+                       "and corotational on quadratic tets (squares), with each one's Pareto "
+                       "front."}
 
 
 def chart_convergence(bench, runs, refs):
@@ -224,7 +254,7 @@ def chart_convergence(bench, runs, refs):
             axis.plot([r["n"] for r in base], [r[key] / r[ref_key] for r in base], "o-",
                       color=COLORS[elasticity], label=f"{elasticity} (beam along x)", ms=5)
             odd = [r for r in runs if r["load"] == load and r["orientation"] == "x"
-                   and not is_base(r) and r["elasticity"] == elasticity]
+                   and not is_base(r) and r["elasticity"] == elasticity and r["element"] == "p1"]
             axis.scatter([r["n"] for r in odd], [r[key] / r[ref_key] for r in odd], marker=">",
                          color=COLORS[elasticity], s=30, label=f"{elasticity}: odd n, beam along x",
                          zorder=3)
@@ -278,6 +308,12 @@ def run(bench):
                 for orientation in ("x", "reversed"):
                     runs.append(fem_run(bench, n + 1, n // 10, orientation, elasticity, load,
                                         refs))
+        lattices, cell_sizes = quadratic_plan(bench.quick)
+        for n in lattices:
+            runs.append(fem_run(bench, n, max(1, n // 10), "x", "corotational", load, refs, "p2"))
+        for h in cell_sizes:
+            for element in ("p1", "p2"):
+                runs.append(fem_run(bench, 0, 0, "x", "corotational", load, refs, element, h))
     unsettled = [r for r in runs if r["settling"] > 1e-3]
     extrapolated = {}
     if len(base_meshes) >= 3:
@@ -295,7 +331,7 @@ def run(bench):
                                  for r in unsettled],
               "wall_s": wall_s,
               "figures": [chart_pareto(bench, runs), chart_convergence(bench, runs, refs)]}
-    output["markdown"] = markdown(runs, refs, extrapolated, wall_s)
+    output["markdown"] = markdown(runs, refs, extrapolated, wall_s) + quadratic_markdown(runs)
     if unsettled:
         output["markdown"].append("**Not settled** (the tip still moves by more than 0.1 % over "
                                   "the last 10 % of the steps): "

@@ -9,11 +9,43 @@ from beam_theory import E_PA, NU
 
 
 def is_base(r):
-    """The scene's orientation on an n × n/10 × n/10 lattice (cubic cells)."""
-    return r["orientation"] == "x" and r["m"] * 10 == r["n"]
+    """The scene's orientation on an n × n/10 × n/10 lattice (cubic cells), linear tets."""
+    return (r["orientation"] == "x" and r["m"] * 10 == r["n"] and r.get("element", "p1") == "p1"
+            and r.get("cell_size_m") is None)
+
+
+def quadratic_markdown(runs):
+    """The quadratic element's runs and the unstructured meshes' (corotational, beam along x), each
+    beside the corotational linear lattices' error at the same mean step cost (log-interpolated
+    along them)."""
+    quadratic = [r for r in runs if r.get("element") == "p2" or r.get("cell_size_m")]
+    if not quadratic:
+        return []
+    md = ["Quadratic tets (`element: p2`, corotational, beam along x; issue 27) against the "
+          "linear ones at the same mean step, on lattices and on unstructured tets (Gmsh, from "
+          "the beam's closed surface scenes/meshes/beam.obj at the cell size given):", "",
+          "| load | mesh | element | tets | nodes | mean / median step (ms) | vertical error | error | "
+          "P1 corotational lattices at that cost |", "|---|---|---|---:|---:|---:|---:|---:|---:|"]
+    for r in quadratic:
+        linear = sorted((p for p in runs if is_base(p) and p["load"] == r["load"]
+                         and p["elasticity"] == "corotational"), key=lambda p: p["mean_ms"])
+        at_cost = "outside the linear lattices' costs"
+        for a, b in zip(linear, linear[1:]):
+            if a["mean_ms"] <= r["mean_ms"] <= b["mean_ms"]:
+                t = math.log(r["mean_ms"] / a["mean_ms"]) / math.log(b["mean_ms"] / a["mean_ms"])
+                error = a["relative_error"] + t * (b["relative_error"] - a["relative_error"])
+                at_cost = (f"{100 * error:.1f} % (ratio {r['relative_error'] / error:.2f})"
+                           if error else "0")
+        md.append(f"| {r['load']} | {mesh_label(r)} | {r['element'].upper()} | {r['tets']} | "
+                  f"{r['nodes']} | "
+                  f"{r['mean_ms']:.2f} / {r['median_ms']:.2f} | {100 * r['vertical_error']:+.1f} % "
+                  f"| {100 * r['relative_error']:.1f} % | {at_cost} |")
+    return md + [""]
 
 
 def mesh_label(r):
+    if r.get("cell_size_m"):
+        return f"unstructured, {1e3 * r['cell_size_m']:g} mm"
     return "×".join(str(c) for c in r["cells"])
 
 
@@ -97,7 +129,7 @@ def markdown(runs, refs, extrapolated, wall_s):
     def find(load, elasticity, n, m, orientation):
         for o in runs:
             if (o["load"], o["elasticity"], o["n"], o["m"], o["orientation"]) == (
-                    load, elasticity, n, m, orientation):
+                    load, elasticity, n, m, orientation) and o.get("element", "p1") == "p1":
                 return o
         return None
 

@@ -13,6 +13,17 @@ block bonded at its base stiffer than a half-space: the error should be positive
 the cell size. Linear tetrahedra are also too stiff in volume change as ν nears 1/2 (volumetric
 locking); the full run measures how much of the error that is by pressing the middle mesh again
 at ν = 0.3 (the closed form's E* follows ν).
+
+Issue 27 adds the quadratic element (`body.element: p2`) on coarser lattices beside the linear
+one, each at ν 0.45 and 0.49, and a second reference for Hertz: the block is not a half-space but a
+layer of thickness h bonded at its base, which is stiffer. For a sphere on a bonded layer,
+Dimitriadis et al. (Biophys. J. 82, 2002, eq. 12) give
+    F = F_Hertz · (1 − (2α₀/π) χ + (4α₀²/π²) χ² − (8/π³)(α₀³ + (4π²/15) β₀) χ³
+                     + (16 α₀/π⁴)(α₀³ + (3π²/5) β₀) χ⁴),   χ = (R d)^(1/2) / h,
+    α₀ = −(1.2876 − 1.4678 ν + 1.3442 ν²)/(1 − ν),  β₀ = (0.6387 − 1.0277 ν + 1.5164 ν²)/(1 − ν),
+fitted with the same power law over the same depths. At this block's 0.8 mm it is +11 % at ν 0.45.
+The full run checks that correction against the model itself: the finest quadratic mesh pressed
+again into a block twice as deep (and wide), where the layer formula predicts less stiffening.
 """
 import math
 
@@ -24,6 +35,9 @@ E_PA, NU, SPHERE_R_M, PUNCH_A_M = 50000.0, 0.45, 0.01, 0.003
 E_STAR = E_PA / (1.0 - NU * NU)
 # The full run's second Poisson's ratio, on the middle mesh (cells, grading ratio).
 LOW_NU, NU_MESH = 0.3, (10, 10.0)
+# Both elements are pressed at these ν (issue 27: tissue is nearly incompressible).
+TISSUE_NUS = (0.45, 0.49)
+BLOCK_DEPTH_M = 0.03
 CASES = {
     "hertz": {"scene": "scenes/hertz_indentation.yaml", "top_m": 0.03, "offset_m": SPHERE_R_M,
               "window_m": (0.2e-3, 0.8e-3), "power": 1.5,
@@ -38,11 +52,36 @@ CASES = {
 
 
 def meshes(quick):
-    """(cells m: lattice 2m x 2m x m, grading ratio) per run."""
+    """(element, cells m: lattice 2m x 2m x m, grading ratio) per run."""
     if quick:
-        return [(6, 10.0), (8, 10.0)]
-    return [(6, 10.0), (8, 10.0), (10, 10.0), (12, 10.0), (14, 10.0), (16, 10.0),
-            (10, 5.0), (10, 20.0)]
+        return [("p1", 6, 10.0), ("p1", 8, 10.0), ("p2", 3, 10.0)]
+    return [("p1", 6, 10.0), ("p1", 8, 10.0), ("p1", 10, 10.0), ("p1", 12, 10.0),
+            ("p1", 14, 10.0), ("p1", 16, 10.0), ("p1", 10, 5.0), ("p1", 10, 20.0),
+            ("p2", 3, 10.0), ("p2", 4, 10.0), ("p2", 5, 10.0), ("p2", 6, 10.0)]
+
+
+def layer_factor(depth_m, nu, thickness_m=BLOCK_DEPTH_M):
+    """Dimitriadis et al. 2002: a bonded layer's force over the half-space's (sphere, R)."""
+    chi = math.sqrt(SPHERE_R_M * depth_m) / thickness_m
+    a0 = -(1.2876 - 1.4678 * nu + 1.3442 * nu * nu) / (1.0 - nu)
+    b0 = (0.6387 - 1.0277 * nu + 1.5164 * nu * nu) / (1.0 - nu)
+    pi = math.pi
+    return (1.0 - 2.0 * a0 / pi * chi + 4.0 * a0 * a0 / pi ** 2 * chi ** 2
+            - 8.0 / pi ** 3 * (a0 ** 3 + 4.0 * pi ** 2 / 15.0 * b0) * chi ** 3
+            + 16.0 * a0 / pi ** 4 * (a0 ** 3 + 3.0 * pi ** 2 / 5.0 * b0) * chi ** 4)
+
+
+def layer_coefficient(curve, case, nu, thickness_m=BLOCK_DEPTH_M):
+    """The bonded layer's force fitted as `fit` fits the run's: same law, same depths."""
+    num = den = 0.0
+    low, high = case["window_m"]
+    half_space = case["coefficient_over_E_star"] * E_PA / (1.0 - nu * nu)
+    for depth_m, _ in curve:
+        if low <= depth_m <= high:
+            basis = depth_m ** case["power"]
+            num += half_space * basis * layer_factor(depth_m, nu, thickness_m) * basis
+            den += basis * basis
+    return num / den
 
 
 def fit(frames, case):
@@ -62,26 +101,41 @@ def fit(frames, case):
     return num / den, curve
 
 
-def press(bench, name, case, cells, ratio, nu=NU):
-    """One indentation run on a 2m × 2m × m lattice graded towards the top centre; its fit."""
-    label = f"{name}_m{cells}_r{ratio:g}" + ("" if nu == NU else f"_nu{nu:g}")
-    bench.progress(f"indentation: {label} ({20 * cells ** 3} tets)")
+def press(bench, name, case, cells, ratio, nu=NU, element="p1", depth_scale=1):
+    """One indentation run on a 2m × 2m × m lattice graded towards the top centre; its fit.
+    depth_scale 2: the block twice as deep and wide (the same cells), its top where it was."""
+    label = (f"{name}_{element}_m{cells}_r{ratio:g}_nu{nu:g}"
+             + ("" if depth_scale == 1 else f"_deep{depth_scale}"))
+    tets = 20 * cells ** 3
+    bench.progress(f"indentation: {label} ({tets} tets)")
+    half_width_m, depth_m = 0.03 * depth_scale, BLOCK_DEPTH_M * depth_scale
     edits = {"body.mesh.box.cells": [2 * cells, 2 * cells, cells],
-             "body.mesh.box.graded": {"focus_m": [0.0, 0.0, 0.03], "ratio": ratio}}
-    if nu != NU:
-        edits["body.material.poisson_ratio"] = nu
+             "body.mesh.box.graded": {"focus_m": [0.0, 0.0, 0.03], "ratio": ratio},
+             "body.material.poisson_ratio": nu, "body.element": element}
+    if depth_scale != 1:
+        edits["body.mesh.box.min_m"] = [-half_width_m, -half_width_m, 0.03 - depth_m]
+        edits["body.mesh.box.max_m"] = [half_width_m, half_width_m, 0.03]
+        edits["body.fixed"] = {"min_m": [-2 * half_width_m, -2 * half_width_m, 0.03 - depth_m - 1e-4],
+                               "max_m": [2 * half_width_m, 2 * half_width_m, 0.03 - depth_m + 1e-4]}
     summary, frames, _ = bench.sim(bench.scene_variant(case["scene"], edits, label), label)
     coefficient, curve = fit(frames, case)
     analytic = case["coefficient_over_E_star"] * E_PA / (1.0 - nu * nu)
-    return {"cells": cells, "ratio": ratio, "tets": 20 * cells ** 3, "poisson_ratio": nu,
-            "frame_ms": summary["frame_stage_median_ms"]["total"],
-            "max_contacts": summary["max_contacts"], "fitted_coefficient": coefficient,
-            "analytic_coefficient": analytic, "relative_error": coefficient / analytic - 1.0,
-            "curve": curve}
+    run = {"element": element, "cells": cells, "ratio": ratio, "tets": tets,
+           "poisson_ratio": nu, "block_depth_m": depth_m,
+           "frame_ms": summary["frame_stage_median_ms"]["total"],
+           "max_contacts": summary["max_contacts"], "fitted_coefficient": coefficient,
+           "analytic_coefficient": analytic, "relative_error": coefficient / analytic - 1.0,
+           "curve": curve}
+    if name == "hertz":
+        run["layer_coefficient"] = layer_coefficient(curve, case, nu, depth_m)
+        run["layer_relative_error"] = coefficient / run["layer_coefficient"] - 1.0
+    return run
 
 
 def run_case(bench, name, case):
-    return [press(bench, name, case, cells, ratio) for cells, ratio in meshes(bench.quick)]
+    nus = (NU,) if bench.quick else TISSUE_NUS
+    return [press(bench, name, case, cells, ratio, nu, element)
+            for nu in nus for element, cells, ratio in meshes(bench.quick)]
 
 
 def locking_markdown(name, at_nu, at_low_nu):
@@ -103,31 +157,130 @@ def locking_markdown(name, at_nu, at_low_nu):
     return said
 
 
+SERIES = {("p1", 0.45): ("k", "o"), ("p1", 0.49): ("0.55", "o"),
+          ("p2", 0.45): ("tab:blue", "s"), ("p2", 0.49): ("tab:cyan", "s")}
+
+
+def label_of(r):
+    return f"{r['element'].upper()} m{r['cells']}" + ("" if r["ratio"] == 10.0 else f" r{r['ratio']:g}")
+
+
 def chart(bench, name, case, results):
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
-    top_d = max(d for r in results for d, _ in r["curve"])
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.6))
+    shown = [r for r in results if r["poisson_ratio"] == NU and r["ratio"] == 10.0]
+    top_d = max(d for r in shown for d, _ in r["curve"])
     ds = [top_d * i / 100 for i in range(101)]
     left.plot([1e3 * d for d in ds], [case["coefficient"] * d ** case["power"] for d in ds], "k-",
-              lw=2, label=case["law"])
-    for r in results:
+              lw=2, label=case["law"] + " (half-space)")
+    if name == "hertz":
+        left.plot([1e3 * d for d in ds],
+                  [case["coefficient"] * d ** case["power"] * layer_factor(d, NU) for d in ds],
+                  "k:", lw=2, label="bonded 30 mm layer (Dimitriadis et al. 2002)")
+    for r in shown:
         left.plot([1e3 * d for d, _ in r["curve"] if d > 0], [f for d, f in r["curve"] if d > 0],
-                  lw=1, label=f"m {r['cells']}, ratio {r['ratio']:g} ({r['tets']} tets)")
+                  "-" if r["element"] == "p1" else "--", lw=1,
+                  label=f"{label_of(r)} ({r['tets']} tets)")
     left.axvspan(1e3 * case["window_m"][0], 1e3 * case["window_m"][1], color="0.9", zorder=0)
     left.set(xlabel="depth below the undeformed top (mm)", ylabel="contact force (N)",
-             title=f"{name}: force against depth (grey: fit window)")
-    left.legend(fontsize=7)
-    labels = draw_pareto(right, [(r["frame_ms"], 100 * r["relative_error"]) for r in results],
-                         [f"m{r['cells']} r{r['ratio']:g}" for r in results])
+             title=f"{name}, ν {NU}: force against depth (grey: fit window)")
+    left.legend(fontsize=6)
+    labels = []
+    for (element, nu), (color, marker) in SERIES.items():
+        series = [r for r in results if r["element"] == element and r["poisson_ratio"] == nu]
+        if series:
+            labels += draw_pareto(right, [(r["frame_ms"], 100 * r["relative_error"]) for r in series],
+                                  [label_of(r) for r in series], color=color, marker=marker,
+                                  name=f"{element.upper()}, ν {nu:g}")
+    right.axhline(0.0, color="k", lw=0.8)
     right.set(xscale="log", xlabel="median visual frame (ms)",
               ylabel="error of the fitted coefficient (%)",
-              title=f"{name}: error against cost (line: Pareto front)")
+              title=f"{name}: error against cost, against the half-space (lines: Pareto fronts)")
+    right.legend(fontsize=7)
     for axis in (left, right):
         axis.grid(True, alpha=0.3)
     place_labels(right, labels)
     save_figure(fig, bench.path(f"{name}.png"))
     return {"file": f"{name}.png",
-            "caption": f"{case['law']}: force against depth per mesh, and the fitted coefficient's "
-                       "error against the median visual frame."}
+            "caption": f"{case['law']}: force against depth per mesh (ν {NU}; linear tets solid, "
+                       "quadratic dashed), and the fitted coefficient's error against the median "
+                       "visual frame for both elements at ν 0.45 and 0.49."}
+
+
+def error_at_cost(front_runs, frame_ms, key):
+    """P1's error at a frame cost, interpolated (log cost, linear error) along its Pareto front;
+    None outside the front's range of costs."""
+    points = sorted((r["frame_ms"], r[key]) for r in front_runs)
+    front = []
+    for cost, error in points:  # undominated: each cheaper than the next and more wrong
+        if not front or abs(error) < abs(front[-1][1]):
+            front.append((cost, error))
+    for (c0, e0), (c1, e1) in zip(front, front[1:]):
+        if c0 <= frame_ms <= c1:
+            t = math.log(frame_ms / c0) / math.log(c1 / c0)
+            return e0 + t * (e1 - e0)
+    return None
+
+
+def comparison_markdown(name, results):
+    """Per quadratic run: the linear element's error at the same frame cost, and the ratio."""
+    lines = []
+    key = "layer_relative_error" if name == "hertz" else "relative_error"
+    for nu in sorted({r["poisson_ratio"] for r in results}):
+        p1 = [r for r in results if r["element"] == "p1" and r["poisson_ratio"] == nu]
+        for r in (r for r in results if r["element"] == "p2" and r["poisson_ratio"] == nu):
+            p1_error = error_at_cost(p1, r["frame_ms"], key)
+            if p1_error is None:
+                lines.append(f"- ν {nu:g}, {label_of(r)} ({r['frame_ms']:.1f} ms): "
+                             f"{100 * r[key]:+.1f} %; no P1 mesh charted at that cost")
+            else:
+                lines.append(f"- ν {nu:g}, {label_of(r)} ({r['frame_ms']:.1f} ms): "
+                             f"{100 * r[key]:+.1f} % against P1's {100 * p1_error:+.1f} % at the "
+                             f"same cost (ratio {abs(r[key] / p1_error):.2f})")
+    return lines
+
+
+def table_markdown(name, results):
+    layer = name == "hertz"
+    head = "error (half-space / bonded layer)" if layer else "error"
+    md = [f"| element, lattice (2m × 2m × m), grading | tets | ν 0.45: frame, {head} | "
+          f"ν 0.49: frame, {head} |", "|---|---:|---:|---:|"]
+    keys = []
+    for r in results:
+        key = (r["element"], r["cells"], r["ratio"])
+        if key not in keys:
+            keys.append(key)
+    for element, cells, ratio in keys:
+        cells_md = []
+        for nu in TISSUE_NUS:
+            r = next((r for r in results if (r["element"], r["cells"], r["ratio"], r["poisson_ratio"])
+                      == (element, cells, ratio, nu)), None)
+            if r is None:
+                cells_md.append("–")
+                continue
+            error = f"{100 * r['relative_error']:+.1f} %"
+            if layer:
+                error += f" / {100 * r['layer_relative_error']:+.1f} %"
+            cells_md.append(f"{r['frame_ms']:.1f} ms, {error}")
+        tets = 20 * cells ** 3
+        md.append(f"| {element.upper()}, m {cells}, ratio {ratio:g} | {tets} | {cells_md[0]} | "
+                  f"{cells_md[1]} |")
+    return md
+
+
+def depth_check_markdown(standard, deep):
+    """The layer correction tested by the model: the same contact-zone cells, a deeper block."""
+    def stiffening(r):  # the layer's coefficient over the half-space's
+        return r["layer_coefficient"] / r["analytic_coefficient"]
+
+    def errors(r):
+        return (f"{100 * r['relative_error']:+.1f} % against the half-space, "
+                f"{100 * r['layer_relative_error']:+.1f} % against the bonded layer")
+    return (f"The layer correction, checked on the model: {label_of(standard)} in the 30 mm block "
+            f"gives {errors(standard)}; the same cells at the top (m {deep['cells']}, the block "
+            f"60 mm deep and 120 mm wide, so the cells at the focus are the same size) give "
+            f"{errors(deep)}. The half-space's excess falls by "
+            f"{100 * (standard['relative_error'] - deep['relative_error']):.1f} points; the formula "
+            f"predicts {100 * (stiffening(standard) - stiffening(deep)):.1f}.")
 
 
 def run(bench):
@@ -138,22 +291,30 @@ def run(bench):
         output[name] = {"law": case["law"], "analytic_coefficient": case["coefficient"],
                         "window_m": case["window_m"],
                         "runs": [{k: v for k, v in r.items() if k != "curve"} for r in results]}
-        at_nu = next((r for r in results if (r["cells"], r["ratio"]) == NU_MESH), None)
+        at_nu = next((r for r in results if (r["element"], r["cells"], r["ratio"], r["poisson_ratio"])
+                      == ("p1", *NU_MESH, NU)), None)
         at_low_nu = None
         if at_nu is not None:  # the full run's meshes include it
             at_low_nu = press(bench, name, case, *NU_MESH, nu=LOW_NU)
             output[name]["low_poisson_run"] = {k: v for k, v in at_low_nu.items() if k != "curve"}
         output["figures"].append(chart(bench, name, case, results))
-        md.append(f"**{name}** ({case['law']}, E {E_PA:g} Pa, ν {NU}; fit over depths "
-                  f"{1e3 * case['window_m'][0]:g}–{1e3 * case['window_m'][1]:g} mm):")
+        md.append(f"**{name}** ({case['law']}, E {E_PA:g} Pa; fit over depths "
+                  f"{1e3 * case['window_m'][0]:g}–{1e3 * case['window_m'][1]:g} mm; median visual "
+                  "frame on one core):")
         md.append("")
-        md.append("| lattice (2m × 2m × m), grading | tets | median frame (ms) | max contacts | "
-                  "error of the coefficient |")
-        md.append("|---|---:|---:|---:|---:|")
-        for r in results:
-            md.append(f"| m {r['cells']}, ratio {r['ratio']:g} | {r['tets']} | {r['frame_ms']:.1f} "
-                      f"| {r['max_contacts']} | {100 * r['relative_error']:+.1f} % |")
+        md += table_markdown(name, results)
+        md.append("")
+        md.append("Quadratic against linear at the same frame cost"
+                  + (" (errors against the bonded layer):" if name == "hertz" else ":"))
+        md.append("")
+        md += comparison_markdown(name, results)
         md.append("")
         if at_low_nu is not None:
             md += [locking_markdown(name, at_nu, at_low_nu), ""]
+        if name == "hertz" and not bench.quick:
+            standard = next(r for r in results if (r["element"], r["cells"], r["poisson_ratio"])
+                            == ("p2", 4, NU))
+            deep = press(bench, name, case, 8, 10.0, NU, "p2", depth_scale=2)
+            output[name]["deep_block_run"] = {k: v for k, v in deep.items() if k != "curve"}
+            md += [depth_check_markdown(standard, deep), ""]
     return output
