@@ -1,10 +1,12 @@
 #include "config/body_builder.h"
 
+#include <iostream>
 #include <stdexcept>
 
 #include "config/surface_mesh_cache.h"
 #include "core/error.h"
 #include "core/triangle_mesh_io.h"
+#include "fem/curved_boundary.h"
 #include "fem/lattice_mesher.h"
 #include "fem/mesh_io.h"
 #include "fem/time_stepper.h"
@@ -74,11 +76,28 @@ fem::EmbeddedSurface EmbedSurfaceFile(const EmbeddedSurfaceSource& source,
   }
 }
 
+// Quadratic tets cut from a `surface:` file: their boundary edge nodes onto that surface
+// (fem/curved_boundary.h), so the body is as round as the surface, not its linear facets.
+void CurveOntoSurfaceFile(const MeshSource& source, fem::TetMesh* mesh) {
+  TriangleMesh surface = ReadTriangleMesh(source.file);
+  source.transform.Apply(&surface.vertices_m);
+  const fem::CurvedBoundaryReport report =
+      fem::MoveBoundaryEdgeNodesOntoSurface(surface.vertices_m, surface.triangles, mesh);
+  if (report.num_kept > 0)
+    std::cerr << source.location.file << ':' << source.location.line
+              << ": warning: " << report.num_kept << " of " << report.num_boundary_edge_nodes
+              << " boundary edge nodes stay on their straight edges: moving them onto "
+              << source.file << " would fold a tet; a smaller cell_size_m curves them too\n";
+}
+
 }  // namespace
 
 Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
   fem::TetMesh mesh = MakeMesh(scene.mesh);
-  if (scene.quadratic) mesh = fem::MakeQuadraticMesh(mesh);
+  if (scene.quadratic) {
+    mesh = fem::MakeQuadraticMesh(mesh);
+    if (scene.mesh.kind == MeshSource::Kind::kSurface) CurveOntoSurfaceFile(scene.mesh, &mesh);
+  }
   std::vector<int> fixed_nodes;
   if (scene.fixed) {
     fixed_nodes =

@@ -4,11 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "core/error.h"
 #include "core/shape_mesh.h"
+#include "fem/curved_boundary.h"
+#include "fem/quadratic_tet.h"
 
 namespace hapsim::fem {
 namespace {
@@ -61,6 +64,77 @@ TEST(SurfaceMesher, FillsASphereToItsVolume) {
   for (int e = 0; e < mesh.num_tets(); ++e) mean_edge_m += MeanEdge(mesh, e) / mesh.num_tets();
   EXPECT_GT(mean_edge_m, 0.6 * h_m);
   EXPECT_LT(mean_edge_m, 1.4 * h_m);
+}
+
+// The volume of a mesh whose tets may be curved quadratic ones (their ∫ dV by quadrature).
+double CalcMeshVolume(const TetMesh& mesh) {
+  double volume_m3 = 0.0;
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    P2Nodes X_m;
+    for (int a = 0; a < kP2Nodes; ++a) X_m.col(a) = mesh.rest_positions_m.col(mesh.node(a, t));
+    volume_m3 += MakeQuadraticTetRest(X_m, 1.0, 1.0, 1.0).volume_m3;
+  }
+  return volume_m3;
+}
+
+// Quadratic tets cut from a coarse sphere (h = r/3), their boundary edge nodes moved onto the
+// surface (fem/curved_boundary.h): every boundary node, corner or edge, then lies on the sphere,
+// and the curved faces recover most of the volume the flat facets cut off (against 4/3 π r³ and
+// the mesh with straight edges). Interior edge nodes stay at their midpoints. Moved onto a copy of
+// the sphere 1 m away, no move is made (each is longer than a quarter of its edge).
+TEST(SurfaceMesher, QuadraticTetsCurvedOntoTheSurface) {
+  const TriangleMesh surface = MakeSphereSurface(128);
+  const TetMesh linear = MeshClosedSurface(surface, {kRadius_m / 3.0, {}, 0.0, 0.0}, "sphere");
+  const TetMesh straight = MakeQuadraticMesh(linear);
+  TetMesh curved = straight;
+  const CurvedBoundaryReport report =
+      MoveBoundaryEdgeNodesOntoSurface(surface.vertices_m, surface.triangles, &curved);
+  RecordProperty("boundary_edge_nodes", report.num_boundary_edge_nodes);
+  RecordProperty("kept", report.num_kept);
+  EXPECT_GT(report.num_boundary_edge_nodes, 100);
+  EXPECT_EQ(report.num_moved + report.num_kept, report.num_boundary_edge_nodes);
+  EXPECT_GE(report.num_moved, report.num_boundary_edge_nodes * 9 / 10);
+  EXPECT_GT(report.max_move_m, 0.0);
+  const double sagitta_m = kRadius_m * (1.0 - std::cos(M_PI / 128.0));
+  int moved_on_sphere = 0;
+  const Matrix3Xi faces = ExtractBoundarySurface(curved);
+  std::vector<int> boundary(faces.data(), faces.data() + faces.size());
+  std::sort(boundary.begin(), boundary.end());
+  boundary.erase(std::unique(boundary.begin(), boundary.end()), boundary.end());
+  for (int n : boundary) {
+    const double off_m = std::abs(curved.rest_positions_m.col(n).norm() - kRadius_m);
+    if (n < linear.num_nodes())
+      EXPECT_LE(off_m, 2.0 * sagitta_m + 1e-9) << n;
+    else if (off_m <= 2.0 * sagitta_m + 1e-9)
+      ++moved_on_sphere;
+  }
+  EXPECT_EQ(moved_on_sphere, report.num_moved);
+  int interior_moved = 0;
+  for (int n = linear.num_nodes(); n < curved.num_nodes(); ++n)
+    if (!std::binary_search(boundary.begin(), boundary.end(), n))
+      interior_moved += curved.rest_positions_m.col(n) != straight.rest_positions_m.col(n);
+  EXPECT_EQ(interior_moved, 0);
+  EXPECT_FALSE(FindRestMeshProblem(curved).has_value());
+  const double sphere_m3 = 4.0 / 3.0 * M_PI * std::pow(kRadius_m, 3);
+  const double straight_error = CalcMeshVolume(straight) / sphere_m3 - 1.0;
+  const double curved_error = CalcMeshVolume(curved) / sphere_m3 - 1.0;
+  RecordProperty("straight_volume_error", std::to_string(straight_error));
+  RecordProperty("curved_volume_error", std::to_string(curved_error));
+  EXPECT_LT(straight_error, -0.02);  // the facets of a coarse mesh cut the sphere's volume
+  EXPECT_LT(std::abs(curved_error), 0.25 * std::abs(straight_error));
+
+  TriangleMesh far = surface;
+  far.vertices_m.row(0).array() += 1.0;
+  TetMesh unchanged = straight;
+  const CurvedBoundaryReport refused =
+      MoveBoundaryEdgeNodesOntoSurface(far.vertices_m, far.triangles, &unchanged);
+  EXPECT_EQ(refused.num_moved, 0);
+  EXPECT_EQ(refused.num_kept, refused.num_boundary_edge_nodes);
+  EXPECT_TRUE(unchanged.rest_positions_m == straight.rest_positions_m);
+  TetMesh linear_copy = linear;
+  EXPECT_THROW(
+      MoveBoundaryEdgeNodesOntoSurface(surface.vertices_m, surface.triangles, &linear_copy),
+      std::invalid_argument);
 }
 
 // Graded: within the refine radius of the point the tets are about the refine size, far from it
