@@ -261,7 +261,8 @@ struct EmbeddedSurfaceSource {
 
 struct BodyScene {
   MeshSource mesh;
-  // `element: p2`: quadratic tets (fem/quadratic_tet.h), a node added on every edge of the mesh;
+  // `element: p2`: quadratic tets (fem/quadratic_tet.h), a node added on every edge of the mesh
+  // (on a `surface:` mesh, the boundary's moved onto that surface: fem/curved_boundary.h);
   // `p1` (the default): linear tets. A mesh file of 10-node tets (Gmsh type 11) is quadratic
   // whatever this says.
   bool quadratic = false;

@@ -6,8 +6,8 @@ scene's contact law and a visual rate of 100 Hz (or the scene's own, if higher),
 scene's haptic mode (linear, the paper's; the probe keeps its god-object). Then one knob at a time
 is moved from there towards the cheaper end:
 
-- mesh: the lattice at 0.5, 0.75 and 1 times the shipped cells per axis (an ellipsoid's cell
-  size divided by the factor); a file mesh stays as shipped;
+- mesh: the lattice at 0.5, 0.75 and 1 times the shipped cells per axis (an ellipsoid's or a
+  filled surface's cell size divided by the factor); a file mesh stays as shipped;
 - element law: linear against corotational;
 - contact compliance: warped (precomputed at rest, rotated) against exact (forward solves);
 - contact law: equality against unilateral where the scene allows it (not with rigid objects);
@@ -66,6 +66,9 @@ PLAN = {
               "why": "4.5 s (side push, hold, lift, back down; the withdrawal cut)"},
     "probe": {"fine": 1.5},
     "pick_and_place": {"fine": 1.5},
+    "two_organs": {"fine": 1.0, "num_steps": 210,
+                   "why": "the liver's palpation only (4.2 s: press, hold, lift); the shipped "
+                          "cells the finest (two surfaces filled with tets)"},
 }
 QUICK_PLAN = {"block_press": {"fine": 1.0, "num_steps": 40, "visual_hz": 100.0,
                               "knobs": ["compliance", "visual_hz"], "rates": [25.0],
@@ -100,8 +103,11 @@ def first_deformable(scene):
 
 
 def mesh_kind(mesh):
-    """Which of a scene's mesh sources a deformable object uses: box, ellipsoid or file."""
-    return next(k for k in ("box", "ellipsoid", "file") if k in mesh)
+    """Which of a scene's mesh sources a deformable object uses: box, ellipsoid, surface or file."""
+    kind = next((k for k in ("box", "ellipsoid", "surface", "file") if k in mesh), None)
+    if kind is None:
+        raise RuntimeError(f"economy: a mesh source it does not know: {sorted(mesh)}")
+    return kind
 
 
 def has_rigid_objects(scene):
@@ -177,6 +183,10 @@ def scaled_mesh(mesh, kind, factor):
         mesh["box"]["cells"] = [max(1, round(c * factor)) for c in mesh["box"]["cells"]]
     elif kind == "ellipsoid":
         mesh["ellipsoid"]["cell_size_m"] = mesh["ellipsoid"]["cell_size_m"] / factor
+    elif kind == "surface":  # the user's surface filled with tets at that size (Gmsh, cached)
+        mesh["cell_size_m"] = mesh["cell_size_m"] / factor
+        if "refine" in mesh:
+            mesh["refine"]["cell_size_m"] = mesh["refine"]["cell_size_m"] / factor
     return mesh
 
 
@@ -188,6 +198,8 @@ def mesh_label(spec, factor):
         return "×".join(str(c) for c in mesh["box"]["cells"])
     if spec["mesh_kind"] == "ellipsoid":
         return f"h {1e3 * mesh['ellipsoid']['cell_size_m']:.3g} mm"
+    if spec["mesh_kind"] == "surface":
+        return f"h {1e3 * mesh['cell_size_m']:.3g} mm"
     return "as shipped"
 
 
@@ -199,9 +211,20 @@ def absolute(path):
 def variant_mesh(mesh, factor):
     """A deformable object's mesh scaled by factor, its file (if any) made absolute."""
     mesh = scaled_mesh(mesh, mesh_kind(mesh), factor)
-    if "file" in mesh:
-        mesh["file"] = absolute(mesh["file"])
+    for key in ("file", "surface"):
+        if key in mesh:
+            mesh[key] = absolute(mesh[key])
     return mesh
+
+
+def variant_body(body, mesh_factor):
+    """A deformable object with its mesh scaled and every surface file it names made absolute."""
+    body = copy.deepcopy(body)
+    body["mesh"] = variant_mesh(body["mesh"], mesh_factor)
+    for key in ("visual", "collision"):
+        if key in body:
+            body[key]["file"] = absolute(body[key]["file"])
+    return body
 
 
 def edits_for(spec, config):
@@ -216,7 +239,10 @@ def edits_for(spec, config):
     if "mesh" in shape:
         edits["tool.shape.mesh.file"] = absolute(shape["mesh"]["file"])
     if "body" in scene:
-        edits["body.mesh"] = variant_mesh(scene["body"]["mesh"], config["mesh"])
+        body = variant_body(scene["body"], config["mesh"])
+        for key in ("mesh", "visual", "collision"):
+            if key in body:
+                edits[f"body.{key}"] = body[key]
         edits["body.elasticity"] = config["elasticity"]
     if "objects" in scene:
         objects = copy.deepcopy(scene["objects"])
@@ -226,10 +252,9 @@ def edits_for(spec, config):
                 item["rigid"]["shape"]["mesh"]["file"] = absolute(item["rigid"]["shape"]["mesh"]
                                                                   ["file"])
             if "deformable" in item:
-                body = item["deformable"]
-                body["mesh"] = variant_mesh(body["mesh"], config["mesh"])
+                item["deformable"] = variant_body(item["deformable"], config["mesh"])
                 if first:
-                    body["elasticity"] = config["elasticity"]
+                    item["deformable"]["elasticity"] = config["elasticity"]
                 first = False
         edits["objects"] = objects
     return edits

@@ -194,7 +194,7 @@ def chart(bench, name, case, results):
     right.axhline(0.0, color="k", lw=0.8)
     right.set(xscale="log", xlabel="median visual frame (ms)",
               ylabel="error of the fitted coefficient (%)",
-              title=f"{name}: error against cost, against the half-space (lines: Pareto fronts)")
+              title=f"{name}: error against the half-space, against cost\n(lines: Pareto fronts)")
     right.legend(fontsize=7)
     for axis in (left, right):
         axis.grid(True, alpha=0.3)
