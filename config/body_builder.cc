@@ -87,7 +87,9 @@ void CurveOntoSurfaceFile(const MeshSource& source, fem::TetMesh* mesh) {
     std::cerr << source.location.file << ':' << source.location.line
               << ": warning: " << report.num_kept << " of " << report.num_boundary_edge_nodes
               << " boundary edge nodes stay on their straight edges: moving them onto "
-              << source.file << " would fold a tet; a smaller cell_size_m curves them too\n";
+              << source.file
+              << " would fold or nearly fold a tet, or move them more than a quarter of their "
+              << "edge; a smaller cell_size_m curves them too\n";
 }
 
 }  // namespace

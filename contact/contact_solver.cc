@@ -233,8 +233,9 @@ bool StepToward(const Eigen::VectorXd& z, const std::vector<Eigen::Index>& free_
 // body under a flat tool: W is close to the rank-6 tool part).
 // Started from a λ ≥ 0 (the last frame's, ImpulseWarmStart), its positive rows form the first free
 // set: the method only needs a feasible start whose positive rows are the free ones, and every
-// step from there lowers the objective as from zero, so it ends at the same solution. A press
-// then enters its loaded rows in one go instead of one an iteration.
+// step from there lowers the objective as from zero, so it ends at the LCP's solution as from
+// zero (to the slack tolerance; see contact_solver.h on redundant rows). A press then enters its
+// loaded rows in one go instead of one an iteration.
 ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
                                   const ContactSolveOptions& options, Eigen::VectorXd* lambda) {
   const Eigen::Index n = rhs.size();

@@ -48,10 +48,12 @@ struct ContactSolveReport {
 // Solves for the impulses λ (rows). On entry *lambda is a start (resized and zeroed if its size
 // is wrong): Gauss–Seidel's initial guess for kFriction; for kUnilateral the rows with λ > 0
 // start in the active set at those λ (negative entries are taken as 0); kEquality ignores it.
-// The unilateral and the friction solves return the same solution from any start, to their
-// tolerances. rows_per_contact must be 3 for kFriction.
-// friction_per_contact, if given (kFriction; one μ ≥ 0 per contact), replaces
-// options.friction_coefficient contact by contact (a rigid object's own μ).
+// The unilateral solve ends at the LCP's solution from any start (unique where W's symmetric part
+// is definite; with nearly redundant contacts, held apart only by its 1e-10 shift, the share of λ
+// between them may differ, the force they sum to not). A frame's λ may so depend on the frames
+// before it, through the start, within those bounds; friction may have several solutions.
+// rows_per_contact must be 3 for kFriction. friction_per_contact, if given (kFriction; one μ ≥ 0
+// per contact), replaces options.friction_coefficient contact by contact (a rigid object's own μ).
 ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
                                         double dt_s, int rows_per_contact,
                                         const ContactSolveOptions& options, Eigen::VectorXd* lambda,

@@ -48,7 +48,8 @@ class ImpulseWarmStart {
   int num_carried() const { return num_carried_; }
 
  private:
-  // Body nodes, the rigid object, on_tool.
+  // The contact's surface points (its nodes, or an embedded surface's points), the rigid object,
+  // on_tool.
   using Identity = std::array<int, 5>;
   static bool HasIdentity(const Contact& contact) { return contact.nodes[0] >= 0; }
   static Identity IdentityOf(const Contact& contact);

@@ -105,7 +105,9 @@ struct VisualFrameStats {
   double coupling_s = 0.0, free_tool_s = 0.0, free_fem_s = 0.0, detection_s = 0.0;
   double response_s = 0.0, model_s = 0.0, sanity_s = 0.0, total_s = 0.0;
   // Of response_s: the body's compliance W_body (both steps' when the model takes the haptic
-  // step's), the impulse solve, and the post-collision correction A_u⁻¹ Δt J_uᵀ λ.
+  // step's); the impulse solve with forming W and the warm start; the post-collision correction
+  // A_u⁻¹ Δt J_uᵀ λ with the tool's. The rest of response_s (the Jacobian, the targets, c_post)
+  // is in none of the three.
   double compliance_s = 0.0, solve_s = 0.0, correction_s = 0.0;
   int num_candidates = 0;      // contacts detected
   int num_contacts = 0;        // contacts made constraints

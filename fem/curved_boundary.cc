@@ -1,5 +1,6 @@
 #include "fem/curved_boundary.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -60,11 +61,32 @@ class ClosestSurfacePoint {
 // spans 106°, far more than a surface meshed at its own cell size bends over one edge).
 constexpr double kMaxMoveOverEdge = 0.25;
 
-bool AnyTetFolds(const TetMesh& mesh, const std::vector<int>& tets) {
+// A curved tet must keep det(∂x/∂ξ), at its corners and quadrature points, at least this fraction
+// of its straight corner tet's (constant) det: FindQuadraticTetProblem only refuses det ≤ 0, and a
+// tet bent to near zero there would be valid but badly conditioned, stiffening the step.
+constexpr double kMinDetOverStraight = 0.2;
+
+bool IsBentTooFar(const P2Nodes& X_m) {
+  if (FindQuadraticTetProblem(X_m)) return true;
+  const double straight = CalcSignedVolume(X_m.col(0), X_m.col(1), X_m.col(2), X_m.col(3)) * 6.0;
+  const auto det_at = [&](const Eigen::Vector3d& xi) {
+    const Eigen::Matrix3d J = X_m * CalcP2ShapeDerivatives(xi);  // ∂x/∂ξ
+    return J.determinant();
+  };
+  const Eigen::Vector3d corners[4] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(),
+                                      Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
+  for (const Eigen::Vector3d& xi : corners)
+    if (det_at(xi) < kMinDetOverStraight * straight) return true;
+  for (const QuadraturePoint& q : P2Quadrature())
+    if (det_at(q.xi) < kMinDetOverStraight * straight) return true;
+  return false;
+}
+
+bool AnyTetBentTooFar(const TetMesh& mesh, const std::vector<int>& tets) {
   for (int t : tets) {
     P2Nodes X_m;
     for (int a = 0; a < kP2Nodes; ++a) X_m.col(a) = mesh.rest_positions_m.col(mesh.node(a, t));
-    if (FindQuadraticTetProblem(X_m)) return true;
+    if (IsBentTooFar(X_m)) return true;
   }
   return false;
 }
@@ -107,7 +129,7 @@ CurvedBoundaryReport MoveBoundaryEdgeNodesOntoSurface(const Matrix3Xd& surface_v
     const Eigen::Vector3d target = surface.Find(midpoint);
     mesh->rest_positions_m.col(node) = target;
     if ((target - midpoint).norm() > kMaxMoveOverEdge * edge_length_m[node] ||
-        AnyTetFolds(*mesh, tets_of_edge_node[node])) {
+        AnyTetBentTooFar(*mesh, tets_of_edge_node[node])) {
       mesh->rest_positions_m.col(node) = midpoint;
       ++report.num_kept;
       continue;

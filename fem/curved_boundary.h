@@ -6,12 +6,13 @@
 // isoparametric, fem/quadratic_tet.h): a sphere of flat facets becomes a sphere of curved patches,
 // and the volume, mass and contact surface follow the organ more closely at the same mesh.
 //
-// A move that would fold an element (FindQuadraticTetProblem on any tet around the node), or that
-// is longer than a quarter of the edge (the surface is not the one the mesh was cut from), is not
-// made: that node stays at its midpoint, and the report counts it. Interior edge nodes never move,
-// so an element can only curve where it touches the boundary; the tets behind a strongly curved
-// boundary face need cells small against the surface's radius of curvature, which Gmsh's sizing
-// gives the user's surface.
+// A move that would fold an element, or bend it so far that det(∂x/∂ξ) falls below a fifth of its
+// straight tet's anywhere the element is checked (FindQuadraticTetProblem's corners and quadrature
+// points), or that is longer than a quarter of the edge (the surface is not the one the mesh was
+// cut from), is not made: that node stays at its midpoint, and the report counts it. Interior edge
+// nodes never move, so an element can only curve where it touches the boundary; the tets behind a
+// strongly curved boundary face need cells small against the surface's radius of curvature, which
+// Gmsh's sizing gives the user's surface.
 
 #include "core/eigen_types.h"
 #include "fem/tet_mesh.h"
@@ -21,7 +22,8 @@ namespace hapsim::fem {
 struct CurvedBoundaryReport {
   int num_boundary_edge_nodes = 0;
   int num_moved = 0;        // moved onto the surface
-  int num_kept = 0;         // left at their midpoints: the move would fold a tet, or is too long
+  int num_kept = 0;         // left at their midpoints: the move would bend a tet too far, or
+                            // is too long
   double max_move_m = 0.0;  // the largest move made
 };
 
