@@ -38,6 +38,17 @@ void MakePlane(double c, Matrix3Xd* vertices_m, Matrix3Xi* triangles) {
       2, 3;
 }
 
+// Each edge node k at its straight position, raised by c where raised(k).
+template <typename Raised>
+void ExpectEdgeNodesRaised(const TetMesh& mesh, const TetMesh& straight, double c, Raised raised) {
+  for (int k = 0; k < 6; ++k) {
+    const int node = mesh.edge_nodes(k, 0);
+    const Eigen::Vector3d expected =
+        straight.rest_positions_m.col(node) + (raised(k) ? c : 0.0) * Eigen::Vector3d::UnitZ();
+    EXPECT_LT((mesh.rest_positions_m.col(node) - expected).norm(), 1e-15) << k;
+  }
+}
+
 TEST(CurvedBoundary, MovesOntoAFlatSurfaceWhereTheTetStaysWellShaped) {
   Matrix3Xd vertices_m;
   Matrix3Xi triangles;
@@ -50,13 +61,9 @@ TEST(CurvedBoundary, MovesOntoAFlatSurfaceWhereTheTetStaysWellShaped) {
   EXPECT_EQ(report.num_moved, 3);
   EXPECT_EQ(report.num_kept, 3);
   EXPECT_NEAR(report.max_move_m, 0.1, 1e-15);
-  for (int k = 0; k < 6; ++k) {
-    const int node = mesh.edge_nodes(k, 0);
-    const bool bottom = kP2EdgeCorners[k][0] != 3 && kP2EdgeCorners[k][1] != 3;
-    const Eigen::Vector3d expected =
-        straight.rest_positions_m.col(node) + (bottom ? 0.1 : 0.0) * Eigen::Vector3d::UnitZ();
-    EXPECT_LT((mesh.rest_positions_m.col(node) - expected).norm(), 1e-15) << k;
-  }
+  ExpectEdgeNodesRaised(mesh, straight, 0.1, [](int k) {  // the bottom face's edges
+    return kP2EdgeCorners[k][0] != 3 && kP2EdgeCorners[k][1] != 3;
+  });
 }
 
 TEST(CurvedBoundary, RefusesMovesThatBendTheTetPastAFifthOfItsDeterminant) {
@@ -75,13 +82,7 @@ TEST(CurvedBoundary, RefusesMovesThatBendTheTetPastAFifthOfItsDeterminant) {
       MoveBoundaryEdgeNodesOntoSurface(vertices_m, triangles, &mesh);
   EXPECT_EQ(report.num_moved, 1);
   EXPECT_EQ(report.num_kept, 5);
-  for (int k = 0; k < 6; ++k) {
-    const int node = mesh.edge_nodes(k, 0);
-    const bool raised_edge = FindP2Edge(1, 2) == k;
-    const Eigen::Vector3d expected =
-        straight.rest_positions_m.col(node) + (raised_edge ? 0.22 : 0.0) * Eigen::Vector3d::UnitZ();
-    EXPECT_LT((mesh.rest_positions_m.col(node) - expected).norm(), 1e-15) << k;
-  }
+  ExpectEdgeNodesRaised(mesh, straight, 0.22, [](int k) { return k == FindP2Edge(1, 2); });
 }
 
 }  // namespace
