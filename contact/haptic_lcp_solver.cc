@@ -119,6 +119,7 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
         refused(max_rows_in, 0),
         active_before_rebase(max_rows_in, 0),
         frame_active(max_rows_in, 0),
+        frame_impulse_N(max_rows_in),
         r(max_rows_in),
         x(max_rows_in),
         z(max_rows_in),
@@ -144,6 +145,7 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   bool Rebase();
   void GuessActiveSet(const ContactRows& rows, const Eigen::VectorXd& push, bool hold);
   void StartFromGuess();
+  bool ReleaseRowsPullingPastTheirPush(double dt_s);
   void RefreshTargets();
   bool HoldsFrameSet(const ContactRows& rows) const {
     const bool frame_set = rows.lambda_frame_N.size() == n;
@@ -212,6 +214,7 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   // (max) the frame's active rows as the rows last gave them (λ_frame > 0): unstamped rows are
   // the cached ones only if these match too, for they choose the held set.
   std::vector<std::uint8_t> frame_active;
+  Eigen::VectorXd frame_impulse_N;  // (max) λ_frame per row (0 without the frame's impulses)
   Eigen::VectorXd r, x, z, w, column;
   Eigen::VectorXd target;  // (max) this step's body_rhs (rows.body_rhs, or Solve's targets)
   // Border system of one solve.
@@ -295,6 +298,7 @@ void HapticLcpSolver::Workspace::GuessActiveSet(const ContactRows& rows,
   num_held = 0;
   for (int i = 0; i < n; ++i) {
     frame_active[i] = frame_set && rows.lambda_frame_N[i] > 0.0;
+    frame_impulse_N[i] = frame_set ? rows.lambda_frame_N[i] : 0.0;
     held[i] = hold && frame_active[i];
     num_held += held[i];
     active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : push[i] > 0.0;
@@ -312,6 +316,27 @@ void HapticLcpSolver::Workspace::StartFromGuess() {
   if (Rebase() || num_held == 0) return;
   std::fill(held.begin(), held.begin() + n, std::uint8_t{0});
   num_held = 0;
+}
+
+// A held row may pull (λ < 0), as the linear contact model's rows do, by a little: the model's
+// correction of the frame's push as the tool moves on (on block_press at most 2 % of the frame's
+// total push). One that pulls harder than it pushed at the frame (x_i < −Δt λ_frame,i) is held
+// against a twin: a free row nearly dependent on it (two points of an embedded surface in the same
+// tets, W rows alike to 1e-6) that has engaged at its own, tracked gap while the held row keeps
+// closing the frame's gap. The equality and the inequality then disagree along a direction W
+// hardly resists, and the solve meets them with opposite impulses that grow without bound (seen:
+// ±1e10 N, and 26–260 N reaching the tool on two_organs with the exact compliance; pulls past the
+// push in 1,678 of polyp's 3,890 steps, cancelling to within its 0.4 N). Such rows are released,
+// solved unilaterally from then on as the lcp mode solves them, until new rows come; true if any.
+bool HapticLcpSolver::Workspace::ReleaseRowsPullingPastTheirPush(double dt_s) {
+  bool released = false;
+  for (int i = 0; i < n; ++i) {
+    if (!held[i] || !(x[i] < -dt_s * frame_impulse_N[i])) continue;
+    held[i] = 0;
+    --num_held;
+    released = true;
+  }
+  return released;
 }
 
 // New targets on the same rows and base (the hybrid mode's free rows move every step): h = L⁻¹
@@ -577,6 +602,27 @@ double HapticLcpSolver::Workspace::CalcResidual(double dt_s) const {
   return scale > 0.0 ? residual / scale : residual;
 }
 
+// One retry from a fresh factorisation should round-off in the border (or rows refused as
+// dependent) have spoilt the complementarity. A step out of its budget keeps its feasible iterate
+// and is not retried: the next step goes on from its active set; nor is one that has spent its
+// budget converging.
+bool HapticLcpSolver::RunActiveSetWithRetry(double dt_s, double tolerance) {
+  Workspace& ws = *ws_;
+  bool converged = false;
+  last_out_of_budget_ = false;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (attempt == 1) ws.rebase_pending = true;
+    const Workspace::End end = ws.RunActiveSet(tolerance, max_solves_per_step_, &last_iterations_);
+    converged = end != Workspace::End::kFailed;
+    last_out_of_budget_ = end == Workspace::End::kOutOfBudget;
+    if (!converged) break;
+    last_residual_ = ws.CalcResidual(dt_s);
+    const bool budget_spent = max_solves_per_step_ > 0 && last_iterations_ >= max_solves_per_step_;
+    if (last_out_of_budget_ || budget_spent || !(last_residual_ > kRetryResidual)) break;
+  }
+  return converged;
+}
+
 HapticLcpSolver::HapticLcpSolver(int max_rows, int friction_sweeps, bool hold_frame_contacts,
                                  int max_solves_per_step)
     : hold_frame_contacts_(hold_frame_contacts), max_solves_per_step_(max_solves_per_step) {
@@ -678,22 +724,12 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   }
   const double tolerance =
       kEnteringTolerance * std::max(1.0, ws.r.head(n).lpNorm<Eigen::Infinity>());
-  // One retry from a fresh factorisation should round-off in the border (or rows refused as
-  // dependent) have spoilt the complementarity; then a residual past kAcceptResidual fails. A step
-  // out of its budget keeps its feasible iterate and is not retried: the next step goes on from
-  // its active set; nor is one that has spent its budget converging.
-  bool converged = false;
-  last_out_of_budget_ = false;
-  for (int attempt = 0; attempt < 2; ++attempt) {
-    if (attempt == 1) ws.rebase_pending = true;
-    const Workspace::End end = ws.RunActiveSet(tolerance, max_solves_per_step_, &last_iterations_);
-    converged = end != Workspace::End::kFailed;
-    last_out_of_budget_ = end == Workspace::End::kOutOfBudget;
-    if (!converged) break;
-    last_residual_ = ws.CalcResidual(dt_s);
-    const bool budget_spent = max_solves_per_step_ > 0 && last_iterations_ >= max_solves_per_step_;
-    if (last_out_of_budget_ || budget_spent || !(last_residual_ > kRetryResidual)) break;
-  }
+  // A residual past kAcceptResidual after the retry fails. Rows released from their hold go on
+  // from the iterate, whose first pass (ShrinkToFeasible, not bounded by the budget) drops their
+  // negative impulses.
+  bool converged = RunActiveSetWithRetry(dt_s, tolerance);
+  while (converged && ws.ReleaseRowsPullingPastTheirPush(dt_s))
+    converged = RunActiveSetWithRetry(dt_s, tolerance);
   if (converged && !last_out_of_budget_ && !(last_residual_ <= kAcceptResidual)) converged = false;
   last_num_factorizations_ = ws.num_factorizations;
   if (!converged) {

@@ -160,6 +160,10 @@ class HapticLcpSolver {
 
  private:
   struct Workspace;
+  // The active-set iteration, redone once from a fresh factorisation should round-off have spoilt
+  // its complementarity (Solve); sets last_out_of_budget_ and last_residual_. False: failed.
+  bool RunActiveSetWithRetry(double dt_s, double tolerance);
+
   std::unique_ptr<Workspace> ws_;
   std::unique_ptr<HapticFrictionSolver> friction_;  // null without friction sweeps
   bool hold_frame_contacts_ = false;

@@ -2,13 +2,15 @@
 // rows held as equalities, its other rows unilateral (a mixed LCP), against independent values:
 //  - enumeration: every subset of the free rows, each solved densely with the held rows by LU on
 //    the assembled W; the one subset whose solution meets the mixed LCP's conditions is the
-//    answer (unique, W's symmetric part positive definite);
+//    answer (unique, W's symmetric part positive definite); a held row that pulls past the
+//    frame's push on it is released and the enumeration repeated, until none does;
 //  - the linear contact model (MakeLinearContactModel) on the held rows when no free row engages,
 //    also while a held row pulls (λ < 0), which the plain lcp solve would not allow;
 //  - no heap allocation after construction.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -102,15 +104,38 @@ Eigen::VectorXd SolveByEnumerationAllowingTies(const DenseProblem& dense, double
   return Eigen::VectorXd::Zero(n);
 }
 
-// `rows` with the frame's impulses set so that `held` are the frame's active rows.
-void MarkFrameActive(const std::vector<bool>& held, ContactRows* rows) {
-  rows->lambda_frame_N = Eigen::VectorXd::Zero(rows->num_rows());
-  for (int i = 0; i < rows->num_rows(); ++i)
-    if (held[i]) rows->lambda_frame_N[i] = 1.0;
+// The solver's law with its releases (HapticLcpSolver: a held row may pull by at most the frame's
+// impulse on it), from exact solves: the mixed LCP by enumeration, then every held row pulling
+// past its frame impulse released (in `held`, which keeps them released, as the solver does until
+// new rows come), and again until no held row does.
+Eigen::VectorXd SolveByEnumerationWithReleases(const DenseProblem& dense, double dt_s,
+                                               const Eigen::VectorXd& lambda_frame_N,
+                                               std::vector<bool>* held) {
+  while (true) {
+    const Eigen::VectorXd lambda = SolveByEnumeration(dense, dt_s, *held);
+    bool released = false;
+    for (size_t i = 0; i < held->size(); ++i) {
+      if (!(*held)[i] || !(lambda[i] < -lambda_frame_N[i])) continue;
+      (*held)[i] = false;
+      released = true;
+    }
+    if (!released) return lambda;
+  }
 }
 
+// `rows` with the frame's impulses set so that `held` are the frame's active rows, each with
+// `push_N`: what a held row may pull before it is released.
+void MarkFrameActive(const std::vector<bool>& held, ContactRows* rows, double push_N = 1.0) {
+  rows->lambda_frame_N = Eigen::VectorXd::Zero(rows->num_rows());
+  for (int i = 0; i < rows->num_rows(); ++i)
+    if (held[i]) rows->lambda_frame_N[i] = push_N;
+}
+
+// Frame impulses no held row of these random problems pulls past: the mixed LCP alone.
+constexpr double kNoReleasePush_N = 1e3;
+
 TEST(HapticHybridSolve, MatchesEnumerationOfTheMixedLcp) {
-  int num_pulling = 0, num_free_engaged = 0;
+  int num_pulling = 0, num_free_engaged = 0, num_released = 0;
   for (const int n : {6, 9, 12}) {
     for (unsigned seed = 1; seed <= 6; ++seed) {
       const LcpProblem p = MakeLcpProblem(n, 1000 * n + seed, 0.0, 1.0);
@@ -127,7 +152,10 @@ TEST(HapticHybridSolve, MatchesEnumerationOfTheMixedLcp) {
         ASSERT_TRUE(solver.Solve(rows, p.tool, F_hat, p.T_hat_N_m, &F_c, &T_c)) << where;
         EXPECT_LT(solver.last_residual(), 1e-10) << where;
         const DenseProblem dense = AssembleDense(rows, p.tool, F_hat, p.T_hat_N_m);
-        const Eigen::VectorXd expected = SolveByEnumeration(dense, p.tool.dt_s, held);
+        const int num_held = static_cast<int>(std::count(held.begin(), held.end(), true));
+        const Eigen::VectorXd expected =
+            SolveByEnumerationWithReleases(dense, p.tool.dt_s, rows.lambda_frame_N, &held);
+        num_released += num_held - static_cast<int>(std::count(held.begin(), held.end(), true));
         const Eigen::VectorXd lambda = solver.last_impulses();
         EXPECT_LE((lambda - expected).norm(), kRelativeTolerance * expected.norm()) << where;
         const double F_scale = expected.cwiseAbs().sum();
@@ -140,8 +168,10 @@ TEST(HapticHybridSolve, MatchesEnumerationOfTheMixedLcp) {
       }
     }
   }
-  // The cases exercise both halves of the law: held rows that pull, free rows that engage.
+  // The cases exercise every part of the law: held rows that pull, held rows released, free rows
+  // that engage.
   EXPECT_GT(num_pulling, 5);
+  EXPECT_GT(num_released, 5);
   EXPECT_GT(num_free_engaged, 5);
 }
 
@@ -156,7 +186,7 @@ TEST(HapticHybridSolve, WithNoFreeRowEngagedIsTheLinearContactModel) {
   ContactRows rows = p.rows;
   for (int i = 0; i < n; ++i)
     if (!held[i]) rows.body_rhs[i] = -10.0;  // each would need 10 m/s more approach to engage
-  MarkFrameActive(held, &rows);
+  MarkFrameActive(held, &rows, kNoReleasePush_N);
   const int k = static_cast<int>(held_rows.size());
   ContactJacobian J;
   J.J_v.resize(k, 3);
@@ -203,7 +233,7 @@ TEST(HapticHybridSolve, PerStepTargetsAreSolvedExactly) {
   std::vector<bool> held(n, false);
   for (int i = 0; i < n; i += 3) held[i] = true;
   ContactRows rows = p.rows;
-  MarkFrameActive(held, &rows);
+  MarkFrameActive(held, &rows, kNoReleasePush_N);
   StampNewContactRows(&rows);
   HapticLcpSolver warm(16, 0, true), prepared(16, 0, true);
   ASSERT_TRUE(prepared.Prepare(rows, MakeTool(0.3)));
@@ -258,6 +288,44 @@ TEST(HapticHybridSolve, DependentHeldRowsAreSolvedUnilaterally) {
   EXPECT_LE((F_hybrid - rows.J_v.transpose() * expected).norm(),
             1e-8 * (1.0 + expected.cwiseAbs().sum()));
   EXPECT_GE(hybrid.last_impulses().minCoeff(), 0.0);
+}
+
+// The case that called for the release (two_organs, exact compliance: ±1e10 N and 26–260 N on the
+// tool): a held row and a free near-twin (W's rows alike to ~1e-8, as two points of an embedded
+// surface in the same tets) whose target asks for a little more separation. Held, the row and its
+// twin meet with opposite impulses ∝ 1/(twin distance)²; released, the held row is unilateral and
+// the pair's force is that of the plain lcp solve.
+TEST(HapticHybridSolve, HeldRowPullingAgainstAFreeTwinIsReleased) {
+  const int n = 6;
+  const LcpProblem p = MakeLcpProblem(n, 31, 0.0, 1.0);
+  ContactRows rows = p.rows;
+  // W_body = B Bᵀ with row 1 of B row 0's plus 1e-4 of another: W's rows 0 and 1 alike to ~1e-8.
+  Eigen::MatrixXd B = rows.W_body.llt().matrixL();
+  B.row(1) = B.row(0) + 1e-4 * B.row(2);
+  rows.W_body = B * B.transpose();
+  rows.J_v.row(1) = rows.J_v.row(0);
+  rows.J_w.row(1) = rows.J_w.row(0);
+  rows.body_rhs[0] = 0.2;
+  rows.body_rhs[1] = 0.25;  // the twin asks to separate 0.05 m/s faster
+  std::vector<bool> held(n, false);
+  held[0] = held[3] = true;
+  MarkFrameActive(held, &rows, 0.5);
+  const DenseProblem dense = AssembleDense(rows, p.tool, p.F_hat_N, p.T_hat_N_m);
+  const Eigen::VectorXd held_answer = SolveByEnumeration(dense, p.tool.dt_s, held);
+  ASSERT_LT(held_answer[0], -1e3) << "the case must hold its row against the twin";
+  HapticLcpSolver hybrid(16, 0, /*hold_frame_contacts=*/true), lcp(16);
+  Eigen::Vector3d F_hybrid, F_lcp, T;
+  ASSERT_TRUE(hybrid.Solve(rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_hybrid, &T));
+  std::vector<bool> kept = held;
+  const Eigen::VectorXd expected =
+      SolveByEnumerationWithReleases(dense, p.tool.dt_s, rows.lambda_frame_N, &kept);
+  EXPECT_FALSE(kept[0]);
+  EXPECT_LE((hybrid.last_impulses() - expected).norm(), 1e-7 * expected.norm());
+  EXPECT_GE(hybrid.last_impulses()[0], 0.0);
+  EXPECT_LT(hybrid.last_impulses().cwiseAbs().maxCoeff(), 1e2);
+  // The release persists over the frame's next steps (a row released is not held again).
+  ASSERT_TRUE(hybrid.Solve(rows, p.tool, p.F_hat_N, p.T_hat_N_m, &F_hybrid, &T));
+  EXPECT_LE((hybrid.last_impulses() - expected).norm(), 1e-7 * expected.norm());
 }
 
 TEST(HapticHybridSolve, AllocatesNothingAfterConstruction) {
