@@ -321,9 +321,9 @@ void HapticLcpSolver::Workspace::StartFromGuess() {
 // A held row may pull (λ < 0), as the linear contact model's rows do, by a little: the model's
 // correction of the frame's push as the tool moves on (on block_press at most 2 % of the frame's
 // total push). One that pulls harder than it pushed at the frame (x_i < −Δt λ_frame,i) is held
-// against a twin: a free row nearly dependent on it (two points of an embedded surface in the same
-// tets, W rows alike to 1e-6) that has engaged at its own, tracked gap while the held row keeps
-// closing the frame's gap. The equality and the inequality then disagree along a direction W
+// against a twin: a free row nearly dependent on it (several tool points on one body face share
+// its three nodes and its normal; two_organs' rows came in such threes) that has engaged at its
+// own, tracked gap while the held row keeps closing the frame's gap. The equality and the inequality then disagree along a direction W
 // hardly resists, and the solve meets them with opposite impulses that grow without bound (seen:
 // ±1e10 N, and 26–260 N reaching the tool on two_organs with the exact compliance; pulls past the
 // push in 1,678 of polyp's 3,890 steps, cancelling to within its 0.4 N). Such rows are released,

@@ -291,8 +291,8 @@ TEST(HapticHybridSolve, DependentHeldRowsAreSolvedUnilaterally) {
 }
 
 // The case that called for the release (two_organs, exact compliance: ±1e10 N and 26–260 N on the
-// tool): a held row and a free near-twin (W's rows alike to ~1e-8, as two points of an embedded
-// surface in the same tets) whose target asks for a little more separation. Held, the row and its
+// tool): a held row and a free near-twin (W's rows alike to ~1e-8, as two tool points on one body
+// face) whose target asks for a little more separation. Held, the row and its
 // twin meet with opposite impulses ∝ 1/(twin distance)²; released, the held row is unilateral and
 // the pair's force is that of the plain lcp solve.
 TEST(HapticHybridSolve, HeldRowPullingAgainstAFreeTwinIsReleased) {
