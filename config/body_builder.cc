@@ -108,14 +108,6 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
       Fail(scene.fixed_location, "the fixed box holds no node of the mesh (" +
                                      std::to_string(mesh.num_nodes()) + " nodes)");
   }
-  // The surface binding (fem/surface_embedding.h) weighs a point by its linear tet's corners; a
-  // quadratic tet's point needs its edge nodes too, not done yet (issue 27).
-  for (const auto* surface : {&scene.collision_surface, &scene.visual_surface})
-    if (mesh.is_quadratic() && *surface)
-      Fail((*surface)->location,
-           "not yet with quadratic tets (element: p2, or a mesh file of 10-node tets): the "
-           "surface binding uses linear tets; leave it out, and the body is drawn and touched on "
-           "its own boundary");
   Body body;
   body.model = fem::MakeModel(std::move(mesh), scene.material, fixed_nodes);
   if (scene.collision_surface)

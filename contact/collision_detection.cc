@@ -157,14 +157,15 @@ const Eigen::VectorXd& CollisionDetector::SurfacePositions(const Eigen::VectorXd
 
 void CollisionDetector::ExpandEmbeddedContacts(std::vector<Contact>* contacts) const {
   for (Contact& contact : *contacts) {
-    // Σ_k w_k x_{p_k} = Σ_k w_k Σ_a b_{k,a} x_{n_{k,a}}: one slot per distinct node.
+    // Σ_k w_k x_{p_k} = Σ_k w_k Σ_a b_{k,a} x_{n_{k,a}}: one slot per distinct node (at most
+    // 3 × 10, kMaxContactNodes).
     std::array<int, kMaxContactNodes> nodes;
     std::array<double, kMaxContactNodes> weights{};
     nodes.fill(-1);
     int count = 0;
     for (int k = 0; k < 3 && contact.nodes[k] >= 0; ++k) {
       const int point = contact.nodes[k];
-      for (int a = 0; a < 4; ++a) {
+      for (int a = 0; a < embedded_.nodes_per_point(); ++a) {
         const double w = contact.weights[k] * embedded_.weights(a, point);
         if (w == 0.0) continue;
         const int node = embedded_.nodes(a, point);

@@ -9,8 +9,8 @@
 // (one node with weight 1 for a node-versus-tool contact; a face's three nodes for a tool feature
 // point against a face; a body edge's two nodes for a tool edge against a body edge). On a
 // collision surface embedded in the tets (fem/surface_embedding.h) the same one, two or three
-// surface points are each carried by their tet's four nodes: up to twelve nodes, with the
-// products of the two weights (`embedded`).
+// surface points are each carried by their tet's four nodes (ten in quadratic tets): up to thirty
+// nodes, with the products of the two weights (`embedded`).
 // A contact that touches no tool (a body node on a rigid object) has on_tool = false: its rows
 // have no tool terms, and "tool" below then means the rigid object (p_tool_W_m is the object's
 // point, n_W points out of the object). A contact with a rigid object has no body nodes on that
@@ -26,8 +26,16 @@
 
 namespace hapsim::contact {
 
-// The most nodes a body point combines: a face's three points, each on its tet's four nodes.
-inline constexpr int kMaxContactNodes = 12;
+// The most nodes a body point combines: a face's three points, each on its tet's ten nodes (a
+// quadratic tet's; a linear one's four make at most twelve).
+inline constexpr int kMaxContactNodes = 30;
+
+// kMaxContactNodes slots, none used.
+constexpr std::array<int, kMaxContactNodes> NoContactNodes() {
+  std::array<int, kMaxContactNodes> nodes{};
+  for (int& node : nodes) node = -1;
+  return nodes;
+}
 
 struct Contact {
   Eigen::Vector3d p_tool_W_m = Eigen::Vector3d::Zero();  // point on the tool surface, world, m
@@ -37,7 +45,7 @@ struct Contact {
   // Body nodes and their weights (sum 1), in slots [0, k); the slots after are −1 and 0. Set
   // them with SetBodyNodes, which clears the rest: a brace list assigned to the array would fill
   // the slots it does not name with node 0.
-  std::array<int, kMaxContactNodes> nodes = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
+  std::array<int, kMaxContactNodes> nodes = NoContactNodes();
   std::array<double, kMaxContactNodes> weights = {};
   bool embedded = false;  // the body point lies on an embedded collision surface
   // The one to three points of the surface the contact was found on (boundary nodes, or points of

@@ -23,8 +23,11 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
   const int num_rows = rows_per_contact * static_cast<int>(contacts.size());
   J.J_v.resize(num_rows, 3);
   J.J_w.resize(num_rows, 3);
+  size_t num_entries = 0;  // an upper bound: 3 per node slot used, per row
+  for (const Contact& contact : contacts)
+    for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k) num_entries += 3;
   std::vector<Eigen::Triplet<double>> body_entries;
-  body_entries.reserve(static_cast<size_t>(num_rows) * 3 * kMaxContactNodes);
+  body_entries.reserve(num_entries * static_cast<size_t>(rows_per_contact));
   for (size_t i = 0; i < contacts.size(); ++i) {
     const Contact& contact = contacts[i];
     Eigen::Vector3d directions[3];

@@ -5,11 +5,13 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
 
 #include "core/closest_points.h"
+#include "fem/quadratic_tet.h"
 
 namespace hapsim::fem {
 namespace {
@@ -142,6 +144,62 @@ int FindNearestTet(const TetMesh& mesh, const TetGrid& grid, const Vector3d& p_m
   return best_tet;
 }
 
+// The reference coordinates ξ of p in quadratic tet t, X(ξ) = Σ_a N_a(ξ) X_a = p, by Newton's
+// method from the corner tet's barycentric coordinates (exact at once where the tet is straight):
+//   ξ ← ξ + (∂X/∂ξ)⁻¹ (p − X(ξ)),  ∂X/∂ξ = Σ_a X_a ∂N_a/∂ξ.
+// Converged when the step is below 1e-12 of the tet's size; nullopt if it is not within 20 steps
+// (or ∂X/∂ξ is singular: a tet curved past folding, which fem/curved_boundary.h refuses).
+std::optional<Vector3d> FindQuadraticReferencePoint(const TetMesh& mesh, int t, const Vector3d& p_m,
+                                                    const Vector4d& corner_weights) {
+  Eigen::Matrix<double, 3, kP2Nodes> X;
+  for (int a = 0; a < kP2Nodes; ++a) X.col(a) = mesh.rest_positions_m.col(mesh.node(a, t));
+  Vector3d xi = corner_weights.tail<3>();
+  for (int step = 0; step < 20; ++step) {
+    const Vector3d residual_m = p_m - X * CalcP2ShapeFunctions(xi);
+    const Eigen::Matrix3d dX_dxi = X * CalcP2ShapeDerivatives(xi);
+    const Eigen::FullPivLU<Eigen::Matrix3d> lu(dX_dxi);
+    if (!lu.isInvertible()) return std::nullopt;
+    const Vector3d delta = lu.solve(residual_m);
+    xi += delta;
+    if (delta.norm() <= 1e-12) return xi;  // ξ is in units of the tet's size
+  }
+  return std::nullopt;
+}
+
+// A point's binding in a quadratic tet: the tet and the point's reference coordinates there.
+struct QuadraticBinding {
+  int tet = -1;
+  Vector3d xi = Vector3d::Zero();
+};
+
+// The smallest barycentric coordinate of reference point ξ: ≥ 0 inside the (curved) tet.
+double MinBarycentric(const Vector3d& xi) { return std::min(1.0 - xi.sum(), xi.minCoeff()); }
+
+// The curved tet that holds p: of the tets whose boxes come within reach_m of p (and
+// `straight_tet`, the one its corner tets chose), those where Newton's method finds ξ, the one
+// with ξ deepest inside. A boundary tet curved outwards holds points that lie outside every corner
+// tet, and near such a bulge the straight choice's quadratic map may have no preimage of p at all
+// (the map folds outside its element: Newton cycled there on two_organs' liver).
+std::optional<QuadraticBinding> BindInQuadraticTet(const TetMesh& mesh, const TetGrid& grid,
+                                                   const Vector3d& p_m, double reach_m,
+                                                   int straight_tet) {
+  std::optional<QuadraticBinding> best;
+  const auto consider = [&](int t) {
+    const std::optional<Vector3d> xi =
+        FindQuadraticReferencePoint(mesh, t, p_m, CalcBarycentric(mesh, t, p_m));
+    if (xi && (!best || MinBarycentric(*xi) > MinBarycentric(best->xi)))
+      best = QuadraticBinding{t, *xi};
+  };
+  consider(straight_tet);
+  const Vector3d reach = Vector3d::Constant(reach_m);
+  grid.ForEachCell(Eigen::AlignedBox3d(p_m - reach, p_m + reach), [&](int cell) {
+    grid.ForEachTet(cell, [&](int t) {
+      if (t != straight_tet) consider(t);
+    });
+  });
+  return best;
+}
+
 double CalcMeanEdgeLength(const TetMesh& mesh) {
   static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   double sum_m = 0.0;
@@ -169,11 +227,13 @@ EmbeddedSurface EmbedSurface(const TetMesh& mesh, const Matrix3Xd& vertices_m,
     throw std::invalid_argument("a triangle of the surface to embed names a vertex out of range");
   if (!(max_outside_m >= 0.0)) throw std::invalid_argument("max_outside_m must be >= 0");
 
-  const TetGrid grid(mesh, std::max(CalcMeanEdgeLength(mesh), 1e-12));
+  const double mean_edge_m = CalcMeanEdgeLength(mesh);
+  const TetGrid grid(mesh, std::max(mean_edge_m, 1e-12));
   EmbeddedSurface surface;
   surface.triangles = triangles;
-  surface.nodes.resize(4, num_points);
-  surface.weights.resize(4, num_points);
+  const int k = mesh.nodes_per_tet();
+  surface.nodes.resize(k, num_points);
+  surface.weights.resize(k, num_points);
   EmbeddingReport found;
   found.max_allowed_m = max_outside_m;
   for (Eigen::Index p = 0; p < num_points; ++p) {
@@ -196,8 +256,24 @@ EmbeddedSurface EmbedSurface(const TetMesh& mesh, const Matrix3Xd& vertices_m,
       ++found.num_outside;
       found.max_outside_m = std::max(found.max_outside_m, distance_m);
     }
-    surface.nodes.col(p) = mesh.tets.col(tet);
-    surface.weights.col(p) = CalcBarycentric(mesh, tet, p_m);
+    if (!mesh.is_quadratic()) {
+      surface.nodes.col(p) = mesh.tets.col(tet);
+      surface.weights.col(p) = CalcBarycentric(mesh, tet, p_m);
+      continue;
+    }
+    // Every tet whose box comes within a tenth of the mean edge of the point is tried (Newton's
+    // method ends in one step in a straight one): a curved side may hold what no corner tet does.
+    const std::optional<QuadraticBinding> bound =
+        BindInQuadraticTet(mesh, grid, p_m, 0.1 * mean_edge_m, tet);
+    if (!bound) {
+      std::ostringstream message;
+      message << "surface vertex " << p + 1 << " at (" << p_m.x() << ", " << p_m.y() << ", "
+              << p_m.z() << ") m: no quadratic tet near it maps a point onto it (Newton's method "
+              << "did not converge in any)";
+      throw std::invalid_argument(message.str());
+    }
+    for (int a = 0; a < k; ++a) surface.nodes(a, p) = mesh.node(a, bound->tet);
+    surface.weights.col(p) = CalcP2ShapeFunctions(bound->xi);
   }
   if (report != nullptr) *report = found;
   return surface;
@@ -241,15 +317,23 @@ EmbeddedSurface MergeEmbeddedSurfaces(const std::vector<EmbeddedSurface>& parts,
     num_points += filled.back().num_points();
     num_triangles += filled.back().num_triangles();
   }
+  // Linear and quadratic parts together: rows for the larger, a short column padded with its
+  // point's first node at weight 0 (read, never adding anything).
+  int rows = 0;
+  for (const EmbeddedSurface& part : filled) rows = std::max(rows, part.nodes_per_point());
   EmbeddedSurface merged;
-  merged.nodes.resize(4, num_points);
-  merged.weights.resize(4, num_points);
+  merged.nodes.resize(rows, num_points);
+  merged.weights.setZero(rows, num_points);
   merged.triangles.resize(3, num_triangles);
   int point = 0, triangle = 0;
   for (size_t i = 0; i < filled.size(); ++i) {
     const EmbeddedSurface& part = filled[i];
-    merged.nodes.middleCols(point, part.num_points()) = part.nodes.array() + first_nodes[i];
-    merged.weights.middleCols(point, part.num_points()) = part.weights;
+    const int k = part.nodes_per_point();
+    for (int p = 0; p < part.num_points(); ++p) {
+      merged.nodes.col(point + p).setConstant(part.nodes(0, p) + first_nodes[i]);
+      merged.nodes.col(point + p).head(k) = part.nodes.col(p).array() + first_nodes[i];
+      merged.weights.col(point + p).head(k) = part.weights.col(p);
+    }
     merged.triangles.middleCols(triangle, part.num_triangles()) = part.triangles.array() + point;
     point += part.num_points();
     triangle += part.num_triangles();
@@ -263,7 +347,7 @@ void CalcEmbeddedPositions(const EmbeddedSurface& surface, const Eigen::VectorXd
   if (x_points_m->size() != size) x_points_m->resize(size);
   for (int p = 0; p < surface.num_points(); ++p) {
     Vector3d x_m = Vector3d::Zero();
-    for (int a = 0; a < 4; ++a)
+    for (int a = 0; a < surface.nodes_per_point(); ++a)
       x_m += surface.weights(a, p) * x_nodes_m.segment<3>(3 * surface.nodes(a, p));
     x_points_m->segment<3>(3 * p) = x_m;
   }

@@ -12,6 +12,13 @@
 // smooth surface over a coarse one bulges out between its nodes) is bound to the nearest tet with
 // the same formula, extrapolated (some w_a < 0); it still moves exactly with that tet's field.
 //
+// In quadratic tets (fem/quadratic_tet.h) the point moves with the tet's quadratic field, on its
+// ten nodes: x_p = Σ_a N_a(ξ_p) x_{n_a}, ξ_p the point's reference coordinates, found at rest by
+// Newton's method on the isoparametric map X(ξ) = Σ_a N_a(ξ) X_a = p (one step in a straight tet,
+// a few in one curved onto the body's surface, fem/curved_boundary.h): exact for every quadratic
+// motion, and a contact's Jacobian row carries the quadratic shape functions, as a contact on the
+// body's own curved faces does (contact/quadratic_surface.h).
+//
 // How far outside is too far: a point at distance d outside a tet of edge h has weights beyond
 // [0, 1] by ~ d/h, and the tet's rotation and strain reach it through that longer lever, where no
 // material constrains it. A smooth surface meshed at the tets' size lies within a small fraction
@@ -28,10 +35,12 @@
 namespace hapsim::fem {
 
 struct EmbeddedSurface {
-  Matrix3Xi triangles;                               // (3 x F) vertex indices, outward normals
-  Eigen::Matrix<int, 4, Eigen::Dynamic> nodes;       // (4 x P) the carrying tet's nodes
-  Eigen::Matrix<double, 4, Eigen::Dynamic> weights;  // (4 x P) barycentric weights, Σ = 1
+  Matrix3Xi triangles;      // (3 x F) vertex indices, outward normals
+  Eigen::MatrixXi nodes;    // (k x P) the carrying tet's nodes, k = 4 (linear) or 10 (quadratic)
+  Eigen::MatrixXd weights;  // (k x P) their weights (barycentric, or P2 shape functions), Σ = 1
+  // (a merge of both kinds pads a linear point's column with its first node at weight 0)
 
+  int nodes_per_point() const { return static_cast<int>(nodes.rows()); }
   int num_points() const { return static_cast<int>(nodes.cols()); }
   int num_triangles() const { return static_cast<int>(triangles.cols()); }
   bool empty() const { return nodes.cols() == 0; }
@@ -50,7 +59,8 @@ double CalcDefaultMaxOutsideDistance(const TetMesh& mesh);
 // Binds each vertex of the surface (vertices_m: 3 x P, rest, world, m; triangles: 3 x F over
 // them) to its tet. Throws std::invalid_argument if the surface is empty, a triangle's index is
 // out of range, or a vertex lies farther than max_outside_m from every tet (the message names
-// the vertex, its position and its distance). A spatial grid of the tets' boxes makes it
+// the vertex, its position and its distance), or (quadratic tets) Newton's method does not find
+// its reference coordinates in its curved tet. A spatial grid of the tets' boxes makes it
 // O(P · tets per cell).
 EmbeddedSurface EmbedSurface(const TetMesh& mesh, const Matrix3Xd& vertices_m,
                              const Matrix3Xi& triangles, double max_outside_m,

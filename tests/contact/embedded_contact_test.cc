@@ -33,10 +33,10 @@ namespace {
 using Eigen::Isometry3d;
 using Eigen::Vector3d;
 
-fem::Model MakeBlock() {  // 6 × 6 × 3 cm, 1 cm cells, top z = 0.03
-  return fem::MakeModel(
-      fem::MakeBoxTetMesh(Vector3d(-0.03, -0.03, 0.0), Vector3d(0.03, 0.03, 0.03), {6, 6, 3}),
-      fem::Material{}, {});
+fem::Model MakeBlock(bool quadratic = false) {  // 6 × 6 × 3 cm, 1 cm cells, top z = 0.03
+  const fem::TetMesh mesh =
+      fem::MakeBoxTetMesh(Vector3d(-0.03, -0.03, 0.0), Vector3d(0.03, 0.03, 0.03), {6, 6, 3});
+  return fem::MakeModel(quadratic ? fem::MakeQuadraticMesh(mesh) : mesh, fem::Material{}, {});
 }
 
 // The body with `vertices_m`, `triangles` embedded in its tets as its collision surface.
@@ -105,8 +105,14 @@ TEST(EmbeddedContactTest, TheBoundaryEmbeddedGivesTheBoundarysContactsAndRows) {
       1e-12);
 }
 
-TEST(EmbeddedContactTest, AFaceSplitInFourCarriesTheFacesOwnRow) {
-  const fem::Model own = MakeBlock();
+// With quadratic tets the boundary's faces are drawn as their four sub-triangles and a contact on
+// one is weighed by the face's six shape functions (contact/quadratic_surface.h); the embedded
+// point's weights are its tet's ten (fem/surface_embedding.h), which on a face are the same six.
+class FaceSplitInFour : public testing::TestWithParam<bool> {};
+
+TEST_P(FaceSplitInFour, CarriesTheFacesOwnRow) {
+  const bool quadratic = GetParam();
+  const fem::Model own = MakeBlock(quadratic);
   // Every boundary face split at its edges' midpoints into four (shared midpoints).
   const auto [vertices_m, triangles] = BoundaryAsSurface(own);
   std::vector<Vector3d> points(vertices_m.cols());
@@ -132,7 +138,8 @@ TEST(EmbeddedContactTest, AFaceSplitInFourCarriesTheFacesOwnRow) {
   for (size_t p = 0; p < points.size(); ++p) fine_vertices_m.col(p) = points[p];
   const fem::Model embedded = WithCollisionSurface(own, fine_vertices_m, fine);
 
-  // A small sphere (2 mm: its cap reaches no vertex) just touching the centroid of a top face.
+  // A small sphere (0.5 mm: its cap, 0.32 mm across, reaches no vertex, even of the quadratic
+  // block's faces split in four twice, 0.59 mm away) just touching the centroid of a top face.
   int top_face = -1;
   for (Eigen::Index f = 0; f < own.surface_triangles.cols() && top_face < 0; ++f) {
     bool on_top = true;
@@ -146,9 +153,9 @@ TEST(EmbeddedContactTest, AFaceSplitInFourCarriesTheFacesOwnRow) {
     centroid_m += own.mesh.rest_positions_m.col(own.surface_triangles(k, top_face)) / 3.0;
   ToolShape sphere;
   sphere.kind = ToolShape::Kind::kSphere;
-  sphere.radius_m = 0.002;
+  sphere.radius_m = 0.0005;
   Isometry3d X_WT = Isometry3d::Identity();
-  X_WT.translation() = centroid_m + Vector3d(0.0, 0.0, 0.002 - 1e-4);  // 0.1 mm in
+  X_WT.translation() = centroid_m + Vector3d(0.0, 0.0, 0.0005 - 1e-4);  // 0.1 mm in
   DetectionOptions options;
   options.margin_m = 0.0;
   std::vector<Contact> from_own, from_embedded;
@@ -160,10 +167,48 @@ TEST(EmbeddedContactTest, AFaceSplitInFourCarriesTheFacesOwnRow) {
   EXPECT_LT((from_embedded[0].p_body_W_m - centroid_m).norm(), 1e-12);
   EXPECT_NEAR(from_embedded[0].gap_m, -1e-4, 1e-12);
   EXPECT_NEAR(from_own[0].gap_m, -1e-4, 1e-12);
-  EXPECT_LT(
-      (DenseBodyRows(from_embedded, embedded) - DenseBodyRows(from_own, own)).cwiseAbs().maxCoeff(),
-      1e-12);
+  if (!quadratic) {
+    EXPECT_LT((DenseBodyRows(from_embedded, embedded) - DenseBodyRows(from_own, own))
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-12);
+    return;
+  }
+  // Quadratic: the embedded triangle is flat between its three points, each carried by the
+  // quadratic field, so its row is Σ_k w_k N(ξ_k), not the face's N at the point (they differ by
+  // O(h²) of the split). Checked on a quadratic displacement u of the nodes, which the points
+  // follow exactly: the row times u is n · Σ_k w_k u(q_k), u evaluated at the triangle's vertices
+  // q_k, w_k the point's barycentric coordinates in it.
+  const Contact& contact = from_embedded[0];
+  int num_nodes = 0;
+  while (num_nodes < kMaxContactNodes && contact.nodes[num_nodes] >= 0) ++num_nodes;
+  EXPECT_GT(num_nodes, 6) << "the row reaches past the face's own nodes";
+  const auto u_m = [](const Vector3d& X_m) {
+    const Vector3d X = X_m / 0.03;
+    return Vector3d(0.002 * (X.x() * X.x() - X.y() * X.z()), 0.001 * X.x() * X.y(),
+                    0.003 * (X.y() * X.y() + 0.5 * X.x() * X.z()));
+  };
+  Eigen::VectorXd u_nodes_m(own.num_dofs());
+  for (int n = 0; n < own.num_nodes(); ++n)
+    u_nodes_m.segment<3>(3 * n) = u_m(own.mesh.rest_positions_m.col(n));
+  Eigen::Matrix<double, 3, 2> edges;
+  const Vector3d q0 = fine_vertices_m.col(contact.surface_points[0]);
+  for (int k = 1; k < 3; ++k)
+    edges.col(k - 1) = fine_vertices_m.col(contact.surface_points[k]) - q0;
+  const Eigen::Vector2d w12 = edges.colPivHouseholderQr().solve(contact.p_body_W_m - q0);
+  const double w[3] = {1.0 - w12.sum(), w12.x(), w12.y()};
+  Vector3d expected_m = Vector3d::Zero();
+  for (int k = 0; k < 3; ++k)
+    expected_m += w[k] * u_m(fine_vertices_m.col(contact.surface_points[k]));
+  const Eigen::MatrixXd rows = DenseBodyRows(from_embedded, embedded);
+  EXPECT_NEAR(rows.row(0).dot(u_nodes_m), contact.n_W.dot(expected_m), 1e-15);
+  EXPECT_GT(std::abs(contact.n_W.dot(expected_m)), 1e-5);  // the field moves the point
 }
+
+INSTANTIATE_TEST_SUITE_P(EmbeddedContactTest, FaceSplitInFour, testing::Bool(),
+                         [](const testing::TestParamInfo<bool>& info) {
+                           return info.param ? "QuadraticTets" : "LinearTets";
+                         });
 
 // A 6 × 6 × 3 cm block pressed by a sphere; `collision` added by the caller.
 constexpr const char* kPressScene = R"(name: press

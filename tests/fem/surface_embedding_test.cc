@@ -3,6 +3,8 @@
 // move it exactly as they move the point itself (the map applied to its rest position, an
 // independent computation); a point far from every tet is refused, naming it; the boundary as a
 // surface of its own puts weight 1 on each node; merging lays the parts out as the nodes are.
+// In quadratic tets a point moves with its tet's quadratic field: a quadratic displacement of the
+// nodes moves it by that displacement at its own rest position, which linear tets cannot do.
 #include "fem/surface_embedding.h"
 
 #include <gtest/gtest.h>
@@ -85,6 +87,66 @@ TEST(SurfaceEmbeddingTest, PointsMoveWithARigidMotionAndAUniformStrainExactly) {
     const Matrix3Xd expected_m = (A * points.vertices_m).colwise() + t_m;
     EXPECT_LT((x_points_m - Stacked(expected_m)).cwiseAbs().maxCoeff(), 1e-12);
   }
+}
+
+// u(X) = quadratic in the position, a few mm over the block; applied to every node and point.
+Vector3d QuadraticDisplacement_m(const Vector3d& X_m) {
+  const Vector3d X = X_m / 0.04;  // over the block's length
+  return 0.003 * Vector3d(X.x() * X.x() - 0.5 * X.y() * X.z(), X.x() * X.y() + X.z() * X.z(),
+                          -X.y() * X.y() + 0.7 * X.x() * X.z());
+}
+
+Matrix3Xd Displaced(const Matrix3Xd& X_m) {
+  Matrix3Xd x_m = X_m;
+  for (Eigen::Index i = 0; i < X_m.cols(); ++i) x_m.col(i) += QuadraticDisplacement_m(X_m.col(i));
+  return x_m;
+}
+
+TEST(SurfaceEmbeddingTest, QuadraticTetsCarryAQuadraticFieldExactly) {
+  const Points points = MakePoints(200, 60);  // inside, and extrapolated up to 4 mm outside
+  const TetMesh quadratic = MakeQuadraticMesh(Block());
+  const EmbeddedSurface surface = EmbedSurface(quadratic, points.vertices_m, points.triangles,
+                                               CalcDefaultMaxOutsideDistance(Block()));
+  ASSERT_EQ(surface.nodes_per_point(), 10);
+  for (int p = 0; p < surface.num_points(); ++p)
+    EXPECT_NEAR(surface.weights.col(p).sum(), 1.0, 1e-13);
+  Eigen::VectorXd x_points_m;
+  CalcEmbeddedPositions(surface, Stacked(quadratic.rest_positions_m), &x_points_m);
+  EXPECT_LT((x_points_m - Stacked(points.vertices_m)).cwiseAbs().maxCoeff(), 1e-15);
+  const Matrix3Xd expected_m = Displaced(points.vertices_m);
+  CalcEmbeddedPositions(surface, Stacked(Displaced(quadratic.rest_positions_m)), &x_points_m);
+  EXPECT_LT((x_points_m - Stacked(expected_m)).cwiseAbs().maxCoeff(), 1e-15);
+  // Linear tets follow the same field only to within a fraction of a millimetre.
+  const EmbeddedSurface linear = EmbedSurface(Block(), points.vertices_m, points.triangles,
+                                              CalcDefaultMaxOutsideDistance(Block()));
+  CalcEmbeddedPositions(linear, Stacked(Displaced(Block().rest_positions_m)), &x_points_m);
+  EXPECT_GT((x_points_m - Stacked(expected_m)).cwiseAbs().maxCoeff(), 1e-5);
+}
+
+// A quadratic body beside a linear one: the linear part's points are padded to ten nodes with
+// weight 0, and each part still moves as its own.
+TEST(SurfaceEmbeddingTest, MergingLinearAndQuadraticPartsKeepsEachPartsMotion) {
+  const Points points = MakePoints(20, 5);
+  const TetMesh quadratic = MakeQuadraticMesh(Block());
+  const double limit_m = CalcDefaultMaxOutsideDistance(Block());
+  const EmbeddedSurface linear_part =
+      EmbedSurface(Block(), points.vertices_m, points.triangles, limit_m);
+  const EmbeddedSurface quadratic_part =
+      EmbedSurface(quadratic, points.vertices_m, points.triangles, limit_m);
+  const int n = Block().num_nodes();
+  const EmbeddedSurface merged = MergeEmbeddedSurfaces(
+      {linear_part, quadratic_part},
+      {ExtractBoundarySurface(Block()), ExtractBoundarySurface(quadratic)}, {0, n});
+  ASSERT_EQ(merged.nodes_per_point(), 10);
+  Eigen::VectorXd x_nodes_m(3 * (n + quadratic.num_nodes()));
+  x_nodes_m << Stacked(Displaced(Block().rest_positions_m)),
+      Stacked(Displaced(quadratic.rest_positions_m));
+  Eigen::VectorXd x_merged_m, x_linear_m, x_quadratic_m;
+  CalcEmbeddedPositions(merged, x_nodes_m, &x_merged_m);
+  CalcEmbeddedPositions(linear_part, x_nodes_m.head(3 * n), &x_linear_m);
+  CalcEmbeddedPositions(quadratic_part, x_nodes_m.tail(3 * quadratic.num_nodes()), &x_quadratic_m);
+  EXPECT_EQ(x_merged_m.head(x_linear_m.size()), x_linear_m);
+  EXPECT_EQ(x_merged_m.tail(x_quadratic_m.size()), x_quadratic_m);
 }
 
 TEST(SurfaceEmbeddingTest, APointFarOutsideIsRefusedByNumber) {

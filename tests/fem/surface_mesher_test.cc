@@ -12,6 +12,7 @@
 #include "core/shape_mesh.h"
 #include "fem/curved_boundary.h"
 #include "fem/quadratic_tet.h"
+#include "fem/surface_embedding.h"
 
 namespace hapsim::fem {
 namespace {
@@ -135,6 +136,34 @@ TEST(SurfaceMesher, QuadraticTetsCurvedOntoTheSurface) {
   EXPECT_THROW(
       MoveBoundaryEdgeNodesOntoSurface(surface.vertices_m, surface.triangles, &linear_copy),
       std::invalid_argument);
+}
+
+// A finer sphere (other vertices than the one the tets were curved onto) carried by the curved
+// quadratic tets: each vertex bound by Newton's method in its curved tet lies exactly where it
+// was given at rest, and follows an affine motion of the nodes exactly (the isoparametric map
+// reproduces linear fields, curved or not).
+TEST(SurfaceMesher, ASurfaceEmbeddedInCurvedTetsSitsOnItAtRestAndMovesAffinely) {
+  const TriangleMesh surface = MakeSphereSurface(128);
+  TetMesh curved =
+      MakeQuadraticMesh(MeshClosedSurface(surface, {kRadius_m / 3.0, {}, 0.0, 0.0}, "sphere"));
+  MoveBoundaryEdgeNodesOntoSurface(surface.vertices_m, surface.triangles, &curved);
+  const TriangleMesh finer = MakeSphereSurface(200);
+  const EmbeddedSurface carried = EmbedSurface(curved, finer.vertices_m, finer.triangles,
+                                               CalcDefaultMaxOutsideDistance(curved));
+  ASSERT_EQ(carried.nodes_per_point(), 10);
+  const auto stacked = [](const Matrix3Xd& p_m) {
+    return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(p_m.data(), p_m.size()));
+  };
+  Eigen::VectorXd x_points_m;
+  CalcEmbeddedPositions(carried, stacked(curved.rest_positions_m), &x_points_m);
+  EXPECT_LT((x_points_m - stacked(finer.vertices_m)).cwiseAbs().maxCoeff(), 1e-12);
+  Eigen::Matrix3d F;
+  F << 1.1, 0.2, 0.0, -0.1, 0.9, 0.3, 0.05, 0.0, 1.2;
+  const Eigen::Vector3d t_m(0.01, -0.02, 0.03);
+  CalcEmbeddedPositions(carried, stacked((F * curved.rest_positions_m).colwise() + t_m),
+                        &x_points_m);
+  EXPECT_LT((x_points_m - stacked((F * finer.vertices_m).colwise() + t_m)).cwiseAbs().maxCoeff(),
+            1e-12);
 }
 
 // Graded: within the refine radius of the point the tets are about the refine size, far from it
