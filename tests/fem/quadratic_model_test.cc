@@ -17,6 +17,7 @@
 #include "fem/quadratic_tet.h"
 #include "fem/stiffness_assembly.h"
 #include "fem/time_stepper.h"
+#include "tests/fem/static_solve.h"
 
 namespace hapsim::fem {
 namespace {
@@ -141,53 +142,13 @@ TEST(QuadraticModel, ARigidMotionHasNoElasticForceAndASmallStrainTheStiffnessOne
               -0.5 * (stretched - model.rest_positions_m).dot(expected), 1e-12 * felt.norm());
 }
 
-// The scene cantilever's beam (0.5 m, 5 × 5 cm, E 1e7 Pa, ν 0.3) clamped at x = 0 under a tenth of
-// its weight, solved statically (K u = f, K at rest): the tip's deflection against beam theory,
-// q L⁴/(8 E I) + q L²/(2 κ G A) with κ = 10(1 + ν)/(12 + 11ν) (scripts/bench/beam_theory.py:
-// 3.717 mm). The gravity load is the lumped masses' (as the stepper's).
+// The scene cantilever's beam (E 1e7 Pa, ν 0.3) against beam theory (3.717 mm).
 double CantileverTipDeflection(const Eigen::Vector3i& cells, bool quadratic) {
-  TetMesh mesh =
-      MakeBoxTetMesh(Eigen::Vector3d(0, -0.025, -0.025), Eigen::Vector3d(0.5, 0.025, 0.025), cells);
-  if (quadratic) mesh = MakeQuadraticMesh(mesh);
-  const std::vector<int> clamped = FindNodesInBox(mesh, Eigen::Vector3d(-0.001, -0.03, -0.03),
-                                                  Eigen::Vector3d(0.001, 0.03, 0.03), 0.0);
-  const Model model = MakeModel(mesh, Rubber(), clamped);
-  const StiffnessAssembler assembler(model);
-  Eigen::SparseMatrix<double> K = assembler.MakeMatrix();
-  assembler.Assemble(
-      model, std::vector<Eigen::Matrix3d>(model.num_tets(), Eigen::Matrix3d::Identity()), 1.0, &K);
-  const Eigen::SparseMatrix<double> full = K.selfadjointView<Eigen::Lower>();
-  std::vector<int> free;
-  for (int i = 0; i < model.num_dofs(); ++i)
-    if (!model.dof_is_fixed[i]) free.push_back(i);
-  std::vector<int> index_of(model.num_dofs(), -1);
-  for (size_t k = 0; k < free.size(); ++k) index_of[free[k]] = static_cast<int>(k);
-  std::vector<Eigen::Triplet<double>> entries;
-  for (int c = 0; c < full.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(full, c); it; ++it)
-      if (index_of[it.row()] >= 0 && index_of[c] >= 0)
-        entries.emplace_back(index_of[it.row()], index_of[c], it.value());
-  Eigen::SparseMatrix<double> K_free(free.size(), free.size());
-  K_free.setFromTriplets(entries.begin(), entries.end());
-  const Eigen::VectorXd f = CalcGravityForce(model, Eigen::Vector3d(0, 0, -0.981));
-  Eigen::VectorXd f_free(free.size());
-  for (size_t k = 0; k < free.size(); ++k) f_free[k] = f[free[k]];
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(K_free);
-  const Eigen::VectorXd u_free = solver.solve(f_free);
-  // The tip's centre (0.5, 0, 0) is a node of both meshes (even cell counts across).
-  for (int n = 0; n < mesh.num_nodes(); ++n)
-    if ((mesh.rest_positions_m.col(n) - Eigen::Vector3d(0.5, 0, 0)).norm() < 1e-9)
-      return -u_free[index_of[3 * n + 2]];
-  ADD_FAILURE() << "no node at the tip's centre";
-  return 0.0;
+  return test::SolveCantileverTipDeflection(test::MakeCantilever(cells, Rubber(), quadratic));
 }
 
 TEST(QuadraticModel, ACantileverConvergesWhereLinearTetsLock) {
-  const double nu = 0.3, E = 1e7, h = 0.05, L = 0.5, q = 1000.0 * 0.981 * h * h;
-  const double I = h * h * h * h / 12.0, G = E / (2.0 * (1.0 + nu));
-  const double kappa = 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu);
-  const double reference =
-      q * std::pow(L, 4) / (8.0 * E * I) + q * L * L / (2.0 * kappa * G * h * h);
+  const double reference = test::CalcCantileverBeamTheory_m(Rubber());
   double p2_errors[2], p1_errors[2];
   const Eigen::Vector3i meshes[2] = {{10, 2, 2}, {20, 2, 2}};
   for (int k = 0; k < 2; ++k) {
