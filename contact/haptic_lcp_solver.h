@@ -81,7 +81,10 @@ namespace hapsim::contact {
 // same rows (with this step's tool system in place of the frame's), and stops a tool that reaches
 // a row the frame did not find active (the linear model alone lets it through). The same
 // active-set iteration solves it: held rows are never dropped and never tested for sign (a convex
-// QP in which they are unconstrained; W's symmetric part positive definite keeps it unique).
+// QP in which they are unconstrained; W's symmetric part positive definite keeps it unique), but
+// one whose pull exceeds its frame impulse (λ_i < −λ_frame,i: held against a near-twin free row,
+// haptic_lcp_solver.cc ReleaseRowsPullingPastTheirPush) is released, solved unilaterally from
+// then on until new rows come.
 // Dependent held rows (W_HH singular: redundant contacts the frame found active, which its own
 // solve admits through a small diagonal shift) are not held: those rows are then solved
 // unilaterally, as in the lcp mode, until new rows come. (The linear model factorises such a W by
@@ -103,7 +106,9 @@ class HapticLcpSolver {
   // feasible (λ ≥ 0 off the held rows) and optimal on its active set, only not yet complementary:
   // rows still to enter do not push yet. The next Solve on the same rows goes on from that set,
   // so a few steps reach the solution the unbounded solve would give in one. Counted in solves,
-  // not time, so that runs replay bit for bit. 0: unbounded (3n + 10 entering rows at most).
+  // not time, so that runs replay bit for bit. 0: unbounded (3n + 10 entering rows at most). A
+  // release of held rows (above) goes past the budget by the pass that drops their negative
+  // impulses (ShrinkToFeasible: a few solves), so that no step returns a pulling released row.
   explicit HapticLcpSolver(int max_rows, int friction_sweeps = 0, bool hold_frame_contacts = false,
                            int max_solves_per_step = 0);
   ~HapticLcpSolver();

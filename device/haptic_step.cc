@@ -50,7 +50,8 @@ bool HapticStep::TracksFreeRows() const {
 // The surface velocity is the body's motion after the frame, not the contact-free velocity of
 // body_rhs: that one assumes the frame's contact force gone, and integrated over a frame it moved
 // the liver's surface millimetres into a resting tool. The held rows keep the frame's target, as
-// the linear contact model does (the solver holds the same rows: λ_frame > 0).
+// the linear contact model does (the solver holds the same rows, λ_frame > 0, or solves one it
+// has released unilaterally with that target).
 void HapticStep::CalcFreeRowTargets() {
   const contact::ContactRows& rows = *rows_;
   const Eigen::Vector3d dx_W_m = tool_state_.x_W_m - rows_linearised_at_.x_W_m;

@@ -79,8 +79,9 @@ void CalcElasticForce(const Model& model, const Eigen::VectorXd& x_m,
   }
   // Average nodal pressure (fem/nodal_pressure.h): σ̄ = 2μ dev ε + p̄ I, the volumetric part from
   // the nodes' averaged strains.
+  // (Scratch kept per thread: the step allocates nothing of size N after its first.)
   const bool nodal = model.nodal_pressure.enabled();
-  Eigen::VectorXd node_strain, element_pressure_Pa;
+  thread_local Eigen::VectorXd node_strain, element_pressure_Pa;
   if (nodal) CalcAveragedNodalPressures(model, x_m, rotations, &node_strain, &element_pressure_Pa);
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];

@@ -68,19 +68,21 @@ PLAN = {
     "block_press": {"fine": 1.5},
     "liver_palpation": {"fine": 1.25, "num_steps": 175,
                         "why": "first palpation only (3.5 s: settle, press, 0.5 s hold); "
-                               "finest cell 6.4 mm (8 / 1.25: at 8 / 1.5 one run took 3.5 min)"},
+                               "finest linear cell 6.4 mm (8 / 1.25: at 8 / 1.5 one run took "
+                               "3.5 min), finest quadratic 12.8 mm"},
     "polyp": {"fine": 1.5, "num_steps": 450,
               "why": "4.5 s (side push, hold, lift, back down; the withdrawal cut)"},
     "probe": {"fine": 1.5},
     "pick_and_place": {"fine": 1.5},
     "two_organs": {"fine": 1.0, "num_steps": 210,
                    "why": "the liver's palpation only (4.2 s: press, hold, lift); the shipped "
-                          "cells the finest (two surfaces filled with tets)"},
+                          "cells the finest linear ones (two surfaces filled with tets), twice "
+                          "them the finest quadratic"},
 }
 QUICK_PLAN = {"block_press": {"fine": 1.0, "num_steps": 40, "visual_hz": 100.0,
                               "knobs": ["compliance", "visual_hz"], "rates": [25.0],
-                              "why": "quick: 1.2 s (rest and press), shipped mesh, 100 Hz finest, "
-                                     "two knobs"}}
+                              "why": "quick: 1.2 s (rest and press), quadratic tets at half "
+                                     "the shipped cells, 100 Hz finest, two knobs"}}
 MESH_FACTORS = [0.5, 0.75, 1.0]
 # Quadratic tets at these factors and at half the finest linear one (the finest mesh of all).
 QUADRATIC_MESH_FACTORS = [0.5]
