@@ -323,11 +323,12 @@ void HapticLcpSolver::Workspace::StartFromGuess() {
 // total push). One that pulls harder than it pushed at the frame (x_i < −Δt λ_frame,i) is held
 // against a twin: a free row nearly dependent on it (several tool points on one body face share
 // its three nodes and its normal; two_organs' rows came in such threes) that has engaged at its
-// own, tracked gap while the held row keeps closing the frame's gap. The equality and the inequality then disagree along a direction W
-// hardly resists, and the solve meets them with opposite impulses that grow without bound (seen:
-// ±1e10 N, and 26–260 N reaching the tool on two_organs with the exact compliance; pulls past the
-// push in 1,678 of polyp's 3,890 steps, cancelling to within its 0.4 N). Such rows are released,
-// solved unilaterally from then on as the lcp mode solves them, until new rows come; true if any.
+// own, tracked gap while the held row keeps closing the frame's gap. The equality and the
+// inequality then disagree along a direction W hardly resists, and the solve meets them with
+// opposite impulses that grow without bound (seen: ±1e10 N, and 26–260 N reaching the tool on
+// two_organs with the exact compliance; pulls past the push in 1,678 of polyp's 3,890 steps,
+// cancelling to within its 0.4 N). Such rows are released, solved unilaterally from then on as
+// the lcp mode solves them, until new rows come; true if any.
 bool HapticLcpSolver::Workspace::ReleaseRowsPullingPastTheirPush(double dt_s) {
   bool released = false;
   for (int i = 0; i < n; ++i) {
