@@ -49,14 +49,23 @@ void ExpectEdgeNodesRaised(const TetMesh& mesh, const TetMesh& straight, double 
   }
 }
 
-TEST(CurvedBoundary, MovesOntoAFlatSurfaceWhereTheTetStaysWellShaped) {
+// The unit quadratic tet with its boundary edge nodes moved onto the plane z = c.
+struct RaisedTet {
+  TetMesh straight = MakeUnitQuadraticTet();
+  TetMesh mesh = straight;
+  CurvedBoundaryReport report;
+};
+RaisedTet RaiseOntoPlane(double c) {
   Matrix3Xd vertices_m;
   Matrix3Xi triangles;
-  MakePlane(0.1, &vertices_m, &triangles);
-  TetMesh mesh = MakeUnitQuadraticTet();
-  const TetMesh straight = mesh;
-  const CurvedBoundaryReport report =
-      MoveBoundaryEdgeNodesOntoSurface(vertices_m, triangles, &mesh);
+  MakePlane(c, &vertices_m, &triangles);
+  RaisedTet raised;
+  raised.report = MoveBoundaryEdgeNodesOntoSurface(vertices_m, triangles, &raised.mesh);
+  return raised;
+}
+
+TEST(CurvedBoundary, MovesOntoAFlatSurfaceWhereTheTetStaysWellShaped) {
+  const auto [straight, mesh, report] = RaiseOntoPlane(0.1);
   EXPECT_EQ(report.num_boundary_edge_nodes, 6);
   EXPECT_EQ(report.num_moved, 3);
   EXPECT_EQ(report.num_kept, 3);
@@ -67,22 +76,18 @@ TEST(CurvedBoundary, MovesOntoAFlatSurfaceWhereTheTetStaysWellShaped) {
 }
 
 TEST(CurvedBoundary, RefusesMovesThatBendTheTetPastAFifthOfItsDeterminant) {
-  Matrix3Xd vertices_m;
-  Matrix3Xi triangles;
-  MakePlane(0.22, &vertices_m, &triangles);
-  TetMesh mesh = MakeUnitQuadraticTet();
-  const TetMesh straight = mesh;
+  const TetMesh straight = MakeUnitQuadraticTet();
   // The move alone is one FindQuadraticTetProblem accepts: det 1 − 4 · 0.22 = 0.12 > 0.
   TetMesh raised = straight;
   raised.rest_positions_m.col(raised.edge_nodes(0, 0)).z() = 0.22;
   P2Nodes X_m;
   for (int a = 0; a < kP2Nodes; ++a) X_m.col(a) = raised.rest_positions_m.col(raised.node(a, 0));
   EXPECT_FALSE(FindQuadraticTetProblem(X_m).has_value());
-  const CurvedBoundaryReport report =
-      MoveBoundaryEdgeNodesOntoSurface(vertices_m, triangles, &mesh);
-  EXPECT_EQ(report.num_moved, 1);
-  EXPECT_EQ(report.num_kept, 5);
-  ExpectEdgeNodesRaised(mesh, straight, 0.22, [](int k) { return k == FindP2Edge(1, 2); });
+  const RaisedTet raised_onto_plane = RaiseOntoPlane(0.22);
+  EXPECT_EQ(raised_onto_plane.report.num_moved, 1);
+  EXPECT_EQ(raised_onto_plane.report.num_kept, 5);
+  ExpectEdgeNodesRaised(raised_onto_plane.mesh, straight, 0.22,
+                        [](int k) { return k == FindP2Edge(1, 2); });
 }
 
 }  // namespace
