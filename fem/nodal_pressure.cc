@@ -25,6 +25,9 @@ void EnableNodalPressure(Model* model) {
     if (nodal.node_volume_m3[n] > 0.0) nodal.node_bulk_Pa[n] /= nodal.node_volume_m3[n];
 }
 
+namespace {
+
+// The volumetric strain θ_e = tr(R_eᵀ F_e − I) of tet t.
 double CalcVolumetricStrain(const Model& model, const Eigen::VectorXd& x_m,
                             const Eigen::Matrix3d& rotation, int t) {
   const Eigen::Matrix<double, 3, 4>& b = model.tet_rest[t].shape_gradients_1_m;
@@ -33,8 +36,6 @@ double CalcVolumetricStrain(const Model& model, const Eigen::VectorXd& x_m,
     trace += (rotation * b.col(a)).dot(x_m.segment<3>(3 * model.mesh.tets(a, t)));
   return trace;
 }
-
-namespace {
 
 // θ_n = Σ_{e∋n} (V_e/4) θ_e / V_n for every node.
 void CalcNodalStrains(const Model& model, const Eigen::VectorXd& x_m,

@@ -47,8 +47,4 @@ void CalcAveragedNodalPressures(const Model& model, const Eigen::VectorXd& x_m,
 double CalcNodalVolumetricEnergy(const Model& model, const Eigen::VectorXd& x_m,
                                  const std::vector<Eigen::Matrix3d>& rotations);
 
-// The volumetric strain θ_e = tr(R_eᵀ F_e − I) of tet t.
-double CalcVolumetricStrain(const Model& model, const Eigen::VectorXd& x_m,
-                            const Eigen::Matrix3d& rotation, int t);
-
 }  // namespace hapsim::fem
