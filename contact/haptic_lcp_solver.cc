@@ -118,7 +118,6 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
         held(max_rows_in, 0),
         refused(max_rows_in, 0),
         active_before_rebase(max_rows_in, 0),
-        frame_active(max_rows_in, 0),
         frame_impulse_N(max_rows_in),
         r(max_rows_in),
         x(max_rows_in),
@@ -147,11 +146,12 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   void StartFromGuess();
   bool ReleaseRowsPullingPastTheirPush(double dt_s);
   void RefreshTargets();
+  // The frame's impulses as the cached rows gave them: the held set and each held row's release
+  // threshold (ReleaseRowsPullingPastTheirPush) come from them.
   bool HoldsFrameSet(const ContactRows& rows) const {
     const bool frame_set = rows.lambda_frame_N.size() == n;
     for (int i = 0; i < n; ++i)
-      if (static_cast<bool>(frame_active[i]) != (frame_set && rows.lambda_frame_N[i] > 0.0))
-        return false;
+      if (frame_impulse_N[i] != (frame_set ? rows.lambda_frame_N[i] : 0.0)) return false;
     return true;
   }
   void ForwardSolveInPlace(int first, Eigen::Ref<Eigen::VectorXd> v) const;
@@ -211,10 +211,10 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
   // factorisation refusing them, round-off), and the active set kept across such a refactorisation.
   std::vector<std::uint8_t> refused;
   std::vector<std::uint8_t> active_before_rebase;
-  // (max) the frame's active rows as the rows last gave them (λ_frame > 0): unstamped rows are
-  // the cached ones only if these match too, for they choose the held set.
-  std::vector<std::uint8_t> frame_active;
-  Eigen::VectorXd frame_impulse_N;  // (max) λ_frame per row (0 without the frame's impulses)
+  // (max) λ_frame per row as the rows last gave it (0 without the frame's impulses; > 0: the
+  // frame's active rows): unstamped rows are the cached ones only if these match too, for they
+  // choose the held set and its release thresholds.
+  Eigen::VectorXd frame_impulse_N;
   Eigen::VectorXd r, x, z, w, column;
   Eigen::VectorXd target;  // (max) this step's body_rhs (rows.body_rhs, or Solve's targets)
   // Border system of one solve.
@@ -297,9 +297,8 @@ void HapticLcpSolver::Workspace::GuessActiveSet(const ContactRows& rows,
   const bool frame_set = rows.lambda_frame_N.size() == n;
   num_held = 0;
   for (int i = 0; i < n; ++i) {
-    frame_active[i] = frame_set && rows.lambda_frame_N[i] > 0.0;
     frame_impulse_N[i] = frame_set ? rows.lambda_frame_N[i] : 0.0;
-    held[i] = hold && frame_active[i];
+    held[i] = hold && frame_impulse_N[i] > 0.0;
     num_held += held[i];
     active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : push[i] > 0.0;
   }
