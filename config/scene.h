@@ -106,6 +106,17 @@
 //     mass_kg: 0.05                    # exactly one of mass_kg / density_kg_m3, > 0
 //     position_m: [0, 0, 0.09]         # initial centre of mass, world; default 0
 //     rotation_vector_rad: [0, 0, 0]   # initial orientation q_WT = exp(axis · angle); default 0
+//     grasp:                           # optional: the tool is a grasper (contact/tissue_grasp.h);
+//                                      # the device's button closes its jaws on the body's surface
+//                                      # points inside them and opens them again. Needs a body,
+//                                      # normal rows (contact.law unilateral or equality), no
+//                                      # `collision:` surface, and a mode that renders the
+//                                      # frame's rows or coupling (hybrid, linear, lcp, coupling,
+//                                      # reference)
+//       jaw_center_m: [0, 0, -0.01]    # the jaws: a ball in the tool frame, centre, m
+//       jaw_radius_m: 0.004            # and radius, m (> 0)
+//       max_force_N: 3                 # grip force per held point past which it slips, N (> 0);
+//                                      # default: never slips
 //   coupling:                          # required with a tool: the virtual coupling, ≥ 0 each
 //     {k_lin_N_m: 2000, b_lin_N_s_m: 5, k_ang_N_m_rad: 2, b_ang_N_m_s_rad: 0.01}
 //   contact:                           # optional (with a tool), defaults as shown
@@ -302,6 +313,7 @@ struct ToolScene {
   std::string mesh_file;    // ToolShape::Kind::kMesh: the file read (resolved path)
   SourceLocation location;  // the `tool` section
   bool point = false;       // shape `point`: a 3-DOF point (a sphere of its radius in the frame)
+  std::optional<contact::GraspOptions> grasp;  // `grasp`: the tool is a grasper
 };
 
 // Tool–body contact law: contact::ContactLaw (equality, unilateral, friction).
@@ -363,6 +375,9 @@ std::optional<contact::ComplianceMethod> ParseComplianceMethod(const std::string
 // mode given on the command line by ResolveHapticMode.
 std::optional<std::string> WhyModelComplianceStepRefused(contact::ModelComplianceStep step,
                                                          HapticMode mode);
+// Why `mode` cannot render a grasper's bilateral rows, or nullopt if it can: the geometric and
+// god-object modes search their own contacts at 1 kHz and would not feel the held tissue.
+std::optional<std::string> WhyGraspRefused(HapticMode mode);
 
 struct Scene {
   std::string file;  // the path it was loaded from

@@ -23,6 +23,7 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   options.lcp_max_rows = scene.haptic.lcp_max_rows;
   for (const RigidObjectScene& rigid : scene.rigid_objects)
     options.rigid_objects.push_back(rigid.object);
+  if (scene.tool) options.grasp = scene.tool->grasp;
   return options;
 }
 
@@ -59,6 +60,9 @@ device::HapticMode ResolveHapticMode(const Scene& scene, const std::string& opti
   if (const std::optional<std::string> why =
           WhyModelComplianceStepRefused(scene.contact.model_compliance_step, mode))
     throw InputError(scene.file, 0, "contact.model_compliance_step", *why);
+  if (scene.tool && scene.tool->grasp)
+    if (const std::optional<std::string> why = WhyGraspRefused(mode))
+      throw InputError(file, 0, key, *why + " (the tool has a grasp)");
   return mode;
 }
 

@@ -145,7 +145,8 @@ ToolShape ReadToolShape(const YamlMap& map, const std::string& base_dir, std::st
 }
 
 ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
-  map.CheckKeys({"shape", "mass_kg", "density_kg_m3", "position_m", "rotation_vector_rad"});
+  map.CheckKeys(
+      {"shape", "mass_kg", "density_kg_m3", "position_m", "rotation_vector_rad", "grasp"});
   ToolScene tool;
   tool.location = LocationOf(map);
   const YamlMap shape_map = map.GetMap("shape");
@@ -176,6 +177,14 @@ ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
   tool.initial_state.x_W_m = map.GetVector3Or("position_m", Eigen::Vector3d::Zero());
   tool.initial_state.q_WT =
       CalcQuaternionExp(map.GetVector3Or("rotation_vector_rad", Eigen::Vector3d::Zero()));
+  if (const std::optional<YamlMap> grasp = map.FindMap("grasp")) {
+    grasp->CheckKeys({"jaw_center_m", "jaw_radius_m", "max_force_N"});
+    contact::GraspOptions options;
+    options.jaw_center_T_m = grasp->GetVector3("jaw_center_m");
+    options.jaw_radius_m = grasp->GetDouble("jaw_radius_m", Above(0.0));
+    options.max_force_N = grasp->GetDoubleOr("max_force_N", options.max_force_N, Above(0.0));
+    tool.grasp = options;
+  }
   return tool;
 }
 
@@ -446,6 +455,27 @@ std::vector<Waypoint> ReadWaypoints(const YamlMap& map, const std::string& key, 
 
 namespace {
 
+// What tool.grasp needs (config/scene.h): a body to hold, normal rows, contacts on the tets'
+// boundary (a grasp takes boundary nodes, and an embedded collision surface's contacts around
+// them would not be dropped), and a mode that renders the frame's rows or coupling.
+void CheckGrasp(const Scene& scene, const YamlMap& root) {
+  const YamlMap grasp = root.GetMap("tool").GetMap("grasp");
+  if (!scene.body) grasp.Fail("a grasp needs a deformable body to hold; the scene has none");
+  if (scene.contact.law == ContactLaw::kFriction)
+    grasp.Fail(
+        "a grasp's rows are normal rows: contact.law must be unilateral or equality, not "
+        "friction");
+  if (scene.body->collision_surface)
+    grasp.Fail("a grasp holds the tets' boundary nodes; " + scene.body_name +
+               " has a `collision:` surface, which is not supported with a grasp yet");
+  for (const DeformableObjectScene& more : scene.more_bodies)
+    if (more.body.collision_surface)
+      grasp.Fail("a grasp holds the tets' boundary nodes; " + more.name +
+                 " has a `collision:` surface, which is not supported with a grasp yet");
+  if (const std::optional<std::string> why = WhyGraspRefused(scene.haptic.mode))
+    root.GetMap("haptic").FailKey("mode", *why);
+}
+
 TaskScene ReadTask(const YamlMap& map, double duration_s) {
   map.CheckKeys({"targets", "force_band_N", "hold_s", "force_limit_N", "time_limit_s"});
   TaskScene task;
@@ -505,6 +535,7 @@ void ReadSimulationSections(const YamlMap& root, const YamlMap& time, const std:
   if (const std::optional<std::string> why = WhyModelComplianceStepRefused(
           scene->contact.model_compliance_step, scene->haptic.mode))
     root.GetMap("contact").FailKey("model_compliance_step", *why);
+  if (scene->tool->grasp) CheckGrasp(*scene, root);
   const YamlMap device = root.GetMap("device");
   device.CheckKeys({"trajectory", "hand"});
   scene->trajectory = ReadWaypoints(device, "trajectory", /*with_button=*/true);
@@ -527,6 +558,13 @@ std::optional<std::string> WhyModelComplianceStepRefused(contact::ModelComplianc
     return std::nullopt;
   return std::string("'haptic' sets the linear contact model's compliance, which the ") +
          device::ToString(mode) + " mode does not use (hybrid, linear, lcp, reference)";
+}
+
+std::optional<std::string> WhyGraspRefused(HapticMode mode) {
+  if (!device::IsGeometricMode(mode) && mode != HapticMode::kGodObject) return std::nullopt;
+  return std::string("the ") + device::ToString(mode) +
+         " mode finds its own contacts at 1 kHz and cannot render a grasp's rows (hybrid, "
+         "linear, lcp, coupling, reference can)";
 }
 
 std::optional<HapticMode> ParseHapticMode(const std::string& name) {

@@ -8,7 +8,8 @@
 //   φ < 0:  b = −β φ/Δt position stabilisation: a fraction β of the penetration is undone;
 // and, with restitution e, for a contact closing at c⁻ < 0 whose gap closes within the frame
 // (φ ≤ −c⁻ Δt), b = max(b, −e c⁻): the separating velocity after impact is e times the approach
-// velocity (Newton's impact law, the approach of papers/001).
+// velocity (Newton's impact law, the approach of papers/001). A grasp row (Contact::bilateral)
+// takes b = −β φ/Δt whatever φ's sign, and no restitution.
 
 #include <Eigen/Core>
 #include <vector>
@@ -31,8 +32,9 @@ Eigen::VectorXd CalcConstraintTargets(const std::vector<Contact>& contacts,
                                       double dt_s, const ResponseOptions& options);
 
 // Equality constraints hold the bodies together, so only contacts that collide within the frame
-// (predicted gap φ + Δt c_free below `margin_m`) may become constraints; unilateral and friction
-// constraints may keep every candidate (an inactive one gets λ = 0). Returns the kept indices.
+// (predicted gap φ + Δt c_free below `margin_m`) may become constraints, and grasp rows, which
+// hold them together by design; unilateral and friction constraints may keep every candidate (an
+// inactive one gets λ = 0). Returns the kept indices.
 std::vector<int> SelectCollidingContacts(const std::vector<Contact>& contacts,
                                          const Eigen::VectorXd& c_free, int rows_per_contact,
                                          double dt_s, double margin_m);

@@ -17,6 +17,10 @@
 // side: the object has no degrees of freedom. An object the tool holds (grabbed) is part of the
 // tool: its contacts have on_tool = true, rigid_object its index, and body nodes if they are
 // with the body.
+// A grasp row (contact/tissue_grasp.h) is a contact too: a body point held by the tool's jaws,
+// its normal one of the tool frame's axes and its gap the point's offset from where the jaws
+// took it along that axis. It is bilateral: held at c = b with λ of either sign (the tissue
+// pulls), never dropped by the unilateral law.
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -54,6 +58,7 @@ struct Contact {
   std::array<int, 3> surface_points = {-1, -1, -1};
   bool on_tool = true;    // false: a body node against a rigid object
   int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none
+  bool bilateral = false;  // a grasp row: an equality whatever the law, λ of either sign
 
   void SetBodyNodes(std::initializer_list<int> body_nodes,
                     std::initializer_list<double> body_weights) {
@@ -71,9 +76,11 @@ enum class ContactKind : std::int8_t {
   kToolObject = 1,      // the tool, or the object it holds, and a rigid object
   kBodyObject = 2,      // a body node and a rigid object
   kHeldObjectBody = 3,  // a body node and the object the tool holds
+  kGrasp = 4,           // a body point held by the tool's jaws (one row per tool axis)
 };
 
 inline ContactKind KindOf(const Contact& contact) {
+  if (contact.bilateral) return ContactKind::kGrasp;
   if (!contact.on_tool) return ContactKind::kBodyObject;
   if (contact.rigid_object < 0) return ContactKind::kToolBody;
   return contact.nodes[0] >= 0 ? ContactKind::kHeldObjectBody : ContactKind::kToolObject;

@@ -26,12 +26,16 @@ ContactSolveReport SolveEquality(const Eigen::MatrixXd& W, const Eigen::VectorXd
 
 // Complementarity residual of the normal rows, max_i |min(λ_i, c_i / (Δt W_ii))|, in impulse
 // units, relative to the largest |λ| (or absolute when λ = 0).
+// A bilateral row's only condition is c_i = 0: its term is |c_i / (Δt W_ii)|.
 double CalcNormalResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
-                          int stride, const Eigen::VectorXd& lambda) {
+                          int stride, const Eigen::VectorXd& lambda,
+                          const std::vector<std::uint8_t>* bilateral = nullptr) {
   const Eigen::VectorXd c = dt_s * (W * lambda) - rhs;  // by columns: W is column-major
   double residual = 0.0;
   for (Eigen::Index row = 0; row < lambda.size(); row += stride) {
-    residual = std::max(residual, std::abs(std::min(lambda[row], c[row] / (dt_s * W(row, row)))));
+    const double slack = c[row] / (dt_s * W(row, row));
+    const bool equality = bilateral && (*bilateral)[static_cast<size_t>(row)];
+    residual = std::max(residual, std::abs(equality ? slack : std::min(lambda[row], slack)));
   }
   const double scale = lambda.lpNorm<Eigen::Infinity>();
   return scale > 0.0 ? residual / scale : residual;
@@ -132,11 +136,15 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
 // with a temporary print, 2026-11-25).
 class FreeSet {
  public:
-  explicit FreeSet(const Eigen::MatrixXd& M)
-      : M_(M), LU_(M.rows(), M.rows()), is_free_(M.rows(), false) {}
+  // Rows marked in `bilateral` (may be null: none) are equalities: they never leave.
+  FreeSet(const Eigen::MatrixXd& M, const std::vector<std::uint8_t>* bilateral)
+      : M_(M), LU_(M.rows(), M.rows()), is_free_(M.rows(), false), bilateral_(bilateral) {}
 
   const std::vector<Eigen::Index>& rows() const { return rows_; }
   bool contains(Eigen::Index row) const { return is_free_[row]; }
+  bool is_bilateral(Eigen::Index row) const {
+    return bilateral_ != nullptr && (*bilateral_)[static_cast<size_t>(row)] != 0;
+  }
 
   void Add(Eigen::Index row) {
     factor_holds_ = factor_holds_ && Append(row);
@@ -144,11 +152,11 @@ class FreeSet {
     is_free_[row] = true;
   }
 
-  // Rows whose λ is no longer positive leave (their λ set to exactly 0).
+  // Unilateral rows whose λ is no longer positive leave (their λ set to exactly 0).
   void RemoveNonPositive(Eigen::VectorXd* lambda) {
     std::vector<Eigen::Index> kept;
     for (Eigen::Index row : rows_) {
-      if ((*lambda)[row] > 0.0) {
+      if ((*lambda)[row] > 0.0 || is_bilateral(row)) {
         kept.push_back(row);
       } else {
         (*lambda)[row] = 0.0;
@@ -199,18 +207,21 @@ class FreeSet {
   Eigen::MatrixXd LU_;  // L below the diagonal (unit diagonal implied), U on and above it
   std::vector<Eigen::Index> rows_;
   std::vector<bool> is_free_;
+  const std::vector<std::uint8_t>* bilateral_;
   bool factor_holds_ = true;  // LU_ is the factor of M over rows_ (else: pivoted LU per solve)
 };
 
 // Moves the free rows' λ from where they are toward z (the equality solution on the free set),
-// as far as every λ stays ≥ 0 (the ratio test). Returns false if a row hit zero on the way.
-bool StepToward(const Eigen::VectorXd& z, const std::vector<Eigen::Index>& free_rows,
-                Eigen::VectorXd* lambda) {
+// as far as every unilateral λ stays ≥ 0 (the ratio test; a bilateral row's λ has no sign).
+// Returns false if a row hit zero on the way.
+bool StepToward(const Eigen::VectorXd& z, const FreeSet& free_set, Eigen::VectorXd* lambda) {
+  const std::vector<Eigen::Index>& free_rows = free_set.rows();
   const Eigen::Index k = z.size();
   double step = 1.0;
   Eigen::Index limiting = -1;
   for (Eigen::Index a = 0; a < k; ++a) {
     const double current = (*lambda)[free_rows[a]];
+    if (free_set.is_bilateral(free_rows[a])) continue;
     if (z[a] <= 0.0 && current / (current - z[a]) < step) {
       step = current / (current - z[a]);
       limiting = a;
@@ -236,8 +247,13 @@ bool StepToward(const Eigen::VectorXd& z, const std::vector<Eigen::Index>& free_
 // step from there lowers the objective as from zero, so it ends at the LCP's solution as from
 // zero (to the slack tolerance; see contact_solver.h on redundant rows). A press then enters its
 // loaded rows in one go instead of one an iteration.
+// Bilateral rows (a grasp's) make it the mixed problem with those λ unconstrained, still a convex
+// QP: they are free from the start, whatever their λ, never leave and take no part in the ratio
+// test, as equality constraints in an active-set QP method.
 ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
-                                  const ContactSolveOptions& options, Eigen::VectorXd* lambda) {
+                                  const ContactSolveOptions& options,
+                                  const std::vector<std::uint8_t>* bilateral,
+                                  Eigen::VectorXd* lambda) {
   const Eigen::Index n = rhs.size();
   // A relative 1e-10 on the diagonal keeps the free-set systems non-singular when contacts are
   // redundant (same body point twice, many on a nearly rigid part): without it the solves return
@@ -245,9 +261,9 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
   Eigen::MatrixXd M = dt_s * W;
   M.diagonal().array() += 1e-10 * M.diagonal().cwiseAbs().maxCoeff();
   const double tolerance = options.tolerance * std::max(1.0, rhs.lpNorm<Eigen::Infinity>());
-  FreeSet free_set(M);
+  FreeSet free_set(M, bilateral);
   for (Eigen::Index i = 0; i < n; ++i) {
-    if ((*lambda)[i] > 0.0)
+    if ((*lambda)[i] > 0.0 || free_set.is_bilateral(i))
       free_set.Add(i);
     else
       (*lambda)[i] = 0.0;
@@ -256,7 +272,7 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
   // slack: only free rows carry λ, so O(n k), not O(n²).
   Eigen::VectorXd w(n);
   const auto solve_free_set = [&] {
-    while (!free_set.rows().empty() && !StepToward(free_set.Solve(rhs), free_set.rows(), lambda))
+    while (!free_set.rows().empty() && !StepToward(free_set.Solve(rhs), free_set, lambda))
       free_set.RemoveNonPositive(lambda);
     w = -rhs;  // w = Mλ − rhs
     for (Eigen::Index row : free_set.rows()) w += (*lambda)[row] * M.col(row);
@@ -272,7 +288,7 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
     free_set.Add(entering);
     solve_free_set();
   }
-  report.residual = CalcNormalResidual(W, rhs, dt_s, 1, *lambda);
+  report.residual = CalcNormalResidual(W, rhs, dt_s, 1, *lambda, bilateral);
   report.converged = report.residual <= std::max(options.tolerance, 1e-9);
   return report;
 }
@@ -294,9 +310,17 @@ const char* ToString(ContactLaw law) {
 ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
                                         double dt_s, int rows_per_contact,
                                         const ContactSolveOptions& options, Eigen::VectorXd* lambda,
-                                        const Eigen::VectorXd* friction_per_contact) {
+                                        const Eigen::VectorXd* friction_per_contact,
+                                        const std::vector<std::uint8_t>* bilateral_rows) {
   if (W.rows() != rhs.size() || W.cols() != rhs.size())
     throw std::invalid_argument("W must be square with one row per constraint row");
+  if (bilateral_rows && static_cast<Eigen::Index>(bilateral_rows->size()) != rhs.size())
+    throw std::invalid_argument("bilateral_rows needs one entry per constraint row");
+  const bool any_bilateral =
+      bilateral_rows && std::any_of(bilateral_rows->begin(), bilateral_rows->end(),
+                                    [](std::uint8_t b) { return b != 0; });
+  if (any_bilateral && options.law == ContactLaw::kFriction)
+    throw std::invalid_argument("bilateral rows are not supported with the friction law");
   if (friction_per_contact && friction_per_contact->size() * rows_per_contact != rhs.size())
     throw std::invalid_argument("friction_per_contact needs one μ per contact");
   if (lambda->size() != rhs.size()) lambda->setZero(rhs.size());
@@ -307,7 +331,8 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
     case ContactLaw::kUnilateral:
       if (rows_per_contact != 1)
         throw std::invalid_argument("unilateral contact uses normal rows only");
-      return SolveActiveSet(W, rhs, dt_s, options, lambda);
+      return SolveActiveSet(W, rhs, dt_s, options, any_bilateral ? bilateral_rows : nullptr,
+                            lambda);
     case ContactLaw::kFriction:
       if (rows_per_contact != 3) throw std::invalid_argument("friction needs 3 rows per contact");
       if (options.friction_method == FrictionMethod::kDenseGaussSeidel)

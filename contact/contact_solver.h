@@ -14,6 +14,8 @@
 // = b − c_free, with b the position stabilisation −β φ/Δt plus any restitution target.
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <vector>
 
 #include "contact/contact_jacobian.h"
 
@@ -54,10 +56,14 @@ struct ContactSolveReport {
 // before it, through the start, within those bounds; friction may have several solutions.
 // rows_per_contact must be 3 for kFriction. friction_per_contact, if given (kFriction; one μ ≥ 0
 // per contact), replaces options.friction_coefficient contact by contact (a rigid object's own μ).
+// bilateral_rows, if given (one entry per row, non-zero: bilateral), marks equality rows among
+// unilateral ones (a grasp's, contact/tissue_grasp.h): c_i = 0 with λ_i of either sign, the
+// mixed LCP. kEquality holds every row so anyway; kFriction refuses them (std::invalid_argument).
 ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
                                         double dt_s, int rows_per_contact,
                                         const ContactSolveOptions& options, Eigen::VectorXd* lambda,
-                                        const Eigen::VectorXd* friction_per_contact = nullptr);
+                                        const Eigen::VectorXd* friction_per_contact = nullptr,
+                                        const std::vector<std::uint8_t>* bilateral_rows = nullptr);
 
 // The pieces of the friction law both friction solvers (the frame's, above, and the haptic
 // step's HapticFrictionSolver) share, so that they have one fixed point:

@@ -19,7 +19,9 @@ ContactRowCache::ContactRowCache(int max_rows)
 
 bool ContactRowCache::Holds(const ContactRows& rows) const {
   const int m = rows.num_rows();
-  if (m != n || rows.num_coupled_rows() != coupled || rows.rows_per_contact != per) return false;
+  if (m != n || rows.num_coupled_rows() != coupled || rows.rows_per_contact != per ||
+      rows.num_bilateral_rows != bilateral)
+    return false;
   if (rows.stamp != 0) return rows.stamp == stamp;
   // Empty rows have null data(), which memcmp must not be given even for 0 bytes.
   const auto same = [](const double* a, const double* b, Eigen::Index size) {
@@ -46,6 +48,7 @@ bool ContactRowCache::Take(const ContactRows& rows) {
   n = rows.num_rows();
   coupled = rows.num_coupled_rows();
   per = rows.rows_per_contact;
+  bilateral = rows.num_bilateral_rows;
   stamp = rows.stamp;
   num_mu = static_cast<int>(rows.friction_coefficient.size());
   body_rhs.head(n) = rows.body_rhs;
@@ -174,6 +177,9 @@ bool HasConsistentShape(const ContactRows& rows) {
     return false;
   if (rows.num_uncoupled_rows < 0 || rows.num_uncoupled_rows > n ||
       rows.num_uncoupled_rows % std::max(rows.rows_per_contact, 1) != 0)
+    return false;
+  if (rows.num_bilateral_rows < 0 || rows.num_bilateral_rows > rows.num_coupled_rows() ||
+      (rows.num_bilateral_rows > 0 && rows.rows_per_contact != 1))
     return false;
   if (rows.rows_per_contact == 1) return rows.friction_coefficient.size() == 0;
   return rows.rows_per_contact == 3 && rows.friction_coefficient.size() * 3 == n &&

@@ -48,6 +48,10 @@ struct ContactRows {
   // this way (issue 13 item 5): every contact travels, but its coupling costs O(n) instead of
   // O(n²) on the wire and in each haptic step. 0: every row may couple.
   int num_uncoupled_rows = 0;
+  // The first num_bilateral_rows rows (coupled ones; normal rows only) are a grasp's
+  // (contact/tissue_grasp.h): bilateral, held as equalities in every mode, their λ of either
+  // sign (lambda_frame_N too), never released. 0: every row is a unilateral contact.
+  int num_bilateral_rows = 0;
   // Identity for the solvers' caches. 0 (the default) promises nothing: a solver compares the
   // rows it is given with its copy bitwise, O(n²) (~65 µs at 600 rows, about half of a
   // one-sweep friction step there). Rows stamped by StampNewContactRows promise that rows with
@@ -97,6 +101,7 @@ struct ContactRowCache {
   int n = -1;               // rows cached; −1 before the first, or after a failed Take
   int coupled = 0;          // of them, the leading rows that may couple to others
   int per = 1;              // rows per contact
+  int bilateral = 0;        // leading bilateral rows (ContactRows::num_bilateral_rows)
   std::uint64_t stamp = 0;  // their ContactRows::stamp
   // (max × max) W_body: its rows × rows block where they couple, each uncoupled contact's own
   // block, both full (upper entries too); the rest is not written (BodyLower).
@@ -110,7 +115,8 @@ struct ContactRowCache {
 // The checks both haptic solvers make of rows they are handed: W_body square of num_rows,
 // body_rhs, J_w and lambda_frame_N and the three gap vectors (if given) of num_rows rows,
 // friction_coefficient one finite μ ≥ 0 per contact with rows_per_contact 3 (a whole number of
-// contacts) and empty with 1, num_uncoupled_rows whole contacts of num_rows. (The other entries'
+// contacts) and empty with 1, num_uncoupled_rows whole contacts of num_rows, num_bilateral_rows
+// within the coupled rows (and 0 with friction rows). (The other entries'
 // finiteness and W_body's symmetry are checked where a solver copies them.)
 bool HasConsistentShape(const ContactRows& rows);
 

@@ -298,9 +298,10 @@ void HapticLcpSolver::Workspace::GuessActiveSet(const ContactRows& rows,
   num_held = 0;
   for (int i = 0; i < n; ++i) {
     frame_impulse_N[i] = frame_set ? rows.lambda_frame_N[i] : 0.0;
-    held[i] = hold && frame_impulse_N[i] > 0.0;
+    const bool grasp_row = i < bilateral;
+    held[i] = grasp_row || (hold && frame_impulse_N[i] > 0.0);
     num_held += held[i];
-    active[i] = frame_set ? rows.lambda_frame_N[i] > 0.0 : push[i] > 0.0;
+    active[i] = grasp_row || (frame_set ? rows.lambda_frame_N[i] > 0.0 : push[i] > 0.0);
   }
   rebase_pending = true;
 }
@@ -311,8 +312,17 @@ void HapticLcpSolver::Workspace::GuessActiveSet(const ContactRows& rows,
 // equality solution to hold: these rows are then all solved unilaterally, as the lcp mode solves
 // them, until new rows come (which keeps the tool from passing through, unlike a fall-back to the
 // linear model, and costs no retry at the next steps).
+//
+// A grasp's rows (bilateral) are then tried on their own: they hold the tissue, while the frame's
+// held contacts are the ones that may be redundant.
 void HapticLcpSolver::Workspace::StartFromGuess() {
   if (Rebase() || num_held == 0) return;
+  std::fill(held.begin(), held.begin() + n, std::uint8_t{0});
+  num_held = 0;
+  if (bilateral == 0) return;
+  for (int i = 0; i < bilateral; ++i) held[i] = active[i] = 1;
+  num_held = bilateral;
+  if (Rebase()) return;
   std::fill(held.begin(), held.begin() + n, std::uint8_t{0});
   num_held = 0;
 }
@@ -331,7 +341,7 @@ void HapticLcpSolver::Workspace::StartFromGuess() {
 bool HapticLcpSolver::Workspace::ReleaseRowsPullingPastTheirPush(double dt_s) {
   bool released = false;
   for (int i = 0; i < n; ++i) {
-    if (!held[i] || !(x[i] < -dt_s * frame_impulse_N[i])) continue;
+    if (!held[i] || i < bilateral || !(x[i] < -dt_s * frame_impulse_N[i])) continue;
     held[i] = 0;
     --num_held;
     released = true;

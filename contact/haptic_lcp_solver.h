@@ -90,6 +90,10 @@ namespace hapsim::contact {
 // unilaterally, as in the lcp mode, until new rows come. (The linear model factorises such a W by
 // a complete orthogonal decomposition; the fall-back to it would lose the rows a fast tool meets.)
 //
+// A grasp's rows (ContactRows::num_bilateral_rows, the leading rows; contact/tissue_grasp.h) are
+// held in every mode, with or without hold_frame_contacts, and never released: the bilateral
+// rows of the mixed LCP above, whose pull the device feels between frames.
+//
 // Friction rows (ContactRows::rows_per_contact 3, the friction law) go to a HapticFrictionSolver
 // the solver owns when built with friction_sweeps > 0 (its sweep budget per step); the counters
 // below then describe that solve (iterations are sweeps, no factorisations).

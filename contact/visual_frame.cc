@@ -66,7 +66,7 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
                                                            stepper_->external_force_N());
       haptic_compliance_ = std::make_unique<fem::WarpedCompliance>(*body, *haptic_stepper_);
     }
-    if (!options.rigid_objects.empty()) {
+    if (!options.rigid_objects.empty() || options.grasp) {
       const Matrix3Xi surface = fem::ExtractBoundarySurface(body->mesh);
       surface_nodes_.assign(surface.data(), surface.data() + surface.size());
       std::sort(surface_nodes_.begin(), surface_nodes_.end());
@@ -77,6 +77,14 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
                                           [&](int n) { return body->dof_is_fixed[3 * n] != 0; }),
                            surface_nodes_.end());
     }
+    if (options.grasp) {
+      if (rows_per_contact_ != 1)
+        throw std::invalid_argument(
+            "VisualFrame: a grasp needs normal rows (not the friction law)");
+      grasp_ = std::make_unique<TissueGrasp>(*options.grasp, surface_nodes_, body->num_nodes());
+    }
+  } else if (options.grasp) {
+    throw std::invalid_argument("VisualFrame: a grasp needs a deformable body to hold");
   }
 }
 
@@ -101,8 +109,13 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   }
   stats.free_fem_s = stage.Lap();
   // 4. Collision detection, swept from the start to the free configuration, with the rigid
-  //    objects placed for the frame.
-  MoveRigidObjects(device, *tool);
+  //    objects placed for the frame and the grasper's jaws opened or closed (the button is read
+  //    once a frame, at its start).
+  const bool button_down = (device.buttons & 1) != 0;
+  const bool pressed = button_down && !button_was_down_;
+  button_was_down_ = button_down;
+  MoveRigidObjects(button_down, pressed, *tool);
+  UpdateGrasp(button_down, pressed, *tool, *body, &stats);
   DetectContacts(*body, *tool);
   stats.num_candidates = static_cast<int>(contacts_.size());
   for (const Contact& contact : contacts_) stats.num_rigid_contacts += contact.rigid_object >= 0;
@@ -116,7 +129,11 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   FinishRigidObjects(*tool);
   stats.num_contacts = static_cast<int>(contacts_.size());
   for (int row = 0; row < lambda_.size(); row += rows_per_contact_)
-    stats.num_active += lambda_[row] > 0.0;
+    stats.num_active += lambda_[row] > 0.0 && !contacts_[row / rows_per_contact_].bilateral;
+  if (grasp_) {
+    stats.num_grasp_slipped = grasp_->LetSlip(contacts_, lambda_);
+    stats.num_grasped = static_cast<int>(grasp_->held_nodes().size());
+  }
   stats.response_s = stage.Lap();
   // 6. Linear contact model for the haptic step, at the post-collision state.
   BuildLinearModel(device, X_WT_start, *tool, haptic_tool ? *haptic_tool : *tool, *body);
@@ -130,8 +147,19 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   return stats;
 }
 
-// Tool against body, then tool against the rigid objects, then body against them: one list, one
-// response.
+void VisualFrame::UpdateGrasp(bool button_down, bool pressed, const ToolState& tool,
+                              const fem::State& body, VisualFrameStats* stats) {
+  if (!grasp_) return;
+  if (!button_down) {
+    grasp_->Open();
+  } else if (pressed) {
+    stats->grasp_closed_now = true;
+    stats->num_grasp_taken = grasp_->Close(CalcPose(tool), body.x_m);
+  }
+}
+
+// Tool against body, then tool against the rigid objects, then body against them, then the
+// grasp's rows: one list, one response.
 void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) {
   ToolState tool_end = tool;
   AdvanceTool(tool_, options_.dt_s, dv_tool_, dL_tool_, &tool_end);
@@ -145,6 +173,10 @@ void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) 
   if (body_ != nullptr)
     rigid_contacts_.AddBodyContacts(surface_nodes_, body.x_m, x_end_m, CalcPose(tool),
                                     CalcPose(tool_end), &contacts_);
+  if (grasp_) {
+    grasp_->DropToolContactsOnHeldPoints(&contacts_);
+    grasp_->AddContacts(CalcPose(tool), body.x_m, &contacts_);
+  }
 }
 
 ContactJacobian VisualFrame::CalcJacobian(const std::vector<Contact>& contacts,
@@ -196,9 +228,12 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
   if (rows_per_contact_ == 3) SetFrictionCoefficients();
   const bool warm = options_.response.solve.law != ContactLaw::kEquality;
   lambda_ = warm ? impulse_start_.Start(contacts_) : Eigen::VectorXd::Zero(num_rows);
-  last_solve_ =
-      SolveContactImpulses(W, b_ - c_free, dt, rows_per_contact_, options_.response.solve, &lambda_,
-                           objects_have_own_friction_ ? &mu_per_contact_ : nullptr);
+  bilateral_rows_.assign(static_cast<size_t>(num_rows), 0);
+  for (size_t i = 0; i < contacts_.size(); ++i)
+    if (contacts_[i].bilateral) bilateral_rows_[rows_per_contact_ * i] = 1;
+  last_solve_ = SolveContactImpulses(
+      W, b_ - c_free, dt, rows_per_contact_, options_.response.solve, &lambda_,
+      objects_have_own_friction_ ? &mu_per_contact_ : nullptr, grasp_ ? &bilateral_rows_ : nullptr);
   if (warm) impulse_start_.Record(contacts_, lambda_);
   stats->solve_s = stage.Lap();
   // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.

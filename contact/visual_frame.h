@@ -21,9 +21,14 @@
 //     as part of the tool until the button is released, where it stays. The button is read once
 //     a frame: a press shorter than a frame may be missed. Frames count from 0 at
 //     construction: Step k is the frame [k Δt, (k + 1) Δt].
+//   The same press closes a grasper's jaws on the body (options.grasp, contact/tissue_grasp.h):
+//     the surface points inside them are held by bilateral rows from that frame on, added to the
+//     frame's contacts after detection, until the button is released or a point's grip force
+//     passes its limit.
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "contact/collision_detection.h"
@@ -33,6 +38,7 @@
 #include "contact/impulse_warm_start.h"
 #include "contact/linear_contact_model.h"
 #include "contact/rigid_objects.h"
+#include "contact/tissue_grasp.h"
 #include "core/rigid_tool.h"
 #include "core/tool_integrator.h"
 #include "core/virtual_coupling.h"
@@ -98,6 +104,9 @@ struct VisualFrameOptions {
   // that every user of the frame (sim, run, the tests) gets them from the one scene mapping
   // (config::MakeVisualFrameOptions).
   std::vector<RigidObject> rigid_objects;
+  // The tool's jaws (scene key tool.grasp), if it is a grasper; needs a body and normal rows
+  // (the unilateral or equality law).
+  std::optional<GraspOptions> grasp;
 };
 
 // Wall time of each stage, seconds, and what the frame found.
@@ -114,6 +123,13 @@ struct VisualFrameStats {
   int num_active = 0;          // constraints with λ > 0
   int num_rigid_contacts = 0;  // of the candidates: tool or body against a rigid object
   int num_sanity_corrections = 0;
+  // The grasper (options.grasp): points held after the frame, taken when the jaws closed at its
+  // start (closing on none is a grasp of nothing, which a caller should say), and let slip at its
+  // end with a grip force past the limit.
+  int num_grasped = 0;
+  int num_grasp_taken = 0;
+  bool grasp_closed_now = false;
+  int num_grasp_slipped = 0;
   double max_penetration_m = 0.0;  // deepest contact node inside the tool after the step, ≥ 0
   // Deepest body node of a body–object contact inside its rigid object after the step, as the
   // sanity pass finds it before moving it out, ≥ 0.
@@ -158,13 +174,20 @@ class VisualFrame {
   int num_objects() const { return rigid_contacts_.num_objects(); }
   const Eigen::Isometry3d& object_pose(int i) const { return rigid_contacts_.pose(i); }
   int selected_object() const { return selected_object_; }
+  // The grasper's jaws (null when the tool is not one).
+  const TissueGrasp* grasp() const { return grasp_.get(); }
   int grabbed_object() const { return rigid_contacts_.grabbed(); }
   const VisualFrameOptions& options() const { return options_; }
 
  private:
   // Stage 4's first part: scripted objects placed at the frame's start with their velocity over
-  // the frame; the device button applied to grabbing.
-  void MoveRigidObjects(const DeviceState& device, const ToolState& tool);
+  // the frame; the device button (down now, and whether it went down at this frame) applied to
+  // grabbing.
+  void MoveRigidObjects(bool button_down, bool pressed, const ToolState& tool);
+  // The button applied to the grasper's jaws: a press closes them on the points inside, a release
+  // opens them.
+  void UpdateGrasp(bool button_down, bool pressed, const ToolState& tool, const fem::State& body,
+                   VisualFrameStats* stats);
   // Per contact, the velocity the objects' own motion adds to the gap's rate along a direction d,
   // as a vector w with c_object = d·w (zero without a moving object); then c_object per row.
   void CalcObjectVelocities();
@@ -231,7 +254,9 @@ class VisualFrame {
   int selected_object_ = -1;
   bool button_was_down_ = false;
   Eigen::Isometry3d X_TO_grabbed_ = Eigen::Isometry3d::Identity();
-  std::vector<int> surface_nodes_;  // the body's surface nodes (body–object contacts)
+  std::vector<int> surface_nodes_;  // the body's free surface nodes (body–object contacts, grasp)
+  std::unique_ptr<TissueGrasp> grasp_;        // options.grasp with a body
+  std::vector<std::uint8_t> bilateral_rows_;  // per row of the frame: a grasp row
   // Frame data, in stage order.
   CouplingWrench wrench_;
   ToolStepSystem tool_system_;

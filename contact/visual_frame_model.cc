@@ -31,7 +31,8 @@ void VisualFrame::MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start,
       contact.n_W = motion.linear() * contact.n_W;
       contact.gap_m -= contact.n_W.dot(contact.p_tool_W_m - p_visual_W_m);  // haptic tool's offset
     }  // a body node on a rigid object: neither moves with the tool
-    const double fraction = contact.gap_m >= 0.0 ? 1.0 : options_.response.stabilization_beta;
+    const double fraction =
+        contact.gap_m >= 0.0 && !contact.bilateral ? 1.0 : options_.response.stabilization_beta;
     (*b)[row] = -fraction * contact.gap_m / options_.dt_s;
   }
   // A moving object is taken to keep its velocity over the next frame: the rows hold
@@ -43,8 +44,9 @@ void VisualFrame::MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start,
 // use the haptic Δt and the coupling at the new tool pose; the body's compliance is the one of
 // the visual step (the paper's choice) or, with ModelComplianceStep::kHaptic, of the haptic step
 // (DESIGN.md §4's open question; docs/RESULTS.md measures both). Only active constraints (λ > 0)
-// enter: an inactive unilateral contact would otherwise act as an equality and pull the tool. The
-// lcp rows take every contact: the 1 kHz solve decides which are active.
+// enter, and the grasp's rows (any λ: they are equalities): an inactive unilateral contact would
+// otherwise act as an equality and pull the tool. The lcp rows take every contact: the 1 kHz
+// solve decides which are active.
 void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                                    const ToolState& visual_tool, const ToolState& tool,
                                    const fem::State& body) {
@@ -55,7 +57,7 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   std::vector<int> active_rows;
   for (size_t i = 0; i < moved.size(); ++i) {
     const int row = rows_per_contact_ * static_cast<int>(i);
-    if (!(lambda_[row] > 0.0)) continue;
+    if (!(lambda_[row] > 0.0) && !moved[i].bilateral) continue;
     active.push_back(moved[i]);
     for (int d = 0; d < rows_per_contact_; ++d) active_rows.push_back(row + d);
   }
@@ -96,7 +98,8 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
 // while λ stays near λ_vis); the tool approaches it at −(J_v,i v + J_ω,i ω). An uncoupled row
 // sees no other contact's λ, so its target leaves the hold-back out too: the frame's force at
 // the other contacts stays in u̇, as if they kept pushing as they did (its own λ_vis is 0: an
-// active contact is coupled). The coupled contacts come first, then the others, the nearest to
+// active contact is coupled). The grasp's rows come first (ContactRows::num_bilateral_rows), then
+// the coupled contacts, then the others, the nearest to
 // engaging first, as many as lcp_max_rows leaves room for. lcp_reach_m_s = 0 couples them all.
 void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
                                     const Eigen::VectorXd& held_m_s, const ToolState& tool,
@@ -106,9 +109,13 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   const Eigen::VectorXd rhs_all = rhs_uncoupled + held_m_s;
   const double reach_m_s = options_.lcp_reach_m_s;
   const Eigen::Vector3d w_W_rad_s = CalcAngularVelocity(tool_, tool);
-  std::vector<size_t> coupled, uncoupled;           // contacts
-  std::vector<double> shortfall_m_s(moved.size());  // approach beyond the present one to engage
+  std::vector<size_t> bilateral, coupled, uncoupled;  // contacts
+  std::vector<double> shortfall_m_s(moved.size());    // approach beyond the present one to engage
   for (size_t i = 0; i < moved.size(); ++i) {
+    if (moved[i].bilateral) {
+      bilateral.push_back(i);
+      continue;
+    }
     const int normal = rows_per_contact_ * static_cast<int>(i);
     const double tool_separating_m_s =
         J_all.J_v.row(normal).dot(tool.v_W_m_s) + J_all.J_w.row(normal).dot(w_W_rad_s);
@@ -121,12 +128,13 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
                    [&](size_t a, size_t b) { return shortfall_m_s[a] < shortfall_m_s[b]; });
   if (options_.lcp_max_rows > 0) {
     const size_t room = static_cast<size_t>(options_.lcp_max_rows / rows_per_contact_);
-    uncoupled.resize(std::min(uncoupled.size(), room - std::min(room, coupled.size())));
+    const size_t taken = bilateral.size() + coupled.size();
+    uncoupled.resize(std::min(uncoupled.size(), room - std::min(room, taken)));
   }
   std::vector<Contact> ordered;
   std::vector<int> rows;
   std::vector<double> mu;
-  for (const std::vector<size_t>* group : {&coupled, &uncoupled}) {
+  for (const std::vector<size_t>* group : {&bilateral, &coupled, &uncoupled}) {
     for (size_t i : *group) {
       ordered.push_back(moved[i]);
       for (int d = 0; d < rows_per_contact_; ++d)
@@ -141,7 +149,8 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   Eigen::VectorXd rhs(static_cast<Eigen::Index>(rows.size()));
   Eigen::VectorXd lambda(rhs.size()), gap_target(rhs.size()), surface_velocity(rhs.size());
   Eigen::VectorXd gap_m = Eigen::VectorXd::Zero(rhs.size());
-  const int num_coupled = rows_per_contact_ * static_cast<int>(coupled.size());  // rows
+  const int num_coupled =
+      rows_per_contact_ * static_cast<int>(bilateral.size() + coupled.size());  // rows
   for (size_t r = 0; r < rows.size(); ++r) {
     rhs[static_cast<Eigen::Index>(r)] =
         static_cast<int>(r) < num_coupled ? rhs_all[rows[r]] : rhs_uncoupled[rows[r]];
@@ -161,6 +170,7 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   contact_rows_.gap_m = gap_m;
   contact_rows_.gap_target_m_s = gap_target;
   contact_rows_.surface_velocity_m_s = surface_velocity;
+  contact_rows_.num_bilateral_rows = rows_per_contact_ * static_cast<int>(bilateral.size());
   StampNewContactRows(&contact_rows_);  // last: the rows are complete
 }
 
@@ -229,6 +239,7 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
   };
   int corrections = 0;
   for (const Contact& contact : contacts_) {
+    if (contact.bilateral) continue;  // a held point sits where the jaws hold it
     if (contact.embedded) {
       corrections += MoveEmbeddedPointOut(contact, body_->dof_is_fixed, options_.sanity_tolerance_m,
                                           surface_of, body);

@@ -6,7 +6,7 @@
 
 namespace hapsim::contact {
 
-void VisualFrame::MoveRigidObjects(const DeviceState& device, const ToolState& tool) {
+void VisualFrame::MoveRigidObjects(bool button_down, bool pressed, const ToolState& tool) {
   const double t_start_s = static_cast<double>(frame_index_) * options_.dt_s;
   const double t_end_s = t_start_s + options_.dt_s;
   object_motion_.assign(rigid_contacts_.num_objects(), ObjectMotion{});
@@ -27,9 +27,6 @@ void VisualFrame::MoveRigidObjects(const DeviceState& device, const ToolState& t
   }
   // Grabbing acts on a press (the button going down), so holding it while touching an object
   // does not pick the object up; releasing lets go, and the object stays where it is.
-  const bool button_down = (device.buttons & 1) != 0;
-  const bool pressed = button_down && !button_was_down_;
-  button_was_down_ = button_down;
   const Eigen::Isometry3d X_WT = CalcPose(tool);
   if (grabbed_object() >= 0 && !button_down) rigid_contacts_.SetGrabbed(-1);
   if (pressed && grabbed_object() < 0 && selected_object_ >= 0) {

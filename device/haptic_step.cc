@@ -51,7 +51,7 @@ bool HapticStep::TracksFreeRows() const {
 // body_rhs: that one assumes the frame's contact force gone, and integrated over a frame it moved
 // the liver's surface millimetres into a resting tool. The held rows keep the frame's target, as
 // the linear contact model does (the solver holds the same rows, λ_frame > 0, or solves one it
-// has released unilaterally with that target).
+// has released unilaterally with that target), and so do a grasp's rows (bilateral).
 void HapticStep::CalcFreeRowTargets() {
   const contact::ContactRows& rows = *rows_;
   const Eigen::Vector3d dx_W_m = tool_state_.x_W_m - rows_linearised_at_.x_W_m;
@@ -59,7 +59,7 @@ void HapticStep::CalcFreeRowTargets() {
   const Eigen::Vector3d theta_W_rad = turn.angle() * turn.axis();
   const double tau_s = steps_on_rows_ * dt_s_;
   for (Eigen::Index i = 0; i < rows.num_rows(); ++i) {
-    if (rows.lambda_frame_N[i] > 0.0) {
+    if (rows.lambda_frame_N[i] > 0.0 || i < rows.num_bilateral_rows) {
       targets_[i] = rows.body_rhs[i];
       continue;
     }

@@ -180,6 +180,13 @@ bool CheckBodyCompliance(const hapsim_lcm::contact_model_t& msg, std::string* er
                         std::to_string(per));
     return false;
   }
+  if (msg.num_bilateral_rows < 0 || msg.num_bilateral_rows > coupled ||
+      (msg.num_bilateral_rows > 0 && per != 1)) {
+    SetError(error, "contact_model_t.num_bilateral_rows: " +
+                        std::to_string(msg.num_bilateral_rows) + ", expected 0 to the " +
+                        std::to_string(coupled) + " coupled rows (normal rows only)");
+    return false;
+  }
   return CheckPackedArray(msg.W_body_lower, msg.num_W_body_lower, PackedRowStart(coupled),
                           "contact_model_t.W_body_lower",
                           "num_coupled_rows (num_coupled_rows + 1) / 2", error) &&
@@ -243,8 +250,8 @@ bool CheckContactModel(const hapsim_lcm::contact_model_t& msg, std::string* erro
 // zero with J_ω,i zero for a row that touches no tool (a body node on a rigid object: its row
 // couples to the tool's only through the body, CalcContactJacobian);
 // W_body is positive semidefinite, so its diagonal is ≥ 0 (symmetry holds by construction: only
-// the lower triangle travels); the frame's normal impulses are ≥ 0 (unilateral contacts push;
-// a tangential one has either sign).
+// the lower triangle travels); the frame's normal impulses are ≥ 0 but a grasp's (unilateral
+// contacts push; a tangential one has either sign).
 bool CheckContactRowRanges(const hapsim_lcm::contact_model_t& msg, std::string* error) {
   constexpr double kUnitTolerance = 1e-6;
   for (int i = 0; i < msg.num_rows; ++i) {
@@ -266,7 +273,8 @@ bool CheckContactRowRanges(const hapsim_lcm::contact_model_t& msg, std::string* 
                    " (W_body must be positive semidefinite)");
       return false;
     }
-    if (i % std::max<int>(msg.rows_per_contact, 1) == 0 && msg.lambda_frame_N[i] < 0.0) {
+    if (i % std::max<int>(msg.rows_per_contact, 1) == 0 && i >= msg.num_bilateral_rows &&
+        msg.lambda_frame_N[i] < 0.0) {
       SetError(error, "contact_model_t.lambda_frame_N[" + std::to_string(i) + "]: negative");
       return false;
     }
@@ -382,6 +390,7 @@ void RowsToMessage(const contact::ContactRows& rows, hapsim_lcm::contact_model_t
   msg->J_v.assign(n, std::vector<double>(3));
   msg->J_w.assign(n, std::vector<double>(3));
   msg->num_coupled_rows = coupled;
+  msg->num_bilateral_rows = rows.num_bilateral_rows;
   msg->num_W_body_lower = static_cast<std::int32_t>(PackedRowStart(coupled));
   msg->W_body_lower.resize(msg->num_W_body_lower);
   msg->num_W_body_contact_lower =
@@ -445,6 +454,7 @@ hapsim_lcm::contact_model_t ToMessage(const contact::LinearContactModel& model,
   const int n = rows_or_null == nullptr ? 0 : rows_or_null->num_rows();
   msg.num_rows = n;
   msg.num_coupled_rows = 0;
+  msg.num_bilateral_rows = 0;
   msg.num_W_body_lower = 0;
   msg.num_W_body_contact_lower = 0;
   msg.rows_per_contact = 1;
@@ -513,6 +523,7 @@ bool FromMessage(const hapsim_lcm::contact_model_t& msg, contact::LinearContactM
   }
   rows->rows_per_contact = per;
   rows->num_uncoupled_rows = n - coupled;
+  rows->num_bilateral_rows = msg.num_bilateral_rows;
   rows->friction_coefficient.resize(msg.num_friction_coefficients);
   for (int i = 0; i < msg.num_friction_coefficients; ++i)
     rows->friction_coefficient[i] = msg.friction_coefficient[i];

@@ -145,6 +145,7 @@ bool CheckWireLayout<hapsim_lcm::contact_model_t>(const void* data, int size, st
   wire.Skip(nodes * 3, kDouble, "body_x_W_m");
   const std::int64_t objects = wire.ReadCount("num_objects");
   wire.Skip(objects * (3 + 4), kDouble, "object_x_W_m, object_q_WO");
+  wire.Skip(1, kInt32, "num_bilateral_rows");
   return wire.Finish(error);
 }
 

@@ -137,10 +137,10 @@ TEST(WireDecode, EveryTypeRoundTripsThroughTheLayoutCheck) {
 
 // With no rows and no world a contact model ends in num_rows, num_coupled_rows,
 // num_W_body_lower, num_W_body_contact_lower, num_row_gaps (int32), rows_per_contact (int8),
-// num_friction_coefficients, num_body_nodes, num_objects (int32).
-std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 33; }
-std::size_t NumFrictionCoefficientsOffset() { return Encode(MakeContactModel(0)).size() - 12; }
-std::size_t NumBodyNodesOffset() { return Encode(MakeContactModel(0)).size() - 8; }
+// num_friction_coefficients, num_body_nodes, num_objects, num_bilateral_rows (int32).
+std::size_t NumRowsOffset() { return Encode(MakeContactModel(0)).size() - 37; }
+std::size_t NumFrictionCoefficientsOffset() { return Encode(MakeContactModel(0)).size() - 16; }
+std::size_t NumBodyNodesOffset() { return Encode(MakeContactModel(0)).size() - 12; }
 
 // num_rows = −1 makes lcm-gen's decode() throw (resize to SIZE_MAX) and 10^8 or 2^31 − 1 makes
 // it allocate gigabytes before noticing the bytes are missing; Decode refuses all three from the
