@@ -78,7 +78,7 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
            "total_ms,candidates,contacts,active,solver_iterations,solver_residual,"
            "sanity_corrections,max_penetration_m,rigid_contacts,max_object_penetration_m,"
            "tool_x_m,tool_y_m,tool_z_m,contact_force_x_N,contact_force_y_N,contact_force_z_N,"
-           "compliance_ms,solve_ms,correction_ms\n";
+           "compliance_ms,solve_ms,correction_ms,grasped,grasp_slipped,grasp_drift_m\n";
     for (const device::FrameSample& f : record.frames) {
       const contact::VisualFrameStats& s = f.stats;
       out << f.t_s << ',' << 1e3 * s.coupling_s << ',' << 1e3 * s.free_tool_s << ','
@@ -90,7 +90,8 @@ void WriteFramesCsv(const std::string& path, const SimRecord& record) {
           << ',' << f.tool_x_W_m.x() << ',' << f.tool_x_W_m.y() << ',' << f.tool_x_W_m.z() << ','
           << f.contact_force_W_N.x() << ',' << f.contact_force_W_N.y() << ','
           << f.contact_force_W_N.z() << ',' << 1e3 * s.compliance_s << ',' << 1e3 * s.solve_s << ','
-          << 1e3 * s.correction_s << '\n';
+          << 1e3 * s.correction_s << ',' << s.num_grasped << ',' << s.num_grasp_slipped << ','
+          << s.max_grasp_drift_m << '\n';
     }
   });
 }

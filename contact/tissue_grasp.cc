@@ -97,4 +97,19 @@ int TissueGrasp::LetSlip(const std::vector<Contact>& contacts, const Eigen::Vect
   return static_cast<int>(slipping.size());
 }
 
+double TissueGrasp::MoveHeldPointsToTheJaws(const Eigen::Isometry3d& X_WT,
+                                            const Eigen::Vector3d& v_W_m_s,
+                                            const Eigen::Vector3d& w_W_rad_s, Eigen::VectorXd* x_m,
+                                            Eigen::VectorXd* v_m_s) const {
+  double moved_m = 0.0;
+  for (size_t h = 0; h < held_nodes_.size(); ++h) {
+    const int node = held_nodes_[h];
+    const Eigen::Vector3d p_W_m = X_WT * held_T_m_[h];
+    moved_m = std::max(moved_m, (p_W_m - x_m->segment<3>(3 * node)).norm());
+    x_m->segment<3>(3 * node) = p_W_m;
+    v_m_s->segment<3>(3 * node) = v_W_m_s + w_W_rad_s.cross(p_W_m - X_WT.translation());
+  }
+  return moved_m;
+}
+
 }  // namespace hapsim::contact

@@ -64,6 +64,17 @@ class TissueGrasp {
   // rows among `contacts`, λ one entry per contact, N) exceeds the limit is let go. Returns how
   // many slipped.
   int LetSlip(const std::vector<Contact>& contacts, const Eigen::VectorXd& lambda_N);
+  // The frame's sanity pass for held points: each is put back where the jaws hold it, X_WT p_T,
+  // moving with the jaws (v + ω × r), as the pass moves a node out of the tool. The rows hold
+  // the point's velocity relative to the jaws at a target (−β φ/Δt) through a compliance W that
+  // is not the body's own (warped, or from the lagged factor): what is left over in that
+  // velocity, ∝ (W_true − W) λ, would add up over frames to an offset (1.7 mm at a 0.3 N pull on
+  // scenes/retraction.yaml with the exact compliance) and, warped, to a drift that ran away
+  // (2.5 → 15 mm over four frames: W's 10 % error swamps the stiff relative modes of points
+  // 5 mm apart). Returns the largest distance a point was moved, m.
+  double MoveHeldPointsToTheJaws(const Eigen::Isometry3d& X_WT, const Eigen::Vector3d& v_W_m_s,
+                                 const Eigen::Vector3d& w_W_rad_s, Eigen::VectorXd* x_m,
+                                 Eigen::VectorXd* v_m_s) const;
 
  private:
   void Release(int node);

@@ -141,6 +141,10 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   // 7. Sanity pass: nodes still inside the tool are moved to its surface.
   stats.num_sanity_corrections =
       RunSanityPass(*tool, body, &stats.max_penetration_m, &stats.max_object_penetration_m);
+  if (grasp_)
+    stats.max_grasp_drift_m = grasp_->MoveHeldPointsToTheJaws(CalcPose(*tool), tool->v_W_m_s,
+                                                              CalcAngularVelocity(tool_, *tool),
+                                                              &body->x_m, &body->v_m_s);
   stats.sanity_s = stage.Lap();
   stats.total_s = total.Elapsed();
   ++frame_index_;

@@ -130,6 +130,7 @@ struct VisualFrameStats {
   int num_grasp_taken = 0;
   bool grasp_closed_now = false;
   int num_grasp_slipped = 0;
+  double max_grasp_drift_m = 0.0;  // the farthest a held point was put back to the jaws, m
   double max_penetration_m = 0.0;  // deepest contact node inside the tool after the step, ≥ 0
   // Deepest body node of a body–object contact inside its rigid object after the step, as the
   // sanity pass finds it before moving it out, ≥ 0.
