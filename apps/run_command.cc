@@ -204,6 +204,9 @@ hapsim_lcm::sim_frame_t MakeSimFrame(const fem::State& body, const Matrix3Xi& su
   }
   msg.selected_object = frame.selected_object();
   msg.grabbed_object = frame.grabbed_object();
+  if (frame.grasp() != nullptr) msg.grasped_nodes = frame.grasp()->held_nodes();
+  msg.num_grasped = static_cast<int32_t>(msg.grasped_nodes.size());
+  msg.num_grasp_slipped = stats.num_grasp_slipped;
   return msg;
 }
 

@@ -168,6 +168,9 @@ bool CheckWireLayout<hapsim_lcm::sim_frame_t>(const void* data, int size, std::s
   const std::int64_t objects = wire.ReadCount("num_objects");
   wire.Skip(objects * (3 + 4), kDouble, "object_x_W_m, object_q_WO");
   wire.Skip(2, kInt32, "selected_object, grabbed_object");
+  const std::int64_t grasped = wire.ReadCount("num_grasped");
+  wire.Skip(grasped, kInt32, "grasped_nodes");
+  wire.Skip(1, kInt32, "num_grasp_slipped");
   return wire.Finish(error);
 }
 
@@ -232,6 +235,7 @@ void SizeArraysToCounts(hapsim_lcm::sim_frame_t* msg) {
   msg->contact_kind.resize(msg->num_contacts);
   msg->object_x_W_m.resize(msg->num_objects);
   msg->object_q_WO.resize(msg->num_objects);
+  msg->grasped_nodes.resize(msg->num_grasped);
 }
 
 template <>

@@ -90,6 +90,16 @@ bool IsDrawableFrame(const hapsim_lcm::sim_frame_t& frame, std::string* error) {
       }
     }
   }
+  for (const int32_t node : frame.grasped_nodes) {
+    if (node < 0 || node >= frame.num_nodes) {
+      *error = "a grasped node " + std::to_string(node) + " of " + std::to_string(frame.num_nodes);
+      return false;
+    }
+  }
+  if (frame.num_grasp_slipped < 0) {
+    *error = "a negative count of slipped grasp points";
+    return false;
+  }
   for (const int32_t object : {frame.selected_object, frame.grabbed_object}) {
     if (object < -1 || object >= frame.num_objects) {
       *error = "a selected or grabbed object " + std::to_string(object) + " of " +

@@ -293,6 +293,19 @@ void ScenePainter::Draw(const ViewState& state) {
     } else {
       Hide("contacts");
     }
+    // The points the grasper's jaws hold, larger and in the grabbed colour.
+    if (frame.num_grasped > 0 && frame.num_grasped <= frame.num_nodes) {
+      cv::Mat held(1, frame.num_grasped, CV_64FC3);
+      for (int i = 0; i < frame.num_grasped; ++i) {
+        const std::vector<float>& p = frame.positions_W_m[frame.grasped_nodes[i]];
+        held.at<cv::Vec3d>(0, i) = cv::Vec3d(p[0], p[1], p[2]);
+      }
+      cv::viz::WCloud cloud(held, kGrabbed);
+      cloud.setRenderingProperty(cv::viz::POINT_SIZE, 9.0);
+      Show("grasped", cloud);
+    } else {
+      Hide("grasped");
+    }
   }
   for (size_t i = 0; i < state.targets_reached.size() && scene_.task; ++i) {
     const config::PalpationTarget& target = scene_.task->targets[i];

@@ -50,8 +50,9 @@ struct Player {
   }
 };
 
-// Which messages a picture shows, e.g. "frame 50, haptic step 1500, device sample 1502", and
-// the rigid object the tool holds or touches, e.g. ", cube grabbed".
+// Which messages a picture shows, e.g. "frame 50, haptic step 1500, device sample 1502", the
+// rigid object the tool holds or touches, e.g. ", cube grabbed", and the tissue the jaws hold,
+// e.g. ", 7 points grasped, 2 slipped from the jaws" (at the frame they slipped).
 std::string Describe(const ViewState& state, const config::Scene& scene) {
   char text[160];
   std::snprintf(text, sizeof(text), "frame %lld, haptic step %lld, device sample %lld",
@@ -68,6 +69,10 @@ std::string Describe(const ViewState& state, const config::Scene& scene) {
     description += ", " + name_of(state.frame.grabbed_object) + " grabbed";
   else if (state.has_frame && state.frame.selected_object >= 0)
     description += ", " + name_of(state.frame.selected_object) + " selected";
+  if (state.has_frame && state.frame.num_grasped > 0)
+    description += ", " + std::to_string(state.frame.num_grasped) + " points grasped";
+  if (state.has_frame && state.frame.num_grasp_slipped > 0)
+    description += ", " + std::to_string(state.frame.num_grasp_slipped) + " slipped from the jaws";
   return description;
 }
 
