@@ -28,6 +28,7 @@
 
 #include "apps/child_process.h"
 #include "apps/commands.h"
+#include "apps/grasp_report.h"
 #include "apps/log_writer.h"
 #include "apps/run_info.h"
 #include "config/body_builder.h"
@@ -275,6 +276,8 @@ long RunFrames(const config::Scene& scene, device::HapticMode mode,
     const hapsim_lcm::sim_frame_t sim_frame = MakeSimFrame(body_state, surface, visual_tool, frame,
                                                            stats, k, k * scene.dt_s, info.run_id);
     lcm->publish(messages::kSimFrameChannel, &sim_frame);
+    const std::string grasp = DescribeGraspEvents(scene, k * scene.dt_s, stats);
+    if (!grasp.empty()) std::fprintf(stderr, "hapsim run: %s\n", grasp.c_str());
   }
   return k;
 }

@@ -14,6 +14,7 @@
 #include <optional>
 
 #include "apps/commands.h"
+#include "apps/grasp_report.h"
 #include "config/body_builder.h"
 #include "config/scene.h"
 #include "config/simulation_builder.h"
@@ -207,6 +208,11 @@ void RunSim(const SimCommandOptions& options) {
           progress.Update(static_cast<long>(record.haptic.size()));
         },
         [&](const device::FrameSample& f) { record.frames.push_back(f); });
+  }
+  // After the progress bar: what the grasper's jaws did.
+  for (const device::FrameSample& f : record.frames) {
+    const std::string grasp = DescribeGraspEvents(scene, f.t_s, f.stats);
+    if (!grasp.empty()) std::fprintf(stderr, "hapsim sim: %s\n", grasp.c_str());
   }
   const std::string out_dir = options.out_dir.empty()
                                   ? "out/" + scene.name + "_" + device::ToString(mode)
