@@ -17,6 +17,10 @@
 // side: the object has no degrees of freedom. An object the tool holds (grabbed) is part of the
 // tool: its contacts have on_tool = true, rigid_object its index, and body nodes if they are
 // with the body.
+// A contact between two of the body's objects (contact/body_body_contacts.h) has on_tool false
+// and no rigid object: its "tool" side is a face of one object (p_tool_W_m on it, n_W out of it),
+// its body side a node of the other, and its weights are 1 for the node and −w_k for the face's
+// nodes, so that the row measures the gap's rate between them.
 // A grasp row (contact/tissue_grasp.h) is a contact too: a body point held by the tool's jaws,
 // its normal one of the tool frame's axes and its gap the point's offset from where the jaws
 // took it along that axis. It is bilateral: held at c = b with λ of either sign (the tissue
@@ -77,11 +81,13 @@ enum class ContactKind : std::int8_t {
   kBodyObject = 2,      // a body node and a rigid object
   kHeldObjectBody = 3,  // a body node and the object the tool holds
   kGrasp = 4,           // a body point held by the tool's jaws (one row per tool axis)
+  kBodyBody = 5,        // a node of one deformable object and a face of another
 };
 
 inline ContactKind KindOf(const Contact& contact) {
   if (contact.bilateral) return ContactKind::kGrasp;
-  if (!contact.on_tool) return ContactKind::kBodyObject;
+  if (!contact.on_tool)
+    return contact.rigid_object >= 0 ? ContactKind::kBodyObject : ContactKind::kBodyBody;
   if (contact.rigid_object < 0) return ContactKind::kToolBody;
   return contact.nodes[0] >= 0 ? ContactKind::kHeldObjectBody : ContactKind::kToolObject;
 }

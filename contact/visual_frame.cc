@@ -77,6 +77,8 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
                                           [&](int n) { return body->dof_is_fixed[3 * n] != 0; }),
                            surface_nodes_.end());
     }
+    body_contacts_ = std::make_unique<BodyBodyContacts>(*body, options.detection.margin_m);
+    if (body_contacts_->num_objects() < 2) body_contacts_.reset();
     if (options.grasp) {
       if (rows_per_contact_ != 1)
         throw std::invalid_argument(
@@ -163,7 +165,7 @@ void VisualFrame::UpdateGrasp(bool button_down, bool pressed, const ToolState& t
 }
 
 // Tool against body, then tool against the rigid objects, then body against them, then the
-// grasp's rows: one list, one response.
+// body's objects against each other, then the grasp's rows: one list, one response.
 void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) {
   ToolState tool_end = tool;
   AdvanceTool(tool_, options_.dt_s, dv_tool_, dL_tool_, &tool_end);
@@ -177,6 +179,7 @@ void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) 
   if (body_ != nullptr)
     rigid_contacts_.AddBodyContacts(surface_nodes_, body.x_m, x_end_m, CalcPose(tool),
                                     CalcPose(tool_end), &contacts_);
+  if (body_contacts_) body_contacts_->AddContacts(body.x_m, x_end_m, &contacts_);
   if (grasp_) {
     grasp_->DropToolContactsOnHeldPoints(&contacts_);
     grasp_->AddContacts(CalcPose(tool), body.x_m, &contacts_);

@@ -3,6 +3,8 @@
 //   1 coupling to the visual tool   2 free tool update   3 free FEM update
 //   4 collision detection           5 constraint solve + post-collision state
 //   6 linear contact model          7 sanity pass on nodes left inside the tool
+// Stage 4 finds the tool against the body, the tool and the body against rigid objects, and the
+// body's objects against each other (contact/body_body_contacts.h).
 // Step() reads top to bottom as that pipeline. Model data (body model, tool model, rigid objects,
 // options) is fixed at construction; the body and tool states are passed in and updated.
 // A scene without a deformable body (DESIGN.md §9: rigid objects only) builds no FEM: stage 3 does
@@ -31,6 +33,7 @@
 #include <optional>
 #include <vector>
 
+#include "contact/body_body_contacts.h"
 #include "contact/collision_detection.h"
 #include "contact/collision_response.h"
 #include "contact/contact_jacobian.h"
@@ -257,6 +260,7 @@ class VisualFrame {
   Eigen::Isometry3d X_TO_grabbed_ = Eigen::Isometry3d::Identity();
   std::vector<int> surface_nodes_;  // the body's free surface nodes (body–object contacts, grasp)
   std::unique_ptr<TissueGrasp> grasp_;        // options.grasp with a body
+  std::unique_ptr<BodyBodyContacts> body_contacts_;  // a body of two objects or more
   std::vector<std::uint8_t> bilateral_rows_;  // per row of the frame: a grasp row
   // Frame data, in stage order.
   CouplingWrench wrench_;

@@ -240,6 +240,9 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
   int corrections = 0;
   for (const Contact& contact : contacts_) {
     if (contact.bilateral) continue;  // a held point sits where the jaws hold it
+    // Two of the body's objects: the stabilisation (β) undoes their overlap; moving a node onto
+    // a face that itself moves would need both sides.
+    if (KindOf(contact) == ContactKind::kBodyBody) continue;
     if (contact.embedded) {
       corrections += MoveEmbeddedPointOut(contact, body_->dof_is_fixed, options_.sanity_tolerance_m,
                                           surface_of, body);

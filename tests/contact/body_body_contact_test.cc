@@ -1,0 +1,143 @@
+// Contact between the body's objects (contact/body_body_contacts.h, issue 28 item 2), against
+// statics and geometry the contact code does not compute: a block resting on another carries
+// exactly its weight through their contact (ρ V g, from its size alone) and rests on its surface;
+// the objects are the mesh's connected components; a row measures the gap's rate between them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "contact/body_body_contacts.h"
+#include "contact/contact_jacobian.h"
+#include "contact/visual_frame.h"
+#include "fem/lattice_mesher.h"
+#include "fem/model.h"
+#include "fem/time_stepper.h"
+
+namespace hapsim::contact {
+namespace {
+
+constexpr double kGravity_m_s2 = 9.81;
+constexpr double kDensity_kg_m3 = 1000.0;
+
+fem::Material MakeSoft(double youngs_modulus_Pa) {
+  fem::Material material;
+  material.youngs_modulus_Pa = youngs_modulus_Pa;
+  material.poisson_ratio = 0.45;
+  material.density_kg_m3 = kDensity_kg_m3;
+  material.rayleigh_alpha_1_s = 10.0;  // settles within the run
+  return material;
+}
+
+// A 4 x 4 x 2 cm block fixed at its base (z = 0), and on it a free 2 x 2 x 1 cm block whose
+// bottom is `gap_m` above the lower block's top (z = 2 cm): one FEM system of two objects.
+fem::Model MakeStack(double gap_m) {
+  const fem::TetMesh lower =
+      fem::MakeBoxTetMesh({-0.02, -0.02, 0.0}, {0.02, 0.02, 0.02}, {4, 4, 2});
+  const fem::TetMesh upper =
+      fem::MakeBoxTetMesh({-0.01, -0.01, 0.02 + gap_m}, {0.01, 0.01, 0.03 + gap_m}, {3, 3, 2});
+  const std::vector<int> base =
+      fem::FindNodesInBox(lower, {-0.03, -0.03, -0.001}, {0.03, 0.03, 0.001}, 0.0);
+  return fem::MergeModels(
+      {fem::MakeModel(lower, MakeSoft(30e3), base), fem::MakeModel(upper, MakeSoft(20e3), {})});
+}
+
+TEST(BodyBodyContact, ObjectsAreTheConnectedComponents) {
+  const fem::Model stack = MakeStack(0.001);
+  const BodyBodyContacts contacts(stack, 0.001);
+  ASSERT_EQ(contacts.num_objects(), 2);
+  // The lower block's 5 x 5 x 3 lattice nodes come first.
+  for (int node = 0; node < stack.num_nodes(); ++node)
+    EXPECT_EQ(contacts.object_of_node(node), node < 75 ? 0 : 1) << node;
+}
+
+// Each row's J_u u̇ is the rate of its gap, by finite differences of the gap under a velocity
+// field u̇ applied for a short time (the gap recomputed from the moved positions, as the detection
+// would compute it: the node against the face's moved plane at the same barycentric weights).
+TEST(BodyBodyContact, RowsMeasureTheGapsRate) {
+  const fem::Model stack = MakeStack(0.0005);
+  const BodyBodyContacts finder(stack, 0.001);
+  const Eigen::VectorXd x = stack.rest_positions_m;
+  std::vector<Contact> contacts;
+  finder.AddContacts(x, x, &contacts);
+  ASSERT_GT(contacts.size(), 20u);
+  const ContactJacobian J = CalcContactJacobian(contacts, Eigen::Vector3d::Zero(), 1,
+                                                stack.num_dofs(), stack.dof_is_fixed);
+  EXPECT_EQ(J.J_v.norm(), 0.0);  // no tool
+  const Eigen::VectorXd u_dot =
+      Eigen::VectorXd::Random(stack.num_dofs())
+          .cwiseProduct(Eigen::Map<const Eigen::Array<std::uint8_t, Eigen::Dynamic, 1>>(
+                            stack.dof_is_fixed.data(), stack.num_dofs())
+                            .cast<double>()
+                            .matrix()
+                            .unaryExpr([](double fixed) { return 1.0 - fixed; }));
+  const double h = 1e-7;
+  const Eigen::VectorXd x_moved = x + h * u_dot;
+  const Eigen::VectorXd rate = J.J_u * u_dot;
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    const Contact& c = contacts[i];
+    Eigen::Vector3d node = x_moved.segment<3>(3 * c.nodes[0]), face = Eigen::Vector3d::Zero();
+    for (int k = 1; k < 4; ++k) face -= c.weights[k] * x_moved.segment<3>(3 * c.nodes[k]);
+    const double gap_moved = (node - face).dot(c.n_W);  // the normal held: J leaves its turn out
+    EXPECT_NEAR((gap_moved - c.gap_m) / h, rate[static_cast<Eigen::Index>(i)], 1e-6) << i;
+    EXPECT_NEAR(c.gap_m, 0.0005, 1e-12) << i;  // the blocks' faces are 0.5 mm apart
+  }
+}
+
+// The upper block dropped from 1 mm settles on the lower: the contact carries its weight
+// ρ V g = 1000 · 4e-6 · 9.81 = 0.0392 N (the sum of λ n over its contacts, with the sign of its
+// side), and its bottom rests on the lower block's top.
+TEST(BodyBodyContact, StackedBlockCarriesExactlyItsWeight) {
+  const fem::Model stack = MakeStack(0.001);
+  VisualFrameOptions options;
+  options.dt_s = 1.0 / 60.0;
+  options.gravity_m_s2 = Eigen::Vector3d(0, 0, -kGravity_m_s2);
+  options.coupling = CouplingParams{100.0, 1.0, 0.1, 0.001};
+  options.response.solve.law = ContactLaw::kUnilateral;
+  ToolShape sphere;
+  sphere.kind = ToolShape::Kind::kSphere;
+  sphere.radius_m = 0.005;
+  VisualFrame frame(stack, fem::FemOptions{}, fem::CalcGravityForce(stack, options.gravity_m_s2),
+                    MakeToolModelWithMass(sphere, 0.01), options);
+  ToolState tool;
+  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.5);  // far above, out of the way
+  DeviceState device;
+  device.x_W_m = tool.x_W_m;
+  fem::State body = fem::MakeRestState(stack);
+  const BodyBodyContacts objects(stack, 0.001);
+  for (int k = 0; k < 240; ++k) frame.Step(device, &body, &tool);  // 4 s
+  Eigen::Vector3d on_upper_N = Eigen::Vector3d::Zero();
+  int rows = 0;
+  for (size_t i = 0; i < frame.contacts().size(); ++i) {
+    const Contact& c = frame.contacts()[i];
+    if (KindOf(c) != ContactKind::kBodyBody) continue;
+    ++rows;
+    const double lambda_N = frame.impulses()[static_cast<Eigen::Index>(i)];
+    // +λn on the node's object, −λn on the face's.
+    on_upper_N += (objects.object_of_node(c.nodes[0]) == 1 ? 1.0 : -1.0) * lambda_N * c.n_W;
+  }
+  const double weight_N = kDensity_kg_m3 * 0.02 * 0.02 * 0.01 * kGravity_m_s2;
+  double lowest_upper_m = 1.0;
+  for (int node = 75; node < stack.num_nodes(); ++node)
+    lowest_upper_m = std::min(lowest_upper_m, body.x_m[3 * node + 2]);
+  double top_under_m = 0.0;  // the lower block's top centre
+  for (int node = 0; node < 75; ++node)
+    if (std::abs(stack.rest_positions_m[3 * node]) < 1e-9 &&
+        std::abs(stack.rest_positions_m[3 * node + 1]) < 1e-9 &&
+        std::abs(stack.rest_positions_m[3 * node + 2] - 0.02) < 1e-9)
+      top_under_m = body.x_m[3 * node + 2];
+  std::printf(
+      "%d body-body rows; force on the upper block %.6f %.6f %.6f N, weight %.6f N; its "
+      "bottom %.4f mm above the lower top centre; speed %.1e m/s\n",
+      rows, on_upper_N.x(), on_upper_N.y(), on_upper_N.z(), weight_N,
+      1e3 * (lowest_upper_m - top_under_m), body.v_m_s.lpNorm<Eigen::Infinity>());
+  EXPECT_LT(body.v_m_s.lpNorm<Eigen::Infinity>(), 1e-4) << "not at rest";
+  EXPECT_NEAR(on_upper_N.z(), weight_N, 5e-3 * weight_N);
+  EXPECT_LT(on_upper_N.head<2>().norm(), 1e-3 * weight_N);
+  // Resting on the surface: neither hanging above it nor sunk in (β undoes an overlap).
+  EXPECT_NEAR(lowest_upper_m, top_under_m, 1e-4);
+}
+
+}  // namespace
+}  // namespace hapsim::contact
