@@ -1,9 +1,12 @@
 #include "config/body_builder.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <iostream>
 #include <stdexcept>
 
 #include "config/surface_mesh_cache.h"
+#include "contact/body_body_contacts.h"
 #include "core/error.h"
 #include "core/triangle_mesh_io.h"
 #include "fem/curved_boundary.h"
@@ -139,6 +142,41 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
   return body;
 }
 
+namespace {
+
+// Deformable objects that start overlapping would be thrust apart by their contact rows in the
+// first frames (β of the overlap a frame, at the stiffness of both): a scene error, named with
+// both objects, at the later one's entry. Overlaps under 0.1 mm (a mesh's facets against
+// another's curved surface) are let be.
+void CheckObjectsStartApart(const Scene& scene, const Body& body) {
+  constexpr double kTolerance_m = 1e-4;
+  const contact::BodyBodyContacts objects(body.model, scene.contact.margin_m);
+  const std::optional<contact::BodyBodyContacts::Overlap> overlap =
+      objects.FindDeepestOverlap(body.model.rest_positions_m, kTolerance_m);
+  if (!overlap) return;
+  const auto part_of = [&](int node) {
+    int part = 0;
+    while (part + 1 < static_cast<int>(body.parts.size()) &&
+           body.parts[part + 1].first_node <= node)
+      ++part;
+    return part;
+  };
+  const auto name_of = [&](int part) {
+    return part == 0 ? scene.body_name : scene.more_bodies[part - 1].name;
+  };
+  const int inside = part_of(overlap->node), around = part_of(overlap->face_node);
+  const DeformableObjectScene& later = scene.more_bodies[std::max(inside, around) - 1];
+  char depth[32];
+  std::snprintf(depth, sizeof(depth), "%.2f mm", 1e3 * overlap->depth_m);
+  throw InputError(later.location.file, later.location.line, later.location.key,
+                   "deformable objects '" + name_of(inside) + "' and '" + name_of(around) +
+                       "' start interpenetrating: a node of '" + name_of(inside) + "' lies " +
+                       depth + " inside '" + name_of(around) +
+                       "' (move one apart; they touch through contact)");
+}
+
+}  // namespace
+
 std::optional<Body> MakeSceneBody(const Scene& scene) {
   if (!scene.body) return std::nullopt;
   Body first = MakeBody(*scene.body, scene.gravity_m_s2);
@@ -172,6 +210,7 @@ std::optional<Body> MakeSceneBody(const Scene& scene) {
     tet += body.model.num_tets();
   }
   merged.visual_surface = fem::MergeEmbeddedSurfaces(visual_surfaces, boundaries, first_nodes);
+  CheckObjectsStartApart(scene, merged);
   return merged;
 }
 

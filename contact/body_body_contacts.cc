@@ -165,7 +165,7 @@ std::optional<BodyBodyContacts::Overlap> BodyBodyContacts::FindDeepestOverlap(
             (x_m.segment<3>(3 * faces(1, f)) - a).cross(x_m.segment<3>(3 * faces(2, f)) - a);
         const double depth_m = -(x_m.segment<3>(3 * node) - q.point).dot(normal.normalized());
         if (depth_m > tolerance_m && (!deepest || depth_m > deepest->depth_m))
-          deepest = Overlap{object_of_node(node), face_object, depth_m};
+          deepest = Overlap{object_of_node(node), face_object, node, faces(0, f), depth_m};
       });
   return deepest;
 }

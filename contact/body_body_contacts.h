@@ -49,6 +49,7 @@ class BodyBodyContacts {
   // tolerance_m: which objects, and how deep (m, > 0).
   struct Overlap {
     int node_object = -1, face_object = -1;
+    int node = -1, face_node = -1;  // the node, and a corner of the face it is under
     double depth_m = 0.0;
   };
   std::optional<Overlap> FindDeepestOverlap(const Eigen::VectorXd& x_m, double tolerance_m) const;

@@ -5,6 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+#include <string>
+
 #include "config/scene.h"
 #include "core/error.h"
 #include "fem/probe.h"
@@ -133,6 +137,34 @@ TEST(BodyBuilder, QuadraticTetsRefuseASurfaceOutsideTheirMeshAtItsLine) {
                  std::string("  element: ") + element +
                      "\n  visual: {file: scenes/meshes/liver.obj}\n  mesh:");
     ExpectErrorAt(yaml, 6, "body.visual");
+  }
+}
+
+// Two deformable objects that start inside each other (scenes/organs.yaml with the upper organ
+// lowered 2 mm into the lower): an error at the later object's entry naming both and the depth,
+// 1.50 mm (the upper's bottom 1.5 mm below the lower's top); as shipped, 0.5 mm apart, they build.
+TEST(MakeSceneBody, ObjectsStartingInsideEachOtherAreRefused) {
+  std::ifstream file("scenes/organs.yaml");
+  ASSERT_TRUE(file.good()) << "run from the repository root";
+  std::stringstream text;
+  text << file.rdbuf();
+  EXPECT_TRUE(MakeSceneBody(ParseScene(text.str(), "organs.yaml", "scenes")).has_value());
+  std::string lowered = text.str();
+  const std::string apart = "min_m: [-0.02, -0.015, 0.0255], max_m: [0.02, 0.015, 0.0405]";
+  ASSERT_NE(lowered.find(apart), std::string::npos);
+  lowered.replace(lowered.find(apart), apart.size(),
+                  "min_m: [-0.02, -0.015, 0.0235], max_m: [0.02, 0.015, 0.0385]");
+  const Scene scene = ParseScene(lowered, "organs.yaml", "scenes");
+  try {
+    MakeSceneBody(scene);
+    ADD_FAILURE() << "built without error";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.key(), "objects[1].deformable");
+    const std::string what = error.what();
+    EXPECT_NE(what.find("'upper_organ' and 'lower_organ' start interpenetrating"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("1.50 mm"), std::string::npos) << what;
   }
 }
 
