@@ -87,8 +87,9 @@
 //                                      # later ones take the first one's elasticity, integrator
 //                                      # and solver (giving them is an error) and must share its
 //                                      # Rayleigh damping; each has its own mesh, E, ν, density,
-//                                      # fixed region, loads and probes. They do not collide
-//                                      # with each other (only with the tool and rigid objects).
+//                                      # fixed region, loads and probes. They touch each other
+//                                      # (contact/body_body_contacts.h; not themselves where
+//                                      # they fold), and must not start interpenetrating.
 //   tool:                              # optional: the rigid tool (DESIGN.md §3); needs coupling
 //                                      # and device
 //     shape:                           # exactly one of (tool frame T: origin at the COM, z the
