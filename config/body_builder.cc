@@ -154,17 +154,11 @@ void CheckObjectsStartApart(const Scene& scene, const Body& body) {
   const std::optional<contact::BodyBodyContacts::Overlap> overlap =
       objects.FindDeepestOverlap(body.model.rest_positions_m, kTolerance_m);
   if (!overlap) return;
-  const auto part_of = [&](int node) {
-    int part = 0;
-    while (part + 1 < static_cast<int>(body.parts.size()) &&
-           body.parts[part + 1].first_node <= node)
-      ++part;
-    return part;
+  // The objects are the merged models, in scene order (fem::Model::object_first_nodes).
+  const auto name_of = [&](int object) {
+    return object == 0 ? scene.body_name : scene.more_bodies[object - 1].name;
   };
-  const auto name_of = [&](int part) {
-    return part == 0 ? scene.body_name : scene.more_bodies[part - 1].name;
-  };
-  const int inside = part_of(overlap->node), around = part_of(overlap->face_node);
+  const int inside = overlap->node_object, around = overlap->face_object;
   const DeformableObjectScene& later = scene.more_bodies[std::max(inside, around) - 1];
   char depth[32];
   std::snprintf(depth, sizeof(depth), "%.2f mm", 1e3 * overlap->depth_m);

@@ -465,12 +465,12 @@ void CheckGrasp(const Scene& scene, const YamlMap& root) {
     grasp.Fail(
         "a grasp's rows are normal rows: contact.law must be unilateral or equality, not "
         "friction");
-  if (scene.body->collision_surface)
-    grasp.Fail("a grasp holds the tets' boundary nodes; " + scene.body_name +
-               " has a `collision:` surface, which is not supported with a grasp yet");
+  std::vector<std::pair<std::string, const BodyScene*>> bodies = {{scene.body_name, &*scene.body}};
   for (const DeformableObjectScene& more : scene.more_bodies)
-    if (more.body.collision_surface)
-      grasp.Fail("a grasp holds the tets' boundary nodes; " + more.name +
+    bodies.emplace_back(more.name, &more.body);
+  for (const auto& [name, body] : bodies)
+    if (body->collision_surface)
+      grasp.Fail("a grasp holds the tets' boundary nodes; " + name +
                  " has a `collision:` surface, which is not supported with a grasp yet");
   if (const std::optional<std::string> why = WhyGraspRefused(scene.haptic.mode))
     root.GetMap("haptic").FailKey("mode", *why);
@@ -561,7 +561,7 @@ std::optional<std::string> WhyModelComplianceStepRefused(contact::ModelComplianc
 }
 
 std::optional<std::string> WhyGraspRefused(HapticMode mode) {
-  if (!device::IsGeometricMode(mode) && mode != HapticMode::kGodObject) return std::nullopt;
+  if (!device::NeedsWorld(mode)) return std::nullopt;  // the geometric modes and godobject
   return std::string("the ") + device::ToString(mode) +
          " mode finds its own contacts at 1 kHz and cannot render a grasp's rows (hybrid, "
          "linear, lcp, coupling, reference can)";

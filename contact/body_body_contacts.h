@@ -4,10 +4,12 @@
 // new machinery: a row's J_u reaches both objects' nodes and the frame's one compliance
 // W = J_u A_u⁻¹ J_uᵀ holds both sides' (and their coupling through the tool's other rows).
 //
-// The objects are the body mesh's connected components (tets sharing nodes), numbered in the
-// order of their first node: the scene's objects in their order. Each object's free surface nodes
-// are tested against the other objects' boundary triangles: a node a near a triangle (b1, b2, b3)
-// of another object, its closest point q = Σ w_k x_bk and the triangle's outward normal n, gives
+// The objects are the models merged into the body, in the scene's order
+// (fem::Model::object_first_nodes; a body of one object has no such contacts, whatever its mesh).
+// Each object's free surface nodes are tested against the other objects' boundary triangles
+// (all of them: a face of fixed nodes is still a surface to rest on): a node a near a triangle (b1,
+// b2, b3) of another object, its closest point q = Σ w_k x_bk and the triangle's outward normal n,
+// gives
 //
 //   gap = (x_a − q)·n,   nodes {a, b1, b2, b3}, weights {1, −w1, −w2, −w3}
 //
@@ -18,9 +20,12 @@
 // Both directions are tested (A's nodes on B's faces and B's on A's): the interface is held from
 // both sides, and the unilateral solve shares the load of the near-redundant pairs.
 //
-// Candidates are found per pair of objects inside the overlap of their bounding boxes grown by the
-// margin and the frame's sweep, then tested node against triangle: O(n_a n_t) in that overlap
-// only, which is the contact interface, not the objects.
+// Candidates are found per pair of objects inside the overlap of the one's free surface nodes'
+// box, grown by each node's reach, and the other's faces' box, then tested node against triangle:
+// O(n_a n_t) in that overlap only, which is the contact interface, not the objects.
+// Not handled (docs/CONTACT.md): an object against itself where it folds, embedded `collision:`
+// surfaces (the objects meet at their tets' boundary) and quadratic faces' curvature (their four
+// flat sub-triangles).
 
 #include <Eigen/Core>
 #include <optional>
@@ -48,15 +53,15 @@ class BodyBodyContacts {
   // The deepest node of one object inside another at positions x_m, if any is deeper than
   // tolerance_m: which objects, and how deep (m, > 0).
   struct Overlap {
-    int node_object = -1, face_object = -1;
-    int node = -1, face_node = -1;  // the node, and a corner of the face it is under
+    int node_object = -1, face_object = -1;  // different objects
     double depth_m = 0.0;
   };
   std::optional<Overlap> FindDeepestOverlap(const Eigen::VectorXd& x_m, double tolerance_m) const;
 
  private:
-  // Calls visit(node, triangle column, closest point, weights, signed distance) for every free
-  // surface node of one object within threshold(node) of a triangle of another.
+  // Calls visit(node, face, closest point q on it, the face's unit outward normal, the face's
+  // object) for every free surface node within threshold(node) of a face of another object: the
+  // nearest such face (of those as near, the one the node lies most in front of).
   template <typename Visit, typename Threshold>
   void ForEachCandidate(const Eigen::VectorXd& x_m, const Threshold& threshold,
                         const Visit& visit) const;

@@ -60,7 +60,7 @@ struct Contact {
   // an embedded surface before their tets' nodes replaced them), −1 unused: what names the
   // contact from frame to frame (ImpulseWarmStart).
   std::array<int, 3> surface_points = {-1, -1, -1};
-  bool on_tool = true;    // false: a body node against a rigid object
+  bool on_tool = true;    // false: a body node against a rigid object or another object's face
   int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none
   bool bilateral = false;  // a grasp row: an equality whatever the law, λ of either sign
 

@@ -143,7 +143,7 @@ struct HapticLcpSolver::Workspace : ContactRowCache {
 
   bool Rebase();
   void GuessActiveSet(const ContactRows& rows, const Eigen::VectorXd& push, bool hold);
-  void StartFromGuess();
+  bool StartFromGuess();
   bool ReleaseRowsPullingPastTheirPush(double dt_s);
   void RefreshTargets();
   // The frame's impulses as the cached rows gave them: the held set and each held row's release
@@ -314,17 +314,17 @@ void HapticLcpSolver::Workspace::GuessActiveSet(const ContactRows& rows,
 // linear model, and costs no retry at the next steps).
 //
 // A grasp's rows (bilateral) are then tried on their own: they hold the tissue, while the frame's
-// held contacts are the ones that may be redundant.
-void HapticLcpSolver::Workspace::StartFromGuess() {
-  if (Rebase() || num_held == 0) return;
+// held contacts are the ones that may be redundant. Returns false if even they are dependent:
+// they cannot be solved unilaterally (the tissue would stop pulling), so the solve fails and the
+// step falls back to the linear contact model, which holds them by a rank-revealing solve.
+bool HapticLcpSolver::Workspace::StartFromGuess() {
+  if (Rebase() || num_held == 0) return true;
   std::fill(held.begin(), held.begin() + n, std::uint8_t{0});
   num_held = 0;
-  if (bilateral == 0) return;
+  if (bilateral == 0) return true;
   for (int i = 0; i < bilateral; ++i) held[i] = active[i] = 1;
   num_held = bilateral;
-  if (Rebase()) return;
-  std::fill(held.begin(), held.begin() + n, std::uint8_t{0});
-  num_held = 0;
+  return Rebase();
 }
 
 // A held row may pull (λ < 0), as the linear contact model's rows do, by a little: the model's
@@ -675,7 +675,10 @@ bool HapticLcpSolver::Prepare(const ContactRows& rows, const ToolStepSystem& too
   ws.target.head(n) = rows.body_rhs;
   ws.GuessActiveSet(rows, rows.body_rhs, hold_frame_contacts_);
   ws.num_factorizations = 0;
-  ws.StartFromGuess();
+  if (!ws.StartFromGuess()) {
+    ws.n = -1;
+    return false;
+  }
   return true;
 }
 
@@ -728,7 +731,10 @@ bool HapticLcpSolver::Solve(const ContactRows& rows, const ToolStepSystem& tool,
   ws.r.head(n).noalias() -= ws.U.topRows(n) * ws.s_free;
   if (new_rows) ws.GuessActiveSet(rows, ws.r, hold_frame_contacts_);
   if (ws.rebase_pending) {
-    ws.StartFromGuess();
+    if (!ws.StartFromGuess()) {
+      ws.n = -1;  // the grasp's rows cannot be held: fail (HapticStep falls back to the model)
+      return false;
+    }
   } else if (targets_changed) {
     ws.RefreshTargets();
   }

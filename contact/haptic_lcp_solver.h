@@ -92,7 +92,9 @@ namespace hapsim::contact {
 //
 // A grasp's rows (ContactRows::num_bilateral_rows, the leading rows; contact/tissue_grasp.h) are
 // held in every mode, with or without hold_frame_contacts, and never released: the bilateral
-// rows of the mixed LCP above, whose pull the device feels between frames.
+// rows of the mixed LCP above, whose pull the device feels between frames. Dependent grasp rows
+// (W singular on them) fail the solve rather than be solved unilaterally: the step then renders
+// the linear contact model, which holds them.
 //
 // Friction rows (ContactRows::rows_per_contact 3, the friction law) go to a HapticFrictionSolver
 // the solver owns when built with friction_sweeps > 0 (its sweep budget per step); the counters

@@ -49,10 +49,8 @@ class TissueGrasp {
   int Close(const Eigen::Isometry3d& X_WT, const Eigen::VectorXd& x_m);
   void Open();  // lets every point go
 
-  bool closed() const { return closed_; }
   const std::vector<int>& held_nodes() const { return held_nodes_; }
   bool Holds(int node) const { return node >= 0 && is_held_[static_cast<size_t>(node)] != 0; }
-  const GraspOptions& options() const { return options_; }
 
   // Removes the tool–body contacts (on the tool, no rigid object, not grasp rows) that touch a
   // held node; returns how many.

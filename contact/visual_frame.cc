@@ -83,6 +83,10 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
       if (rows_per_contact_ != 1)
         throw std::invalid_argument(
             "VisualFrame: a grasp needs normal rows (not the friction law)");
+      if (!body->collision_surface.empty())
+        throw std::invalid_argument(
+            "VisualFrame: a grasp holds the tets' boundary nodes, not an embedded collision "
+            "surface's points");
       grasp_ = std::make_unique<TissueGrasp>(*options.grasp, surface_nodes_, body->num_nodes());
     }
   } else if (options.grasp) {
@@ -133,6 +137,7 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   for (int row = 0; row < lambda_.size(); row += rows_per_contact_)
     stats.num_active += lambda_[row] > 0.0 && !contacts_[row / rows_per_contact_].bilateral;
   if (grasp_) {
+    // The grip: points pulled past its limit slip out; their rows leave the model below.
     stats.num_grasp_slipped = grasp_->LetSlip(contacts_, lambda_);
     stats.num_grasped = static_cast<int>(grasp_->held_nodes().size());
   }
@@ -143,6 +148,9 @@ VisualFrameStats VisualFrame::Step(const DeviceState& device, fem::State* body, 
   // 7. Sanity pass: nodes still inside the tool are moved to its surface.
   stats.num_sanity_corrections =
       RunSanityPass(*tool, body, &stats.max_penetration_m, &stats.max_object_penetration_m);
+  // Held points back where the jaws hold them. After the model, which is linearised at the state
+  // the response left, as for the tool's contacts: putting them back first (the model's grasp
+  // gaps then 0) took retraction's pull 0.0042 → 0.0099 N RMS from the reference's.
   if (grasp_)
     stats.max_grasp_drift_m = grasp_->MoveHeldPointsToTheJaws(CalcPose(*tool), tool->v_W_m_s,
                                                               CalcAngularVelocity(tool_, *tool),

@@ -213,6 +213,10 @@ class VisualFrame {
   // (block_press_friction: ~70 active of ~210, with three rows each).
   static Eigen::VectorXd MultiplyByImpulses(const Eigen::MatrixXd& W,
                                             const Eigen::VectorXd& lambda);
+  // A grasp row of a point that slipped out of the jaws at this frame's end: it leaves the model.
+  bool IsLetGo(const Contact& contact) const {
+    return contact.bilateral && !(grasp_ && grasp_->Holds(contact.nodes[0]));
+  }
   void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                         const ToolState& tool, const ToolState& haptic_tool,
                         const fem::State& body);

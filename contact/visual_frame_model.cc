@@ -57,7 +57,7 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   std::vector<int> active_rows;
   for (size_t i = 0; i < moved.size(); ++i) {
     const int row = rows_per_contact_ * static_cast<int>(i);
-    if (!(lambda_[row] > 0.0) && !moved[i].bilateral) continue;
+    if (IsLetGo(moved[i]) || (!(lambda_[row] > 0.0) && !moved[i].bilateral)) continue;
     active.push_back(moved[i]);
     for (int d = 0; d < rows_per_contact_; ++d) active_rows.push_back(row + d);
   }
@@ -113,7 +113,7 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   std::vector<double> shortfall_m_s(moved.size());    // approach beyond the present one to engage
   for (size_t i = 0; i < moved.size(); ++i) {
     if (moved[i].bilateral) {
-      bilateral.push_back(i);
+      if (!IsLetGo(moved[i])) bilateral.push_back(i);
       continue;
     }
     const int normal = rows_per_contact_ * static_cast<int>(i);

@@ -129,6 +129,7 @@ Model MergeModels(const std::vector<Model>& models) {
     first_nodes.push_back(first_node);
     first_node += model.num_nodes();
   }
+  if (models.size() > 1) merged.object_first_nodes = first_nodes;
   merged.collision_surface = MergeEmbeddedSurfaces(collision_surfaces, boundaries, first_nodes);
   merged.dof_mass_kg = merged.node_mass_kg.replicate(1, 3).transpose().reshaped();
   merged.rest_positions_m =

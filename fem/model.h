@@ -60,6 +60,9 @@ struct Model {
   Eigen::VectorXd node_mass_kg;
   Eigen::VectorXd dof_mass_kg;             // (3N) node_mass_kg repeated per axis
   std::vector<std::uint8_t> dof_is_fixed;  // (3N) 1 for a Dirichlet (fixed) dof
+  // A body merged from several objects (MergeModels): the first node of each, ascending, from 0.
+  // Empty: one object. The objects touch each other (contact/body_body_contacts.h).
+  std::vector<int> object_first_nodes;
   Eigen::VectorXd rest_positions_m;        // (3N) stacked rest positions X
 
   int num_nodes() const { return mesh.num_nodes(); }

@@ -1,7 +1,7 @@
 // Contact between the body's objects (contact/body_body_contacts.h, issue 28 item 2), against
 // statics and geometry the contact code does not compute: a block resting on another carries
 // exactly its weight through their contact (ρ V g, from its size alone) and rests on its surface;
-// the objects are the mesh's connected components; a row measures the gap's rate between them.
+// the objects are the models merged into the body; a row measures the gap's rate between them.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,20 +30,20 @@ fem::Material MakeSoft(double youngs_modulus_Pa) {
   return material;
 }
 
-// A 4 x 4 x 2 cm block fixed at its base (z = 0), and on it a free 2 x 2 x 1 cm block whose
-// bottom is `gap_m` above the lower block's top (z = 2 cm): one FEM system of two objects.
-fem::Model MakeStack(double gap_m) {
+// A 4 x 4 x 2 cm block fixed at its base (z = 0), or whole, and on it a free 2 x 2 x 1 cm block
+// whose bottom is `gap_m` above the lower block's top (z = 2 cm): one FEM system of two objects.
+fem::Model MakeStack(double gap_m, bool lower_fixed_whole = false) {
   const fem::TetMesh lower =
       fem::MakeBoxTetMesh({-0.02, -0.02, 0.0}, {0.02, 0.02, 0.02}, {4, 4, 2});
   const fem::TetMesh upper =
       fem::MakeBoxTetMesh({-0.01, -0.01, 0.02 + gap_m}, {0.01, 0.01, 0.03 + gap_m}, {3, 3, 2});
-  const std::vector<int> base =
-      fem::FindNodesInBox(lower, {-0.03, -0.03, -0.001}, {0.03, 0.03, 0.001}, 0.0);
+  const std::vector<int> base = fem::FindNodesInBox(
+      lower, {-0.03, -0.03, -0.001}, {0.03, 0.03, lower_fixed_whole ? 0.03 : 0.001}, 0.0);
   return fem::MergeModels(
       {fem::MakeModel(lower, MakeSoft(30e3), base), fem::MakeModel(upper, MakeSoft(20e3), {})});
 }
 
-TEST(BodyBodyContact, ObjectsAreTheConnectedComponents) {
+TEST(BodyBodyContact, ObjectsAreTheMergedModels) {
   const fem::Model stack = MakeStack(0.001);
   const BodyBodyContacts contacts(stack, 0.001);
   ASSERT_EQ(contacts.num_objects(), 2);
@@ -87,9 +87,12 @@ TEST(BodyBodyContact, RowsMeasureTheGapsRate) {
 
 // The upper block dropped from 1 mm settles on the lower: the contact carries its weight
 // ρ V g = 1000 · 4e-6 · 9.81 = 0.0392 N (the sum of λ n over its contacts, with the sign of its
-// side), and its bottom rests on the lower block's top.
-TEST(BodyBodyContact, StackedBlockCarriesExactlyItsWeight) {
-  const fem::Model stack = MakeStack(0.001);
+// side), and its bottom rests on the lower block's top. The lower block fixed at its base, or
+// whole (no free node: a surface to rest on all the same).
+class StackedBlock : public testing::TestWithParam<bool> {};
+
+TEST_P(StackedBlock, CarriesExactlyItsWeight) {
+  const fem::Model stack = MakeStack(0.001, GetParam());
   VisualFrameOptions options;
   options.dt_s = 1.0 / 60.0;
   options.gravity_m_s2 = Eigen::Vector3d(0, 0, -kGravity_m_s2);
@@ -138,6 +141,11 @@ TEST(BodyBodyContact, StackedBlockCarriesExactlyItsWeight) {
   // Resting on the surface: neither hanging above it nor sunk in (β undoes an overlap).
   EXPECT_NEAR(lowest_upper_m, top_under_m, 1e-4);
 }
+
+INSTANTIATE_TEST_SUITE_P(LowerFixed, StackedBlock, testing::Bool(),
+                         [](const testing::TestParamInfo<bool>& info) {
+                           return info.param ? "Whole" : "AtItsBase";
+                         });
 
 }  // namespace
 }  // namespace hapsim::contact

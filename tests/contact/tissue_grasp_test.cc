@@ -143,6 +143,38 @@ TEST(TissueGrasp, HapticSolverHoldsGraspRowsAsTheFrameSolveDoes) {
   }
 }
 
+// Two grasp rows that are one (the same row twice: W singular on them) cannot be held: the solve
+// fails, so that the step renders the linear model (which holds them by a rank-revealing solve),
+// rather than solve them unilaterally and let the tissue stop pulling.
+TEST(TissueGrasp, DependentGraspRowsFailTheSolve) {
+  ToolStepSystem tool;
+  tool.dt_s = 1e-3;
+  tool.A_v = 20.0 * Eigen::Matrix3d::Identity();
+  tool.A_L = 0.5 * Eigen::Matrix3d::Identity();
+  tool.M_inv_W = 1e3 * Eigen::Matrix3d::Identity();
+  ContactRows rows;
+  rows.J_v = Eigen::MatrixX3d::Zero(3, 3);
+  rows.J_w = Eigen::MatrixX3d::Zero(3, 3);
+  rows.J_v.row(0) = rows.J_v.row(1) = Eigen::RowVector3d(0, 0, -1);
+  rows.J_v.row(2) = Eigen::RowVector3d(-1, 0, 0);
+  rows.W_body = Eigen::MatrixXd::Zero(3, 3);
+  rows.W_body.topLeftCorner(2, 2).setConstant(0.5);
+  rows.W_body(2, 2) = 0.5;
+  rows.body_rhs = Eigen::VectorXd::Constant(3, -0.01);
+  rows.lambda_frame_N = Eigen::VectorXd::Zero(3);
+  Eigen::Vector3d F_N, T_N_m;
+  for (const bool hold : {false, true}) {
+    HapticLcpSolver solver(8, 0, hold);
+    rows.num_bilateral_rows = 1;  // one of the twins: it can be held
+    EXPECT_TRUE(
+        solver.Solve(rows, tool, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), &F_N, &T_N_m));
+    rows.num_bilateral_rows = 2;  // both: no unique λ
+    EXPECT_FALSE(
+        solver.Solve(rows, tool, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), &F_N, &T_N_m));
+    EXPECT_EQ(F_N, Eigen::Vector3d::Zero());
+  }
+}
+
 // The grasp block: 4 x 4 x 2 cm, 1 cm lattice cells, bottom fixed, soft, well damped, no gravity
 // (the static comparison below is then the grasp's pull alone).
 struct GraspBlock {
@@ -176,6 +208,7 @@ VisualFrameOptions MakeGraspOptions(double max_force_N) {
   options.gravity_m_s2 = Eigen::Vector3d::Zero();
   options.coupling = CouplingParams{300.0, 3.0, 0.5, 0.005};
   options.response.solve.law = ContactLaw::kUnilateral;
+  options.export_contact_rows = true;  // the 1 kHz rows, checked after each frame (RunPull)
   GraspOptions grasp;
   grasp.jaw_center_T_m = Eigen::Vector3d(0.0, 0.0, -kToolRadius_m);
   grasp.jaw_radius_m = 0.0105;
@@ -223,9 +256,9 @@ TEST(TissueGrasp, JawsTakeTheFreeSurfaceNodesInsideThem) {
   int grasp_rows = 0;
   for (const Contact& contact : frame.contacts()) {
     grasp_rows += contact.bilateral;
-    if (!contact.bilateral)
-      for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k)
-        EXPECT_FALSE(frame.grasp()->Holds(contact.nodes[k]));
+    if (contact.bilateral) continue;
+    for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k)
+      EXPECT_FALSE(frame.grasp()->Holds(contact.nodes[k]));
   }
   EXPECT_EQ(grasp_rows, 15);
   // The button released: open, nothing held, no grasp rows.
@@ -306,6 +339,9 @@ PullRun RunPull(VisualFrame* frame, fem::State* body, ToolState* tool, double li
     device.x_W_m.z() = 0.02 + kToolRadius_m + lift_m * std::min(1.0, t_s / 0.5);
     run.last = frame->Step(device, body, tool);
     run.slipped += run.last.num_grasp_slipped;
+    // The rows handed to the 1 kHz step hold the points still held, not those that slipped at
+    // this frame's end.
+    EXPECT_EQ(frame->contact_rows().num_bilateral_rows, 3 * run.last.num_grasped) << t_s;
     run.peak_grip_pull_N = std::max(run.peak_grip_pull_N, -frame->contact_force_N().z());
   }
   return run;

@@ -81,7 +81,9 @@ TEST(Retraction, ReleaseLetsGoAtTheNextFrameWithoutAJump) {
     const HapticSample& s = samples[k];
     if (s.t_s > kClose_s + 0.5 && s.t_s < kRelease_s)
       pulled_N = std::max(pulled_N, s.contact_force_W_N.norm());
-    if (s.t_s >= kRelease_s + scene.dt_s) EXPECT_EQ(s.contact_force_W_N.norm(), 0.0) << s.t_s;
+    if (s.t_s >= kRelease_s + scene.dt_s) {
+      EXPECT_EQ(s.contact_force_W_N.norm(), 0.0) << s.t_s;
+    }
     if (k > 0)
       largest_step_N =
           std::max(largest_step_N, (s.device_force_W_N - samples[k - 1].device_force_W_N).norm());
