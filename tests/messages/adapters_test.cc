@@ -395,7 +395,15 @@ TEST(ContactModelMessage, UncoupledContactsTravelAsTheirOwnBlocks) {
                  {"W_body_lower", [per](auto* m) { m->num_coupled_rows += per; }},
                  {"W_body_contact_lower", [](auto* m) { m->W_body_contact_lower.pop_back(); }},
                  {"W_body_contact_lower", [](auto* m) { m->W_body_contact_lower[0] = kNaN; }},
-                 {"W_body_contact_lower", [](auto* m) { m->W_body_contact_lower[0] = -1e-9; }}};
+                 {"W_body_contact_lower", [](auto* m) { m->W_body_contact_lower[0] = -1e-9; }},
+                 // A grasp's rows: within the coupled rows, never negative, normal rows only.
+                 {"num_bilateral_rows", [](auto* m) { m->num_bilateral_rows = -1; }},
+                 {"num_bilateral_rows",
+                  [](auto* m) { m->num_bilateral_rows = m->num_coupled_rows + 1; }},
+                 {"num_bilateral_rows",
+                  [per](auto* m) { m->num_bilateral_rows = per == 3 ? 3 : m->num_rows + 1; }},
+                 // Without them a normal row's frame impulse cannot pull.
+                 {"lambda_frame_N", [](auto* m) { m->lambda_frame_N[0] = -0.1; }}};
     for (const auto& [field, corrupt] : cases) {
       hapsim_lcm::contact_model_t bad = msg;
       corrupt(&bad);
