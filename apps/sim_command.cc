@@ -73,6 +73,25 @@ void WriteHapticCsv(const std::string& path, const SimRecord& record) {
   });
 }
 
+// Open loop ("scripted"): the script is the device; closed loop ("hand"): a simulated hand pulled
+// along the script feels the device force (device.hand), which is how an unstable rendering shows
+// itself.
+std::unique_ptr<device::DeviceBackend> MakeDevice(const config::Scene& scene,
+                                                  const std::string& device) {
+  if (device == "hand")
+    return std::make_unique<device::SimulatedHand>(ScriptedTrajectory(scene.trajectory), scene.hand,
+                                                   1.0 / scene.haptic.rate_hz);
+  return std::make_unique<device::ScriptedDevice>(ScriptedTrajectory(scene.trajectory));
+}
+
+// What the grasper's jaws did over the run, a line each to stderr (apps/grasp_report.h).
+void ReportGraspEvents(const config::Scene& scene, const SimRecord& record) {
+  for (const device::FrameSample& f : record.frames) {
+    const std::string grasp = DescribeGraspEvents(scene, f.t_s, f.stats);
+    if (!grasp.empty()) std::fprintf(stderr, "hapsim sim: %s\n", grasp.c_str());
+  }
+}
+
 void WriteFramesCsv(const std::string& path, const SimRecord& record) {
   WriteFileAtomically(path, [&](std::ostream& out) {
     out << "t_s,coupling_ms,free_tool_ms,free_fem_ms,detection_ms,response_ms,model_ms,sanity_ms,"
@@ -193,14 +212,7 @@ void RunSim(const SimCommandOptions& options) {
   record.haptic.reserve(num_steps);
   {
     ProgressBar progress("sim", num_steps);
-    // Open loop: the script is the device; closed loop: a simulated hand pulled along the script
-    // feels the device force (device.hand), which is how an unstable rendering shows itself.
-    std::unique_ptr<device::DeviceBackend> backend;
-    if (options.device == "hand")
-      backend = std::make_unique<device::SimulatedHand>(ScriptedTrajectory(scene.trajectory),
-                                                        scene.hand, 1.0 / scene.haptic.rate_hz);
-    else
-      backend = std::make_unique<device::ScriptedDevice>(ScriptedTrajectory(scene.trajectory));
+    const std::unique_ptr<device::DeviceBackend> backend = MakeDevice(scene, options.device);
     simulator.Run(
         backend.get(), num_steps,
         [&](const device::HapticSample& s) {
@@ -209,11 +221,7 @@ void RunSim(const SimCommandOptions& options) {
         },
         [&](const device::FrameSample& f) { record.frames.push_back(f); });
   }
-  // After the progress bar: what the grasper's jaws did.
-  for (const device::FrameSample& f : record.frames) {
-    const std::string grasp = DescribeGraspEvents(scene, f.t_s, f.stats);
-    if (!grasp.empty()) std::fprintf(stderr, "hapsim sim: %s\n", grasp.c_str());
-  }
+  ReportGraspEvents(scene, record);  // after the progress bar
   const std::string out_dir = options.out_dir.empty()
                                   ? "out/" + scene.name + "_" + device::ToString(mode)
                                   : options.out_dir;

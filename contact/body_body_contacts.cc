@@ -16,14 +16,10 @@ BodyBodyContacts::BodyBodyContacts(const fem::Model& body, double margin_m)
     std::fill(object_of_node_.begin() + first_nodes[o], object_of_node_.end(), o);
   surface_nodes_.resize(num_objects);
   triangles_.resize(num_objects);
-  std::vector<std::uint8_t> on_surface(object_of_node_.size(), 0);
-  for (int f = 0; f < body.surface_triangles.cols(); ++f) {
+  for (int f = 0; f < body.surface_triangles.cols(); ++f)
     triangles_[object_of_node_[body.surface_triangles(0, f)]].push_back(f);
-    for (int k = 0; k < 3; ++k) on_surface[body.surface_triangles(k, f)] = 1;
-  }
-  for (int node = 0; node < body.num_nodes(); ++node)
-    if (on_surface[node] && !body.dof_is_fixed[3 * node])
-      surface_nodes_[object_of_node_[node]].push_back(node);
+  for (int node : fem::FindFreeSurfaceNodes(body))
+    surface_nodes_[object_of_node_[node]].push_back(node);
 }
 
 template <typename Visit, typename Threshold>

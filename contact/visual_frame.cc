@@ -66,17 +66,9 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
                                                            stepper_->external_force_N());
       haptic_compliance_ = std::make_unique<fem::WarpedCompliance>(*body, *haptic_stepper_);
     }
-    if (!options.rigid_objects.empty() || options.grasp) {
-      const Matrix3Xi surface = fem::ExtractBoundarySurface(body->mesh);
-      surface_nodes_.assign(surface.data(), surface.data() + surface.size());
-      std::sort(surface_nodes_.begin(), surface_nodes_.end());
-      surface_nodes_.erase(std::unique(surface_nodes_.begin(), surface_nodes_.end()),
-                           surface_nodes_.end());
-      // A fixed node cannot move: its contact row with an object would be all zero (W_ii = 0).
-      surface_nodes_.erase(std::remove_if(surface_nodes_.begin(), surface_nodes_.end(),
-                                          [&](int n) { return body->dof_is_fixed[3 * n] != 0; }),
-                           surface_nodes_.end());
-    }
+    // A fixed node cannot move: its row with an object, or a grasp's, would be all zero.
+    if (!options.rigid_objects.empty() || options.grasp)
+      surface_nodes_ = fem::FindFreeSurfaceNodes(*body);
     body_contacts_ = std::make_unique<BodyBodyContacts>(*body, options.detection.margin_m);
     if (body_contacts_->num_objects() < 2) body_contacts_.reset();
     if (options.grasp) {

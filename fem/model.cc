@@ -137,6 +137,16 @@ Model MergeModels(const std::vector<Model>& models) {
   return merged;
 }
 
+std::vector<int> FindFreeSurfaceNodes(const Model& model) {
+  std::vector<std::uint8_t> on_surface(static_cast<size_t>(model.num_nodes()), 0);
+  for (int f = 0; f < model.surface_triangles.cols(); ++f)
+    for (int k = 0; k < 3; ++k) on_surface[model.surface_triangles(k, f)] = 1;
+  std::vector<int> nodes;
+  for (int node = 0; node < model.num_nodes(); ++node)
+    if (on_surface[node] && !model.dof_is_fixed[3 * node]) nodes.push_back(node);
+  return nodes;
+}
+
 std::vector<int> FindNodesInBox(const TetMesh& mesh, const Eigen::Vector3d& min_m,
                                 const Eigen::Vector3d& max_m, double tolerance_m) {
   std::vector<int> nodes;

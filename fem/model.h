@@ -85,6 +85,10 @@ Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& 
 Model MergeModels(const std::vector<Model>& models);
 
 // Nodes whose rest position lies in the axis-aligned box [min_m − tol, max_m + tol].
+// The nodes of model.surface_triangles that are not fixed, ascending: the surface points that can
+// move, so that a contact or grasp row on one has a non-zero compliance (W_ii > 0).
+std::vector<int> FindFreeSurfaceNodes(const Model& model);
+
 std::vector<int> FindNodesInBox(const TetMesh& mesh, const Eigen::Vector3d& min_m,
                                 const Eigen::Vector3d& max_m, double tolerance_m);
 
