@@ -74,6 +74,13 @@
 //                                      # device.trajectory (without button)
 //         grabbable: false             # true: touching it with the tool selects it, the device
 //                                      # button grabs it (paper 003); not with a trajectory
+//         dynamic: false               # true: it falls under gravity, rests on the tissue and
+//                                      # the other objects, is pushed by the tool, and falls
+//                                      # when let go (contact/object_dynamics.h); not with a
+//                                      # trajectory. Needs exactly one of:
+//         mass_kg: 0.01                #   its mass (> 0), or
+//         density_kg_m3: 7800          #   its density (> 0); only a dynamic object has either.
+//                                      # A dynamic mesh is re-centred on its centre of mass.
 //         friction_coefficient: 0.1    # optional, ≥ 0: μ of every contact with it (friction law
 //                                      # only); default contact.friction_coefficient
 //         material: {stiffness: 1, viscosity: 0, stickiness_N: 0, friction_N_m: 0}

@@ -200,10 +200,50 @@ contact::Material ReadMaterial(const YamlMap& map) {
   return material;
 }
 
+namespace {
+
+// `dynamic: true` with its mass (exactly one of mass_kg, density_kg_m3): the object's mass
+// properties (contact/object_dynamics.h). A mesh is re-centred on its centre of mass, and its
+// pose moved with it, so that the object stays where the scene put it.
+void ReadObjectDynamics(const YamlMap& map, const std::string& name, contact::RigidObject* object) {
+  object->dynamic = map.GetBoolOr("dynamic", false);
+  const int num_masses = map.Has("mass_kg") + map.Has("density_kg_m3");
+  if (!object->dynamic) {
+    for (const char* key : {"mass_kg", "density_kg_m3"})
+      if (map.Has(key))
+        map.FailKey(key, "only a dynamic object has a mass (dynamic: true); " + name +
+                             " is fixed, scripted or moved by the tool");
+    return;
+  }
+  if (num_masses != 1)
+    map.FailKey("dynamic", "the dynamic object " + name +
+                               " needs its mass: give exactly one of mass_kg, density_kg_m3");
+  if (object->script)
+    map.FailKey("dynamic",
+                "a dynamic object moves under gravity and its contacts, not by a "
+                "trajectory");
+  const bool by_mass = map.Has("mass_kg");
+  const double value =
+      by_mass ? map.GetDouble("mass_kg", Above(0.0)) : map.GetDouble("density_kg_m3", Above(0.0));
+  const ToolShape shape = object->shape;
+  const ToolModel model =
+      by_mass ? MakeToolModelWithMass(shape, value) : MakeToolModel(shape, value);
+  if (shape.kind == ToolShape::Kind::kMesh && shape.mesh.vertices_m.cols() > 0) {
+    const Eigen::Vector3d com_O_m =
+        shape.mesh.vertices_m.col(0) - model.shape.mesh.vertices_m.col(0);
+    object->X_WO.translation() += object->X_WO.linear() * com_O_m;
+  }
+  object->shape = model.shape;
+  object->mass_kg = model.mass_kg;
+  object->inertia_O_kg_m2 = model.inertia_T_kg_m2;
+}
+
+}  // namespace
+
 RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
                                  const std::string& base_dir) {
   map.CheckKeys({"shape", "position_m", "rotation_vector_rad", "trajectory", "grabbable",
-                 "friction_coefficient", "material"});
+                 "friction_coefficient", "material", "dynamic", "mass_kg", "density_kg_m3"});
   RigidObjectScene rigid;
   rigid.location = LocationOf(map);
   rigid.object.name = name;
@@ -237,6 +277,7 @@ RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
     rigid.object.script.emplace(ReadWaypoints(map, "trajectory", /*with_button=*/false));
     rigid.object.X_WO = contact::CalcScriptedPose(rigid.object, 0.0);
   }
+  ReadObjectDynamics(map, name, &rigid.object);
   return rigid;
 }
 

@@ -21,6 +21,9 @@
 // and no rigid object: its "tool" side is a face of one object (p_tool_W_m on it, n_W out of it),
 // its body side a node of the other, and its weights are 1 for the node and −w_k for the face's
 // nodes, so that the row measures the gap's rate between them.
+// A contact between two rigid objects, one of them dynamic (contact/object_dynamics.h), has
+// on_tool false and no body nodes: rigid_object is the object on its "tool" side (p_tool_W_m on
+// it, n_W out of it) and other_object the one on its body side (p_body_W_m on it).
 // A grasp row (contact/tissue_grasp.h) is a contact too: a body point held by the tool's jaws,
 // its normal one of the tool frame's axes and its gap the point's offset from where the jaws
 // took it along that axis. It is bilateral: held at c = b with λ of either sign (the tissue
@@ -62,6 +65,7 @@ struct Contact {
   std::array<int, 3> surface_points = {-1, -1, -1};
   bool on_tool = true;    // false: a body node against a rigid object or another object's face
   int rigid_object = -1;  // the rigid object touched (index in the scene's list), −1: none
+  int other_object = -1;  // two rigid objects touching: the one on the body side, −1: none
   bool bilateral = false;  // a grasp row: an equality whatever the law, λ of either sign
 
   void SetBodyNodes(std::initializer_list<int> body_nodes,
@@ -82,12 +86,15 @@ enum class ContactKind : std::int8_t {
   kHeldObjectBody = 3,  // a body node and the object the tool holds
   kGrasp = 4,           // a body point held by the tool's jaws (one row per tool axis)
   kBodyBody = 5,        // a node of one deformable object and a face of another
+  kObjectObject = 6,    // two rigid objects, one of them dynamic (falling, pushed)
 };
 
 inline ContactKind KindOf(const Contact& contact) {
   if (contact.bilateral) return ContactKind::kGrasp;
-  if (!contact.on_tool)
+  if (!contact.on_tool) {
+    if (contact.other_object >= 0) return ContactKind::kObjectObject;
     return contact.rigid_object >= 0 ? ContactKind::kBodyObject : ContactKind::kBodyBody;
+  }
   if (contact.rigid_object < 0) return ContactKind::kToolBody;
   return contact.nodes[0] >= 0 ? ContactKind::kHeldObjectBody : ContactKind::kToolObject;
 }

@@ -214,6 +214,26 @@ void RigidObjectContacts::AddToolContacts(const Eigen::Isometry3d& X_WT_start,
   }
 }
 
+void RigidObjectContacts::AddObjectContacts(std::vector<Contact>* contacts) const {
+  for (int i = 0; i < num_objects(); ++i) {
+    const Placed& moving = objects_[i];
+    if (!moving.object.dynamic || i == grabbed_) continue;
+    for (int j = 0; j < num_objects(); ++j) {
+      if (j == i || j == grabbed_ || (objects_[j].object.dynamic && j < i)) continue;
+      const size_t first = contacts->size();
+      AddMovingBodyContacts(moving.field, moving.points_O_m, moving.point_radius_m,
+                            moving.object.X_WO, j, margin_m_ + moving.sweep_m + objects_[j].sweep_m,
+                            contacts);
+      for (size_t k = first; k < contacts->size(); ++k) {
+        Contact& contact = (*contacts)[k];
+        contact.on_tool = false;  // the moving side is object i, not the tool
+        contact.rigid_object = i;
+        contact.other_object = j;
+      }
+    }
+  }
+}
+
 void RigidObjectContacts::AddBodyContacts(const std::vector<int>& surface_nodes,
                                           const Eigen::VectorXd& x_start_m,
                                           const Eigen::VectorXd& x_end_m,

@@ -3,10 +3,12 @@
 // and their contacts, for stage 4 of the visual frame.
 //
 // A rigid object is one of the tool's shapes (core/tool_shape.h: sphere, capsule, cylinder, box,
-// closed mesh) placed at a pose X_WO: fixed, moved by a script (its pose a function of time), or
-// grabbed by the tool. None has degrees of freedom of its own, so its contact rows carry no
-// compliance of its own: a tool contact has the tool's J_v, J_ω and no J_u; a body contact has
-// the body's J_u and no tool terms.
+// closed mesh) placed at a pose X_WO: fixed, moved by a script (its pose a function of time),
+// grabbed by the tool, or dynamic (it falls and is pushed: contact/object_dynamics.h). Only a
+// dynamic one has degrees of freedom of its own; the others' contact rows carry no compliance of
+// their own: a tool contact has the tool's J_v, J_ω and no J_u; a body contact has the body's J_u
+// and no tool terms. A dynamic object's rows get its velocity and its compliance from the
+// visual frame (contact/object_dynamics.h), and it also touches the other objects.
 //
 // Grabbing (paper 003, selection and grabbing modes): while grabbed, an object is attached to the
 // tool at the relative pose X_TO it had when grabbed, so it is part of the tool. Its contacts
@@ -58,6 +60,13 @@ struct RigidObject {
   std::optional<ScriptedTrajectory> script;
   // Touching it with the tool selects it; pressing the device button grabs it (VisualFrame).
   bool grabbable = false;
+  // Dynamic: it falls under gravity and its contacts push it (contact/object_dynamics.h), with
+  // this mass and body inertia about O's origin, which is its centre of mass (a mesh is
+  // re-centred on it by config). A grabbed dynamic object moves with the tool and falls when
+  // let go.
+  bool dynamic = false;
+  double mass_kg = 0.0;
+  Eigen::Matrix3d inertia_O_kg_m2 = Eigen::Matrix3d::Zero();
   // Its own Coulomb μ under the friction law, for every contact with it (the tool's, the body's,
   // a grabbed object's); none: the scene's μ.
   std::optional<double> friction_coefficient;
@@ -91,6 +100,12 @@ class RigidObjectContacts {
   // against the others: appends contacts with on_tool = true and no body nodes.
   void AddToolContacts(const Eigen::Isometry3d& X_WT_start, const Eigen::Isometry3d& X_WT_end,
                        std::vector<Contact>* contacts) const;
+
+  // Each dynamic object but the grabbed one against every other object but the grabbed one (whose
+  // contacts are the tool's), each pair once: its sample points against the other's field and the
+  // other's points against its own. Appends contacts with on_tool = false, rigid_object the
+  // dynamic object (n_W out of it), other_object the other (contact/contact.h).
+  void AddObjectContacts(std::vector<Contact>* contacts) const;
 
   // The nodes `surface_nodes` of a deformable body against every object: appends contacts with
   // one node of weight 1, on_tool = false except against the grabbed object, which sweeps with

@@ -53,6 +53,9 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
                       [](const RigidObject& o) { return o.friction_coefficient.has_value(); })),
       impulse_start_(rows_per_contact_),
       rigid_contacts_(options.rigid_objects, tool_.shape, options.detection.margin_m) {
+  for (size_t i = 0; i < options.rigid_objects.size(); ++i)
+    if (options.rigid_objects[i].dynamic)
+      dynamic_objects_.push_back(MakeDynamicObject(static_cast<int>(i), options.rigid_objects[i]));
   if ((body == nullptr) != (fem_options == nullptr))
     throw std::invalid_argument("VisualFrame: give both the body and its FEM options, or neither");
   if (body_ != nullptr) {
@@ -176,6 +179,7 @@ void VisualFrame::DetectContacts(const fem::State& body, const ToolState& tool) 
     detector_->Detect(body.x_m, CalcPose(tool), x_end_m, CalcPose(tool_end), &contacts_);
   }
   rigid_contacts_.AddToolContacts(CalcPose(tool), CalcPose(tool_end), &contacts_);
+  rigid_contacts_.AddObjectContacts(&contacts_);
   if (body_ != nullptr)
     rigid_contacts_.AddBodyContacts(surface_nodes_, body.x_m, x_end_m, CalcPose(tool),
                                     CalcPose(tool_end), &contacts_);
@@ -214,10 +218,17 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
   CalcObjectVelocities();
   const Eigen::VectorXd c_object = CalcObjectSeparatingVelocity(contacts_);
   c_free += c_object;
-  const Eigen::VectorXd c_pre =
+  Eigen::VectorXd c_pre =
       CalcSeparatingVelocity(jacobian_, tool.v_W_m_s, tool_system_.M_inv_W * tool.L_W_kg_m2_s,
                              body.v_m_s) +
       c_object;
+  // The dynamic objects' own velocities, through their rows (their motion is not in c_object).
+  for (DynamicObject& object : dynamic_objects_) {
+    if (object.object == grabbed_object()) continue;
+    SetObjectRows(contacts_, rows_per_contact_, &object);
+    AddObjectSeparatingVelocity(object, /*free=*/true, &c_free);
+    AddObjectSeparatingVelocity(object, /*free=*/false, &c_pre);
+  }
   b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
   const int num_rows = jacobian_.num_rows();
   Stopwatch stage;
@@ -229,6 +240,11 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
     W_body_ = stepper_->CalcCompliance(jacobian_.J_u);
   if (haptic_compliance_)
     W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
+  for (const DynamicObject& object : dynamic_objects_) {
+    if (object.object == grabbed_object()) continue;
+    AddToolDelassus(object.J, object.system, &W_body_);  // a rigid body: the same at either step
+    if (haptic_compliance_) AddToolDelassus(object.J, object.system, &W_body_haptic_);
+  }
   stats->compliance_s = stage.Lap();
   Eigen::MatrixXd W = W_body_;
   AddToolDelassus(jacobian_, tool_system_, &W);

@@ -23,6 +23,11 @@
 //     as part of the tool until the button is released, where it stays. The button is read once
 //     a frame: a press shorter than a frame may be missed. Frames count from 0 at
 //     construction: Step k is the frame [k Δt, (k + 1) Δt].
+//   dynamic (contact/object_dynamics.h): takes its free step under gravity first, is placed at
+//     the frame's start swept to the free step's end, and touches the other objects too; its
+//     velocity and compliance enter the one solve through its rows, and it ends the frame where
+//     the solve's impulses leave it. Grabbed, it moves with the tool as above; let go, it keeps
+//     the tool's motion and falls.
 //   The same press closes a grasper's jaws on the body (options.grasp, contact/tissue_grasp.h):
 //     the surface points inside them are held by bilateral rows from that frame on, added to the
 //     frame's contacts after detection, until the button is released or a point's grip force
@@ -40,6 +45,7 @@
 #include "contact/haptic_contact_rows.h"
 #include "contact/impulse_warm_start.h"
 #include "contact/linear_contact_model.h"
+#include "contact/object_dynamics.h"
 #include "contact/rigid_objects.h"
 #include "contact/tissue_grasp.h"
 #include "core/rigid_tool.h"
@@ -181,6 +187,8 @@ class VisualFrame {
   // The grasper's jaws (null when the tool is not one).
   const TissueGrasp* grasp() const { return grasp_.get(); }
   int grabbed_object() const { return rigid_contacts_.grabbed(); }
+  // The dynamic objects after the last Step (a grabbed one's state is where it was let go last).
+  const std::vector<DynamicObject>& dynamic_objects() const { return dynamic_objects_; }
   const VisualFrameOptions& options() const { return options_; }
 
  private:
@@ -196,7 +204,10 @@ class VisualFrame {
   // as a vector w with c_object = d·w (zero without a moving object); then c_object per row.
   void CalcObjectVelocities();
   Eigen::VectorXd CalcObjectSeparatingVelocity(const std::vector<Contact>& contacts) const;
-  // End of stage 5: objects at their end-of-frame poses; the touched grabbable object selected.
+  // The dynamic object of rigid object i, or null.
+  DynamicObject* FindDynamicObject(int i);
+  // End of stage 5: dynamic objects stepped with the solve's impulses; objects at their
+  // end-of-frame poses; the touched grabbable object selected.
   void FinishRigidObjects(const ToolState& tool);
   // Velocity of object i's material point at p_W_m, world (the tool's motion for a grabbed one).
   Eigen::Vector3d CalcObjectPointVelocity(int i, const Eigen::Vector3d& p_W_m,
@@ -258,6 +269,7 @@ class VisualFrame {
   RigidObjectContacts rigid_contacts_;
   // Rigid objects' state: motion this frame (zero for a still one), selection and grabbing.
   std::vector<ObjectMotion> object_motion_;
+  std::vector<DynamicObject> dynamic_objects_;  // the rigid objects with `dynamic`, in order
   long frame_index_ = 0;
   int selected_object_ = -1;
   bool button_was_down_ = false;
@@ -277,7 +289,9 @@ class VisualFrame {
   Eigen::VectorXd du_contact_;
   std::vector<Contact> contacts_;
   ContactJacobian jacobian_;
-  Eigen::MatrixXd W_body_;         // J_u A_u⁻¹ J_uᵀ at the visual step, the frame's solve
+  // J_u A_u⁻¹ J_uᵀ at the visual step, the frame's solve, plus the dynamic objects' parts: all
+  // that yields but the tool.
+  Eigen::MatrixXd W_body_;
   Eigen::MatrixXd W_body_haptic_;  // the same at the haptic step (ModelComplianceStep::kHaptic)
   Eigen::VectorXd b_, lambda_;
   std::vector<Eigen::Vector3d> object_velocity_;  // w of each contact (CalcObjectVelocities)

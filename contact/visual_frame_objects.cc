@@ -26,30 +26,60 @@ void VisualFrame::MoveRigidObjects(bool button_down, bool pressed, const ToolSta
     rigid_contacts_.SetMotion(i, X_start, X_end);
   }
   // Grabbing acts on a press (the button going down), so holding it while touching an object
-  // does not pick the object up; releasing lets go, and the object stays where it is.
+  // does not pick the object up; releasing lets go: a fixed object stays where it is, a dynamic
+  // one leaves with the tool's motion and falls.
   const Eigen::Isometry3d X_WT = CalcPose(tool);
-  if (grabbed_object() >= 0 && !button_down) rigid_contacts_.SetGrabbed(-1);
+  if (grabbed_object() >= 0 && !button_down) {
+    if (DynamicObject* dynamic = FindDynamicObject(grabbed_object()))
+      LetGo(rigid_contacts_.pose(grabbed_object()), tool.x_W_m, tool.v_W_m_s,
+            CalcAngularVelocity(tool_, tool), dynamic);
+    rigid_contacts_.SetGrabbed(-1);
+  }
   if (pressed && grabbed_object() < 0 && selected_object_ >= 0) {
     X_TO_grabbed_ = X_WT.inverse() * rigid_contacts_.pose(selected_object_);
     rigid_contacts_.SetGrabbed(selected_object_, X_TO_grabbed_);
   }
   if (grabbed_object() >= 0) rigid_contacts_.SetPose(grabbed_object(), X_WT * X_TO_grabbed_);
+  // Dynamic objects: the free step under gravity, placed at the frame's start and swept to where
+  // it would take them (their motion enters the rows through their own Jacobian, not
+  // object_motion_, which stays zero for them until the frame's end).
+  for (DynamicObject& object : dynamic_objects_) {
+    if (object.object == grabbed_object()) continue;
+    StartFreeStep(options_.gravity_m_s2, options_.dt_s, &object);
+    rigid_contacts_.SetMotion(object.object, CalcPose(object.state),
+                              CalcFreeEndPose(object, options_.dt_s));
+  }
+}
+
+DynamicObject* VisualFrame::FindDynamicObject(int i) {
+  for (DynamicObject& object : dynamic_objects_)
+    if (object.object == i) return &object;
+  return nullptr;
 }
 
 // A row measures (velocity of the body side − velocity of the tool side)·direction
 // (contact/contact_jacobian.h). A moving object is the body side of a tool contact and the tool
-// side of a body-node contact: w = ±v_O(p). The grabbed object moves with the tool, through J_v
-// and J_ω.
+// side of a body-node contact: w = ±v_O(p); of two objects touching, rigid_object is the tool side
+// and other_object the body side. The grabbed object moves with the tool, through J_v and J_ω; a
+// dynamic object's motion is zero here during its frame's solve (its rows carry it).
 void VisualFrame::CalcObjectVelocities() {
+  const auto velocity_at = [&](int object, const Eigen::Vector3d& p_W_m) {
+    const ObjectMotion& motion = object_motion_[object];
+    return Eigen::Vector3d(motion.v_W_m_s + motion.w_W_rad_s.cross(p_W_m - motion.x_W_m));
+  };
   object_velocity_.assign(contacts_.size(), Eigen::Vector3d::Zero());
   for (size_t i = 0; i < contacts_.size(); ++i) {
     const Contact& contact = contacts_[i];
+    Eigen::Vector3d& w = object_velocity_[i];
     const int object = contact.rigid_object;
-    if (object < 0 || object == grabbed_object()) continue;
-    const ObjectMotion& motion = object_motion_[object];
-    const Eigen::Vector3d& p_W_m = contact.on_tool ? contact.p_body_W_m : contact.p_tool_W_m;
-    const Eigen::Vector3d v_point = motion.v_W_m_s + motion.w_W_rad_s.cross(p_W_m - motion.x_W_m);
-    object_velocity_[i] = contact.on_tool ? v_point : Eigen::Vector3d(-v_point);
+    if (object >= 0 && object != grabbed_object()) {
+      if (contact.on_tool)
+        w += velocity_at(object, contact.p_body_W_m);
+      else
+        w -= velocity_at(object, contact.p_tool_W_m);
+    }
+    const int other = contact.other_object;
+    if (other >= 0 && other != grabbed_object()) w += velocity_at(other, contact.p_body_W_m);
   }
 }
 
@@ -75,6 +105,18 @@ void VisualFrame::FinishRigidObjects(const ToolState& tool) {
   for (int i = 0; i < rigid_contacts_.num_objects(); ++i)
     if (rigid_contacts_.object(i).script)
       rigid_contacts_.SetPose(i, CalcScriptedPose(rigid_contacts_.object(i), t_end_s));
+  // Dynamic objects step with the impulses; from here on (the linear model's targets, the sanity
+  // pass) their velocity after the frame is their motion, as a scripted object's is.
+  for (DynamicObject& object : dynamic_objects_) {
+    if (object.object == grabbed_object()) continue;
+    FinishObjectStep(lambda_, options_.dt_s, &object);
+    rigid_contacts_.SetPose(object.object, CalcPose(object.state));
+    ObjectMotion& motion = object_motion_[object.object];
+    motion.x_W_m = object.state.x_W_m;
+    motion.v_W_m_s = object.state.v_W_m_s;
+    motion.w_W_rad_s = CalcAngularVelocity(object.model, object.state);
+  }
+  if (!dynamic_objects_.empty()) CalcObjectVelocities();
   const int grabbed = grabbed_object();
   if (grabbed >= 0) {
     rigid_contacts_.SetPose(grabbed, CalcPose(tool) * X_TO_grabbed_);

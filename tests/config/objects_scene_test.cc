@@ -257,6 +257,23 @@ const BadCase kBadCases[] = {
      "must be > 0"},
     {"NoShape", "{box: {half_extents_m: [0.1, 0.08, 0.005]}}", "{}", 6, "objects[0].rigid.shape",
      "exactly one of sphere, capsule, cylinder, box, mesh"},
+    {"DynamicWithoutMass", "      position_m: [0.05, 0, 0.02]             # 11\n",
+     "      position_m: [0.05, 0, 0.02]\n      dynamic: true\n", 12, "objects[1].rigid.dynamic",
+     "the dynamic object wall needs its mass: give exactly one of mass_kg, density_kg_m3"},
+    {"DynamicWithBothMasses", "      position_m: [0.05, 0, 0.02]             # 11\n",
+     "      position_m: [0.05, 0, 0.02]\n      dynamic: true\n      mass_kg: 0.1\n"
+     "      density_kg_m3: 1000\n",
+     12, "objects[1].rigid.dynamic", "needs its mass: give exactly one"},
+    {"MassOfAFixedObject", "      position_m: [0.05, 0, 0.02]             # 11\n",
+     "      position_m: [0.05, 0, 0.02]\n      mass_kg: 0.1\n", 12, "objects[1].rigid.mass_kg",
+     "only a dynamic object has a mass (dynamic: true); wall is fixed"},
+    {"ZeroMass", "      position_m: [0.05, 0, 0.02]             # 11\n",
+     "      position_m: [0.05, 0, 0.02]\n      dynamic: true\n      mass_kg: 0\n", 13,
+     "objects[1].rigid.mass_kg", "> 0"},
+    {"DynamicAndScripted", "      position_m: [0, 0, -0.005]              #  7\n",
+     "      trajectory: [{t_s: 0, position_m: [0, 0, 0]}]\n      dynamic: true\n"
+     "      mass_kg: 0.1\n",
+     8, "objects[0].rigid.dynamic", "not by a trajectory"},
 };
 
 class ObjectsSceneBadInputTest : public testing::TestWithParam<BadCase> {};
@@ -283,6 +300,42 @@ TEST(ObjectsSceneTest, RigidObjectsNeedATool) {
   std::string scene = kObjectsScene;
   scene = scene.substr(0, scene.find("tool:"));
   test::ExpectError(scene, kLabel, 3, "objects", "a rigid object needs a tool");
+}
+
+TEST(ObjectsSceneTest, ADynamicObjectGetsItsMassPropertiesAndAMeshIsReCentredInPlace) {
+  const std::string text =
+      Replace(kObjectsScene, "      position_m: [0.05, 0, 0.02]             # 11\n",
+              "      position_m: [0.05, 0, 0.02]\n      dynamic: true\n      mass_kg: 0.2\n");
+  const Scene scene = ParseScene(text, kLabel, "");
+  const contact::RigidObject& wall = scene.rigid_objects[1].object;
+  EXPECT_TRUE(wall.dynamic);
+  EXPECT_FALSE(scene.rigid_objects[0].object.dynamic);
+  EXPECT_EQ(wall.mass_kg, 0.2);
+  // A solid cylinder about its axis (z of O): m r² / 2; across it: m (3 r² + L²) / 12.
+  const double r = 0.02, L = 0.1;
+  EXPECT_NEAR(wall.inertia_O_kg_m2(2, 2), 0.2 * r * r / 2.0, 1e-3 * 0.2 * r * r / 2.0);
+  EXPECT_NEAR(wall.inertia_O_kg_m2(0, 0), 0.2 * (3 * r * r + L * L) / 12.0,
+              1e-3 * 0.2 * (3 * r * r + L * L) / 12.0);
+  EXPECT_TRUE(MakeVisualFrameOptions(scene).rigid_objects[1].dynamic);
+
+  // A mesh is moved so that O's origin is its centre of mass; its vertices stay where they were
+  // in the world. A tetrahedron's centre of mass is the mean of its corners.
+  const test::TempFolder folder("dynamic_mesh");
+  folder.Write("tetra.obj",
+               "v 1 0 0\nv 2 0 0\nv 1 1 0\nv 1 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  const Scene fixed =
+      ParseScene(Replace(kObjectsScene, "{cylinder: {radius_m: 0.02, length_m: 0.1}}",
+                         "{mesh: {file: tetra.obj}}"),
+                 kLabel, folder.path());
+  const Scene dynamic = ParseScene(
+      Replace(text, "{cylinder: {radius_m: 0.02, length_m: 0.1}}", "{mesh: {file: tetra.obj}}"),
+      kLabel, folder.path());
+  const contact::RigidObject& before = fixed.rigid_objects[1].object;
+  const contact::RigidObject& after = dynamic.rigid_objects[1].object;
+  EXPECT_TRUE(after.shape.mesh.vertices_m.rowwise().mean().isZero(1e-12));
+  for (int v = 0; v < 4; ++v)
+    EXPECT_TRUE((after.X_WO * after.shape.mesh.vertices_m.col(v))
+                    .isApprox(before.X_WO * before.shape.mesh.vertices_m.col(v), 1e-12));
 }
 
 // A closed mesh object is read from its file, kept in its own frame; an open one is an error
