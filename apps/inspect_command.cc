@@ -130,8 +130,13 @@ nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* bod
       describe_deformable(scene.more_bodies[k].name, scene.more_bodies[k].body, body->parts[k + 1]);
   }
   for (const config::RigidObjectScene& rigid : scene.rigid_objects) {
+    // A dynamic object's six degrees of freedom are a rigid body's, not FEM dofs.
     nlohmann::json object{{"name", rigid.object.name}, {"kind", "rigid"}, {"dofs", 0}};
     object.update(DescribeShape(rigid.object.shape));
+    if (rigid.object.dynamic) {
+      object["dynamic"] = true;
+      object["mass_kg"] = rigid.object.mass_kg;
+    }
     objects.push_back(object);
   }
   nlohmann::json json{{"scene", scene.name},
@@ -213,6 +218,11 @@ void PrintReport(const nlohmann::json& report) {
       std::printf("  %-12s   collision surface %s; visual %s\n", "",
                   surface_text(object["collision_surface"]).c_str(),
                   surface_text(object["visual_surface"]).c_str());
+    } else if (object.contains("dynamic")) {
+      std::printf(
+          "  %-12s rigid %s, dynamic: %.4g kg, falls and is pushed (a rigid body; no FEM)\n",
+          object["name"].get<std::string>().c_str(), object["shape"].get<std::string>().c_str(),
+          object["mass_kg"].get<double>());
     } else {
       std::printf("  %-12s rigid %s: 0 DOFs, no FEM\n", object["name"].get<std::string>().c_str(),
                   object["shape"].get<std::string>().c_str());

@@ -127,6 +127,8 @@ class MultirateSimulator {
   const PassivityObserver& passivity() const { return passivity_; }
 
   const fem::State& body_state() const { return body_state_; }
+  // The visual frame, as the last frame left it (its contacts, impulses, objects).
+  const contact::VisualFrame& visual_frame() const { return frame_; }
   // The visual frame's options as run (steps, compliance: the reference's is always exact).
   const contact::VisualFrameOptions& visual_options() const { return visual_options_; }
   // Penalty, material and impact modes: the 1 kHz contact (null in the other modes).

@@ -22,7 +22,7 @@ mkdir -p docs/scenes
 # scene, seconds to run, time of the picture (mid-press), colours from the shape at (s)
 for entry in "block_press 1.6 1.5 0" "liver_palpation 3.6 3.5 1.0" "probe_on_tray 1.6 1.5 0" \
   "polyp 3.2 3.0 0.5" "pick_and_place 5.6 5.5 0" "peg_in_hole 2.9 2.8 0" "probe 4.9 4.8 0" \
-  "two_organs 5.6 5.5 1.0" "retraction 2.5 2.4 0.7" "organs 2.5 2.4 0.6"; do
+  "two_organs 5.6 5.5 1.0" "retraction 2.5 2.4 0.7" "organs 2.5 2.4 0.6" "drop 7.8 7.7 0"; do
   read -r scene duration at settle <<< "$entry"
   if [ $# -gt 0 ] && [[ " $* " != *" $scene "* ]]; then continue; fi
   echo "scene_screenshots: $scene"

@@ -30,8 +30,9 @@
 # 10. a hostile publisher on the run's URL and run id changes no force (see the check);
 # 11. the source papers' 1 kHz modes across processes (docs/HAPTIC_MODES.md): scenes/probe.yaml in
 #     its godobject mode and scenes/peg_in_hole.yaml in the penalty mode, the frame's world
-#     carried by each contact model, and scenes/retraction.yaml and organs.yaml (a grasp's
-#     bilateral rows, contact between two organs; issue 28) in the default mode: each log replays bit for bit and its forces agree with
+#     carried by each contact model, and scenes/retraction.yaml, organs.yaml and drop.yaml (a
+#     grasp's bilateral rows, contact between two organs, an instrument that falls; issue 28) in
+#     the default mode: each log replays bit for bit and its forces agree with
 #     `hapsim sim` in that mode as check 1's do.
 # Usage: two_process_test.sh HAPSIM HAPSIM_EXAMPLE_DRIVER
 set -euo pipefail
@@ -447,8 +448,9 @@ PY
 agrees_with_in_process "$work/hostile.json" "$work/hostile.csv" | sed "s/^/under a hostile publisher: /" ||
   inconclusive="${inconclusive:+$inconclusive; }the run under a hostile publisher disagreed (host?)"
 
-# 11. The papers' 1 kHz modes: the world travels with the models; and a grasp and organs that
-# touch (issue 28: scenes/retraction.yaml, organs.yaml, hybrid); replay and forces as above,
+# 11. The papers' 1 kHz modes: the world travels with the models; and a grasp, organs that touch
+# and an instrument that falls (issue 28: scenes/retraction.yaml, organs.yaml, drop.yaml,
+# hybrid); replay and forces as above,
 # with check 1's attempts (a lost datagram or a disturbed run is repeated); under a sanitizer the
 # runs and their bit-exact replays are what it checks.
 papers_mode_agrees() {  # summary, logged CSV, in-process CSV, label
@@ -469,7 +471,8 @@ assert err < 0.1, err
 assert abs(peak(logged) - peak(inproc)) < 0.05 * peak(inproc)
 PY
 }
-for entry in "probe:godobject" "peg_in_hole:penalty" "retraction:hybrid" "organs:hybrid"; do
+for entry in "probe:godobject" "peg_in_hole:penalty" "retraction:hybrid" "organs:hybrid" \
+  "drop:hybrid"; do
   name=${entry%%:*}
   mode=${entry#*:}
   "$hapsim" sim "scenes/$name.yaml" --mode "$mode" --out "$work/sim_$name" > /dev/null
