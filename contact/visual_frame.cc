@@ -278,14 +278,15 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
 
 void VisualFrame::SetFrictionCoefficients() {
   // μ of a contact with an object is that object's (its own or the scene's); the grabbed object
-  // pressing another takes the other's, as the tool touching it would. Kept for the lcp rows.
+  // pressing another takes the other's, as the tool touching it would; of two objects touching,
+  // the dynamic one's own, else the other's own. Kept for the lcp rows.
   mu_per_contact_.setConstant(static_cast<Eigen::Index>(contacts_.size()),
                               options_.response.solve.friction_coefficient);
   for (size_t i = 0; i < contacts_.size(); ++i) {
-    const int object = contacts_[i].rigid_object;
-    if (object >= 0 && options_.rigid_objects[object].friction_coefficient)
-      mu_per_contact_[static_cast<Eigen::Index>(i)] =
-          *options_.rigid_objects[object].friction_coefficient;
+    for (const int object : {contacts_[i].other_object, contacts_[i].rigid_object})
+      if (object >= 0 && options_.rigid_objects[object].friction_coefficient)
+        mu_per_contact_[static_cast<Eigen::Index>(i)] =
+            *options_.rigid_objects[object].friction_coefficient;
   }
 }
 
