@@ -102,14 +102,15 @@ void RunTrain(TrainOptions options) {
        haptic_summary_path, "--duration", std::to_string(task.time_limit_s)},
       "the visual process");
   std::printf(
-      "hapsim train: %s, run %s; %zu targets, force band %.1f-%.1f N, hold %.1f s, limit "
-      "%.1f N, %.0f s\n",
+      "hapsim train: %s, run %s; %zu targets, force band %.2f-%.2f N, hold %.2f s, limit "
+      "%.2f N, %.0f s\n",
       scene.name.c_str(), messages::FormatRunId(run_id).c_str(), task.targets.size(),
       task.force_band_min_N, task.force_band_max_N, task.hold_s, task.force_limit_N,
       task.time_limit_s);
   view::PrintTargetHints(scene, start_W_m, window);
   view::PalpationScorer scorer(task, scene.tool->model.shape,
-                               scene.tool->model.mass_kg * scene.gravity_m_s2, haptic_dt_s);
+                               scene.tool->model.mass_kg * scene.gravity_m_s2, haptic_dt_s,
+                               scene.tool->grasp.has_value());
   int child_code = 0;
   std::string child_end;
   // Whatever ends the session (the task, the time limit, q, an error such as a screenshot that

@@ -190,7 +190,9 @@
 //                                      # `hapsim haptic --device hand`; mass > 0, k, b ≥ 0
 //   task:                              # optional (with a tool): the trainee's task (`hapsim
 //                                      # train`): touch every target with the tissue force
-//                                      # inside the band for hold_s in one go
+//                                      # inside the band for hold_s in one go (with a grasper:
+//                                      # bring the held tissue there, pulling inside the band;
+//                                      # the points slipped from the jaws are scored too)
 //     targets:                         # ≥ 1; names unique
 //       - {name: left_lobe, position_m: [0.02, 0, 0.03], radius_m: 0.008}   # radius > 0
 //     force_band_N: [0.5, 2.0]         # 0 ≤ min < max; default [0.5, 2.0]

@@ -6,12 +6,21 @@
 namespace hapsim::view {
 
 PalpationScorer::PalpationScorer(const config::TaskScene& task, const ToolShape& tool,
-                                 const Eigen::Vector3d& tool_weight_N, double haptic_dt_s)
+                                 const Eigen::Vector3d& tool_weight_N, double haptic_dt_s,
+                                 bool grasper)
     : task_(task),
       tool_(tool),
       tool_weight_N_(tool_weight_N),
       haptic_dt_s_(haptic_dt_s),
+      grasper_(grasper),
       targets_(task.targets.size()) {}
+
+void PalpationScorer::AddFrame(std::int64_t sequence, int num_grasped, int num_slipped) {
+  if (sequence <= last_frame_) return;
+  last_frame_ = sequence;
+  points_held_ = num_grasped;
+  points_slipped_ += num_slipped;
+}
 
 void PalpationScorer::Add(const hapsim_lcm::haptic_state_t& state) {
   if (state.step <= last_step_) return;  // a repeat or an older step
@@ -69,7 +78,12 @@ std::string PalpationScorer::StatusLine() const {
                 num_reached_, targets_.size(), elapsed_s(), task_.time_limit_s, last_force_N_,
                 task_.force_band_min_N, task_.force_band_max_N,
                 over_limit_ ? "   OVER THE FORCE LIMIT" : "", completed() ? "   DONE" : "");
-  return text;
+  std::string line = text;
+  if (grasper_) {
+    line += "   holding " + std::to_string(points_held_) + " points";
+    if (points_slipped_ > 0) line += "   TORN: " + std::to_string(points_slipped_) + " slipped";
+  }
+  return line;
 }
 
 nlohmann::json PalpationScorer::ToJson() const {
@@ -92,6 +106,10 @@ nlohmann::json PalpationScorer::ToJson() const {
                       {"tool_path_length_m", path_length_m_},
                       {"targets", targets}};
   if (completed()) json["time_to_complete_s"] = completed_at_s_;
+  if (grasper_) {
+    json["grip_slipped_points"] = points_slipped_;
+    json["tissue_torn"] = points_slipped_ > 0;
+  }
   return json;
 }
 

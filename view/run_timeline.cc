@@ -150,6 +150,14 @@ std::vector<hapsim_lcm::haptic_state_t> RunTimeline::HapticStatesAfter(std::int6
   return states;
 }
 
+std::vector<RunTimeline::GraspCount> RunTimeline::GraspCountsAfter(std::int64_t sequence) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<GraspCount> counts;
+  for (auto it = frames_.upper_bound(sequence); it != frames_.end(); ++it)
+    counts.push_back({it->first, it->second.num_grasped, it->second.num_grasp_slipped});
+  return counts;
+}
+
 double RunTimeline::first_frame_s() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return frames_.empty() ? 0.0 : frames_.begin()->second.t_s;

@@ -33,6 +33,14 @@ class RunTimeline {
   ViewState StateAt(double t_s) const;
   // Copies of the haptic states after `step`, in step order (a scorer's next states).
   std::vector<hapsim_lcm::haptic_state_t> HapticStatesAfter(std::int64_t step) const;
+  // What the grasper did in each frame after `sequence`, in order (a scorer's count of tissue
+  // slipped from the jaws), without copying the frames' meshes.
+  struct GraspCount {
+    std::int64_t sequence = 0;
+    int num_grasped = 0;
+    int num_slipped = 0;
+  };
+  std::vector<GraspCount> GraspCountsAfter(std::int64_t sequence) const;
   // The time of the first and the newest frame (0 and 0 without frames).
   double first_frame_s() const;
   double last_frame_s() const;

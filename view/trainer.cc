@@ -86,8 +86,10 @@ void PrintTargetHints(const config::Scene& scene, const Eigen::Vector3d& start_W
   for (const config::PalpationTarget& target : scene.task->targets) {
     const Eigen::Vector3d above(target.position_m.x(), target.position_m.y(), start_W_m.z());
     const cv::Point2d pixel = PixelOf(window.renderer(), above);
-    std::printf("  target %s: pointer at (%.0f, %.0f), touches %.0f mm down\n", target.name.c_str(),
-                pixel.x, pixel.y, 1e3 * (start_W_m.z() - tip_m - target.position_m.z()));
+    // A retraction's target may lie above where the tool starts (the tissue pulled up).
+    const double down_mm = 1e3 * (start_W_m.z() - tip_m - target.position_m.z());
+    std::printf("  target %s: pointer at (%.0f, %.0f), touches %.0f mm %s\n", target.name.c_str(),
+                pixel.x, pixel.y, std::abs(down_mm), down_mm >= 0.0 ? "down" : "up");
   }
   std::printf(
       "  mouse: move in the plane; wheel or Up/Down: depth; b: button; s: screenshot; "
@@ -95,12 +97,19 @@ void PrintTargetHints(const config::Scene& scene, const Eigen::Vector3d& start_W
   std::fflush(stdout);
 }
 
-// Feeds the scorer the haptic states that came since its last, saying which targets that reached.
+// Feeds the scorer the haptic states and frames that came since its last, saying which targets
+// that reached and when tissue slipped from the jaws.
 void ScoreNewStates(const RunTimeline& timeline, const config::TaskScene& task,
                     PalpationScorer* scorer) {
   const std::vector<bool> before = scorer->reached();
   for (const hapsim_lcm::haptic_state_t& haptic : timeline.HapticStatesAfter(scorer->last_step()))
     scorer->Add(haptic);
+  for (const RunTimeline::GraspCount& frame : timeline.GraspCountsAfter(scorer->last_frame())) {
+    scorer->AddFrame(frame.sequence, frame.num_grasped, frame.num_slipped);
+    if (frame.num_slipped > 0)
+      std::printf("hapsim train: t %.2f s: %d points slipped from the jaws (tissue torn)\n",
+                  scorer->elapsed_s(), frame.num_slipped);
+  }
   const std::vector<bool> reached = scorer->reached();
   for (size_t i = 0; i < reached.size(); ++i) {
     if (reached[i] && !before[i])
@@ -119,13 +128,17 @@ void WriteScore(const PalpationScorer& scorer, const config::Scene& scene, std::
   score["run_id"] = messages::FormatRunId(run_id);
   score["log"] = log_path;
   WriteFileAtomically(score_path, [&](std::ostream& out) { out << score.dump(2) << '\n'; });
+  const std::string torn =
+      score.contains("grip_slipped_points")
+          ? "; " + std::to_string(scorer.points_slipped()) + " points slipped from the jaws"
+          : "";
   std::printf(
       "hapsim train: %d of %zu targets in %.2f s; peak force %.2f N, %.2f s over the %.1f N "
-      "limit, tool path %.3f m\n  wrote %s and %s (the run %s)\n",
+      "limit, tool path %.3f m%s\n  wrote %s and %s (the run %s)\n",
       score["targets_reached"].get<int>(), scene.task->targets.size(), scorer.elapsed_s(),
       score["peak_force_N"].get<double>(), score["time_over_force_limit_s"].get<double>(),
-      scene.task->force_limit_N, score["tool_path_length_m"].get<double>(), score_path.c_str(),
-      log_path.c_str(), run_end.c_str());
+      scene.task->force_limit_N, score["tool_path_length_m"].get<double>(), torn.c_str(),
+      score_path.c_str(), log_path.c_str(), run_end.c_str());
 }
 
 void RunTrainingLoop(LiveRun* live, ViewWindow* window, MouseDevice* mouse,

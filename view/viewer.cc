@@ -80,8 +80,11 @@ std::string Describe(const ViewState& state, const config::Scene& scene) {
 nlohmann::json ScoreLoggedRun(const config::Scene& scene, const RunTimeline& timeline,
                               double haptic_dt_s, std::vector<double>* reached_at_s) {
   PalpationScorer scorer(*scene.task, scene.tool->model.shape,
-                         scene.tool->model.mass_kg * scene.gravity_m_s2, haptic_dt_s);
+                         scene.tool->model.mass_kg * scene.gravity_m_s2, haptic_dt_s,
+                         scene.tool->grasp.has_value());
   for (const hapsim_lcm::haptic_state_t& state : timeline.HapticStatesAfter(-1)) scorer.Add(state);
+  for (const RunTimeline::GraspCount& frame : timeline.GraspCountsAfter(-1))
+    scorer.AddFrame(frame.sequence, frame.num_grasped, frame.num_slipped);
   const nlohmann::json score = scorer.ToJson();
   for (const nlohmann::json& target : score["targets"])
     reached_at_s->push_back(target.value("reached_at_s", std::numeric_limits<double>::infinity()));

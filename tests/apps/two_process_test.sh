@@ -33,7 +33,8 @@
 #     carried by each contact model, and scenes/retraction.yaml, organs.yaml and drop.yaml (a
 #     grasp's bilateral rows, contact between two organs, an instrument that falls; issue 28) in
 #     the default mode: each log replays bit for bit and its forces agree with
-#     `hapsim sim` in that mode as check 1's do.
+#     `hapsim sim` in that mode as check 1's do; the retraction log scores its task reached with
+#     no tissue torn, and a run with the grip limit cut scores the tissue torn.
 # Usage: two_process_test.sh HAPSIM HAPSIM_EXAMPLE_DRIVER
 set -euo pipefail
 hapsim="$(realpath "$1")"
@@ -500,6 +501,29 @@ for entry in "probe:godobject" "peg_in_hole:penalty" "retraction:hybrid" "organs
   done
   [ "$good" -eq 1 ] || inconclusive="${inconclusive:+$inconclusive; }$attempts $name run(s) disturbed"
 done
+
+# The retraction task's score from its log (`hapsim view --score`, as the trainer scores it): the
+# script reaches the target with nothing slipped from the jaws; with the grip limit cut to 0.05 N
+# a point the scripted pull loads past it slips out, and the score says the tissue tore.
+score_of() {  # log, score file, expect "torn" or "whole"
+  "$hapsim" view "$1" --score "$2" > "$2.out" 2>&1 || fail "view --score $1: $(cat "$2.out")"
+  /usr/bin/python3 - "$2" "$3" <<'PY'
+import json, sys
+score = json.load(open(sys.argv[1]))
+print(f"retraction score ({sys.argv[2]}): reached {score['targets_reached']}, "
+      f"peak pull {score['peak_force_N']:.3f} N, slipped {score['grip_slipped_points']}")
+if sys.argv[2] == "whole":
+    assert score["completed"] and score["grip_slipped_points"] == 0 and not score["tissue_torn"], score
+else:
+    assert score["grip_slipped_points"] >= 1 and score["tissue_torn"] and not score["completed"], score
+PY
+}
+score_of "$work/retraction.lcm" "$work/retraction_score.json" whole || fail "the retraction score"
+sed 's/max_force_N: 0.6 /max_force_N: 0.05/' scenes/retraction.yaml > "$work/torn.yaml"
+grep -q "max_force_N: 0.05" "$work/torn.yaml" || fail "could not cut the grip limit"
+"$hapsim" run "$work/torn.yaml" --lcm-url "$url" --log "$work/torn.lcm" > "$work/torn.out" 2>&1 ||
+  fail "torn retraction run: $(cat "$work/torn.out")"
+score_of "$work/torn.lcm" "$work/torn_score.json" torn || fail "the torn retraction's score"
 
 if [ -n "$inconclusive" ]; then
   echo "SKIPPED (inconclusive): $inconclusive; every other check passed"

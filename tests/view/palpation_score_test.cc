@@ -96,5 +96,26 @@ TEST(PalpationScorer, CountsTimeOverTheLimitAndThePath) {
   EXPECT_NEAR(summary["peak_force_N"].get<double>(), 4.0, 1e-12);
 }
 
+// A retraction task: the same targets, with the jaws' tissue counted from the frames. Each frame
+// counts once, however often it is fed (the trainer feeds what came since its last).
+TEST(PalpationScorer, AGrasperCountsThePointsThatSlippedOncePerFrame) {
+  PalpationScorer scorer(MakeTask(), MakeSphere(), kWeight_N, kDt_s, /*grasper=*/true);
+  scorer.AddFrame(0, 5, 0);
+  scorer.AddFrame(1, 3, 2);
+  scorer.AddFrame(1, 3, 2);  // the same frame again
+  scorer.AddFrame(0, 5, 0);  // an older one
+  EXPECT_EQ(scorer.points_slipped(), 2);
+  EXPECT_NE(scorer.StatusLine().find("holding 3 points   TORN: 2 slipped"), std::string::npos)
+      << scorer.StatusLine();
+  scorer.AddFrame(2, 0, 3);
+  const nlohmann::json summary = scorer.ToJson();
+  EXPECT_EQ(summary["grip_slipped_points"].get<int>(), 5);
+  EXPECT_TRUE(summary["tissue_torn"].get<bool>());
+  // A tool without jaws: no grasp in the score.
+  PalpationScorer probe(MakeTask(), MakeSphere(), kWeight_N, kDt_s);
+  EXPECT_FALSE(probe.ToJson().contains("tissue_torn"));
+  EXPECT_EQ(probe.StatusLine().find("holding"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace hapsim::view
