@@ -147,5 +147,64 @@ INSTANTIATE_TEST_SUITE_P(LowerFixed, StackedBlock, testing::Bool(),
                            return info.param ? "Whole" : "AtItsBase";
                          });
 
+// Friction between objects (the friction law's rows, three per contact, unchanged for a row
+// between two of the body's objects): the upper block on the lower, fixed whole, under gravity
+// tilted by θ with μ = 0.5 (friction angle 26.6°). At 20° it sticks; at 40° its centre of mass
+// slides with a = g (sin θ − μ cos θ) = 2.549 m/s², less the drag of the mass-proportional
+// Rayleigh damping α M v (α = 10 /s, MakeSoft): v̇ = a − α v, v(t) = (a/α)(1 − e^(−α t)).
+Eigen::Vector3d SlideOnTheLowerBlock(double tilt_rad, double duration_s,
+                                     Eigen::Vector3d* com_velocity_m_s) {
+  const fem::Model stack = MakeStack(0.0, /*lower_fixed_whole=*/true);
+  VisualFrameOptions options;
+  options.dt_s = 1.0 / 500.0;
+  options.gravity_m_s2 =
+      kGravity_m_s2 * Eigen::Vector3d(std::sin(tilt_rad), 0.0, -std::cos(tilt_rad));
+  options.coupling = CouplingParams{100.0, 1.0, 0.1, 0.001};
+  options.response.solve.law = ContactLaw::kFriction;
+  options.response.solve.friction_coefficient = 0.5;
+  ToolShape sphere;
+  sphere.kind = ToolShape::Kind::kSphere;
+  sphere.radius_m = 0.005;
+  VisualFrame frame(stack, fem::FemOptions{}, fem::CalcGravityForce(stack, options.gravity_m_s2),
+                    MakeToolModelWithMass(sphere, 0.01), options);
+  ToolState tool;
+  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.5);  // far above, out of the way
+  DeviceState device;
+  device.x_W_m = tool.x_W_m;
+  fem::State body = fem::MakeRestState(stack);
+  const int frames = static_cast<int>(std::lround(duration_s / options.dt_s));
+  for (int k = 0; k < frames; ++k) frame.Step(device, &body, &tool);
+  // The upper block's centre of mass (its nodes come after the lower's 75), moved and moving.
+  Eigen::Vector3d moved_m = Eigen::Vector3d::Zero();
+  com_velocity_m_s->setZero();
+  double mass_kg = 0.0;
+  for (int node = 75; node < stack.num_nodes(); ++node) {
+    const double m = stack.node_mass_kg[node];
+    moved_m += m * (body.x_m.segment<3>(3 * node) - stack.rest_positions_m.segment<3>(3 * node));
+    *com_velocity_m_s += m * body.v_m_s.segment<3>(3 * node);
+    mass_kg += m;
+  }
+  *com_velocity_m_s /= mass_kg;
+  return moved_m / mass_kg;
+}
+
+TEST(BodyBodyContact, FrictionHoldsBelowTheFrictionAngleAndSlidesAbove) {
+  Eigen::Vector3d v_stick, v_slide;
+  const Eigen::Vector3d stick = SlideOnTheLowerBlock(20.0 * M_PI / 180.0, 0.2, &v_stick);
+  const double steep_rad = 40.0 * M_PI / 180.0, t_s = 0.06;
+  const Eigen::Vector3d slide = SlideOnTheLowerBlock(steep_rad, t_s, &v_slide);
+  const double a_m_s2 = kGravity_m_s2 * (std::sin(steep_rad) - 0.5 * std::cos(steep_rad));
+  const double alpha_1_s = MakeSoft(1.0).rayleigh_alpha_1_s;
+  const double expected_m_s = a_m_s2 / alpha_1_s * (1.0 - std::exp(-alpha_1_s * t_s));
+  std::printf(
+      "upper block, mu 0.5: at 20 deg moved %.2e m along x, speed %.2e m/s; at 40 deg after "
+      "%.2f s moving %.4f m/s along x ((a/alpha)(1 - exp(-alpha t)) = %.4f m/s; a t = %.4f), "
+      "moved %.5f m\n",
+      stick.x(), v_stick.x(), t_s, v_slide.x(), expected_m_s, a_m_s2 * t_s, slide.x());
+  EXPECT_LT(std::abs(v_stick.x()), 1e-4);  // sticks: the elastic shear settles
+  EXPECT_LT(std::abs(stick.x()), 1e-4);
+  EXPECT_NEAR(v_slide.x(), expected_m_s, 0.02 * expected_m_s);
+}
+
 }  // namespace
 }  // namespace hapsim::contact
