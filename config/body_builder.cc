@@ -12,7 +12,6 @@
 #include "fem/curved_boundary.h"
 #include "fem/lattice_mesher.h"
 #include "fem/mesh_io.h"
-#include "fem/nodal_pressure.h"
 #include "fem/time_stepper.h"
 
 namespace hapsim::config {
@@ -114,13 +113,6 @@ Body MakeBody(const BodyScene& scene, const Eigen::Vector3d& gravity_m_s2) {
   }
   Body body;
   body.model = fem::MakeModel(std::move(mesh), scene.material, fixed_nodes);
-  if (scene.nodal_pressure) {
-    if (body.model.is_quadratic())
-      Fail(scene.mesh.location,
-           "element p1_nodal_pressure is for linear tets, and this mesh file holds quadratic "
-           "(10-node) ones: give element p2, or a mesh of 4-node tets");
-    fem::EnableNodalPressure(&body.model);
-  }
   if (scene.collision_surface)
     body.model.collision_surface = EmbedSurfaceFile(*scene.collision_surface, body.model.mesh);
   if (scene.visual_surface)

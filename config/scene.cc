@@ -255,14 +255,7 @@ BodyScene ReadBody(const YamlMap& map, const std::string& base_dir) {
                  "solver", "fixed", "loads", "probes"});
   BodyScene body;
   body.mesh = ReadMesh(map.GetMap("mesh"), base_dir);
-  enum class Element { kP1, kP2, kP1NodalPressure };
-  const Element element = map.GetEnumOr<Element>("element",
-                                                 {{"p1", Element::kP1},
-                                                  {"p2", Element::kP2},
-                                                  {"p1_nodal_pressure", Element::kP1NodalPressure}},
-                                                 Element::kP1);
-  body.quadratic = element == Element::kP2;
-  body.nodal_pressure = element == Element::kP1NodalPressure;
+  body.quadratic = map.GetEnumOr<bool>("element", {{"p1", false}, {"p2", true}}, false);
   body.collision_surface = ReadEmbeddedSurface(map, "collision", base_dir);
   body.visual_surface = ReadEmbeddedSurface(map, "visual", base_dir);
   body.material = ReadMaterial(map.GetMap("material"));

@@ -287,9 +287,6 @@ struct BodyScene {
   // `p1` (the default): linear tets. A mesh file of 10-node tets (Gmsh type 11) is quadratic
   // whatever this says.
   bool quadratic = false;
-  // `element: p1_nodal_pressure`: linear tets with average nodal pressure (fem/nodal_pressure.h),
-  // the remedy for their locking at tissue-like Poisson ratios.
-  bool nodal_pressure = false;
   std::optional<EmbeddedSurfaceSource> collision_surface;  // contacts found on it; else boundary
   std::optional<EmbeddedSurfaceSource> visual_surface;     // the viewer draws it; else boundary
   fem::Material material;

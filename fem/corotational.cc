@@ -2,7 +2,6 @@
 
 #include <algorithm>
 
-#include "fem/nodal_pressure.h"
 #include "fem/polar_decomposition.h"
 
 namespace hapsim::fem {
@@ -77,22 +76,12 @@ void CalcElasticForce(const Model& model, const Eigen::VectorXd& x_m,
     AddQuadraticElasticForce(model, x_m, rotations, force_N);
     return;
   }
-  // Average nodal pressure (fem/nodal_pressure.h): σ̄ = 2μ dev ε + p̄ I, the volumetric part from
-  // the nodes' averaged strains.
-  // (Scratch kept per thread: the step allocates nothing of size N after its first.)
-  const bool nodal = model.nodal_pressure.enabled();
-  thread_local Eigen::VectorXd node_strain, element_pressure_Pa;
-  if (nodal) CalcAveragedNodalPressures(model, x_m, rotations, &node_strain, &element_pressure_Pa);
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
     const Eigen::Matrix3d& R = rotations[t];
     const Eigen::Matrix3d F = CalcDeformationGradient(model, x_m, t);
-    const Eigen::Matrix3d strain = CalcRotatedStrain(F, R);
-    Eigen::Matrix3d sigma_Pa = CalcStress(strain, rest.lame_mu_Pa, rest.lame_lambda_Pa);
-    if (nodal)
-      sigma_Pa.diagonal().array() +=
-          element_pressure_Pa[t] -
-          (rest.lame_lambda_Pa + 2.0 / 3.0 * rest.lame_mu_Pa) * strain.trace();
+    const Eigen::Matrix3d sigma_Pa =
+        CalcStress(CalcRotatedStrain(F, R), rest.lame_mu_Pa, rest.lame_lambda_Pa);
     // Columns are f_0..f_3 = −V R σ b_i.
     const Eigen::Matrix<double, 3, 4> f_local_N =
         -rest.volume_m3 * (R * sigma_Pa) * rest.shape_gradients_1_m;
@@ -113,19 +102,14 @@ double CalcElasticEnergy(const Model& model, const Eigen::VectorXd& x_m,
     }
     return energy_J;
   }
-  const bool nodal = model.nodal_pressure.enabled();
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
     const Eigen::Matrix3d strain =
         CalcRotatedStrain(CalcDeformationGradient(model, x_m, t), rotations[t]);
     const double trace = strain.trace();
-    if (nodal)  // V μ dev ε : dev ε; the volumetric part at the nodes, below
-      energy_J += rest.volume_m3 * rest.lame_mu_Pa * (strain.squaredNorm() - trace * trace / 3.0);
-    else
-      energy_J += rest.volume_m3 * (rest.lame_mu_Pa * strain.squaredNorm() +
-                                    0.5 * rest.lame_lambda_Pa * trace * trace);
+    energy_J += rest.volume_m3 * (rest.lame_mu_Pa * strain.squaredNorm() +
+                                  0.5 * rest.lame_lambda_Pa * trace * trace);
   }
-  if (nodal) energy_J += CalcNodalVolumetricEnergy(model, x_m, rotations);
   return energy_J;
 }
 

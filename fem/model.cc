@@ -75,10 +75,6 @@ Model MergeModels(const std::vector<Model>& models) {
     if (model.is_quadratic() != models.front().is_quadratic())
       throw std::invalid_argument(
           "the deformable objects must all have linear tets or all quadratic ones (element)");
-    if (model.nodal_pressure.enabled() != models.front().nodal_pressure.enabled())
-      throw std::invalid_argument(
-          "the deformable objects must all have average nodal pressure (element "
-          "p1_nodal_pressure) or none");
     num_nodes += model.num_nodes();
     num_tets += model.num_tets();
     num_faces += static_cast<int>(model.surface_triangles.cols());
@@ -102,14 +98,6 @@ Model MergeModels(const std::vector<Model>& models) {
     merged.surface_triangles.middleCols(face, model.surface_triangles.cols()) =
         model.surface_triangles.array() + node;
     merged.node_mass_kg.segment(node, model.num_nodes()) = model.node_mass_kg;
-    if (model.nodal_pressure.enabled()) {
-      merged.nodal_pressure.node_volume_m3.conservativeResize(node + model.num_nodes());
-      merged.nodal_pressure.node_volume_m3.tail(model.num_nodes()) =
-          model.nodal_pressure.node_volume_m3;
-      merged.nodal_pressure.node_bulk_Pa.conservativeResize(node + model.num_nodes());
-      merged.nodal_pressure.node_bulk_Pa.tail(model.num_nodes()) =
-          model.nodal_pressure.node_bulk_Pa;
-    }
     merged.tet_rest.insert(merged.tet_rest.end(), model.tet_rest.begin(), model.tet_rest.end());
     merged.dof_is_fixed.insert(merged.dof_is_fixed.end(), model.dof_is_fixed.begin(),
                                model.dof_is_fixed.end());

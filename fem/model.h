@@ -28,16 +28,6 @@ struct TetRestData {
   double lame_lambda_Pa = 0.0;
 };
 
-// Average nodal pressure (Bonet & Burton 1998; fem/nodal_pressure.h), a linear tet's remedy for
-// volumetric locking: the volumetric strain averaged over each node's tets. Per node, its share of
-// the volume V_n = Σ_e V_e/4 and the bulk modulus κ_n there (the volume-weighted mean of its tets'
-// κ = λ + 2μ/3). Empty: every tet keeps its own volumetric strain.
-struct NodalPressure {
-  Eigen::VectorXd node_volume_m3;
-  Eigen::VectorXd node_bulk_Pa;
-  bool enabled() const { return node_volume_m3.size() > 0; }
-};
-
 struct Model {
   TetMesh mesh;
   Matrix3Xi surface_triangles;  // (3 x F) outward-oriented boundary faces
@@ -53,8 +43,6 @@ struct Model {
   // Quadratic tets only: each tet's stiffness K_e at rest (fem/quadratic_tet.h), node-major over
   // mesh.node(0..9, t); 7.2 kB a tet. Empty for linear tets.
   std::vector<P2Matrix> quadratic_stiffness;
-  // Linear tets only, `element: p1_nodal_pressure`: set by EnableNodalPressure.
-  NodalPressure nodal_pressure;
   // (N) lumped mass: ρV/4 from each incident linear tet; a quadratic tet's HRZ masses (1/36 of
   // its ρV at a corner, 4/27 at an edge node for a straight one).
   Eigen::VectorXd node_mass_kg;

@@ -1,7 +1,6 @@
 #include "fem/stiffness_assembly.h"
 
 #include <algorithm>
-#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -34,11 +33,9 @@ StiffnessAssembler::StiffnessAssembler(const Model& model)
             const int row = 3 * model.mesh.node(a, t) + r, col = 3 * model.mesh.node(b, t) + c;
             if (row >= col) entries.emplace_back(row, col, 0.0);
           }
-  if (model.nodal_pressure.enabled()) BuildNodalPressurePattern(model, &entries);
   pattern_.resize(num_dofs, num_dofs);
   pattern_.setFromTriplets(entries.begin(), entries.end());
   pattern_.makeCompressed();
-  if (model.nodal_pressure.enabled()) IndexNodalPressurePairs();
 
   // Pair (a, b ≥ a) of a tet is block (low, high) of the lower triangle, low the larger node:
   // columns 3·high + c hold rows 3·low + r. For a = b only the rows r ≥ c exist, from the diagonal.
@@ -62,63 +59,6 @@ StiffnessAssembler::StiffnessAssembler(const Model& model)
     if (diagonal_value_index_[i] < 0)
       throw std::invalid_argument("StiffnessAssembler: node " + std::to_string(i / 3) +
                                   " belongs to no tet");
-  }
-}
-
-void StiffnessAssembler::BuildNodalPressurePattern(const Model& model,
-                                                   std::vector<Eigen::Triplet<double>>* entries) {
-  const int num_nodes = model.num_nodes();
-  node_tet_begin_.assign(num_nodes + 1, 0);
-  for (int t = 0; t < model.num_tets(); ++t)
-    for (int a = 0; a < 4; ++a) ++node_tet_begin_[model.mesh.tets(a, t) + 1];
-  for (int n = 0; n < num_nodes; ++n) node_tet_begin_[n + 1] += node_tet_begin_[n];
-  node_tets_.resize(node_tet_begin_.back());
-  std::vector<int> fill(node_tet_begin_.begin(), node_tet_begin_.end() - 1);
-  for (int t = 0; t < model.num_tets(); ++t)
-    for (int a = 0; a < 4; ++a) node_tets_[fill[model.mesh.tets(a, t)]++] = t;
-  ring_begin_.assign(1, 0);
-  tet_slots_.resize(4 * node_tets_.size());
-  std::vector<std::uint64_t> node_pairs;  // (larger node << 32 | smaller), once each below
-  size_t max_ring = 0;
-  for (int n = 0; n < num_nodes; ++n) {
-    std::vector<int> ring;
-    for (int k = node_tet_begin_[n]; k < node_tet_begin_[n + 1]; ++k)
-      for (int a = 0; a < 4; ++a) ring.push_back(model.mesh.tets(a, node_tets_[k]));
-    std::sort(ring.begin(), ring.end());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-    for (int k = node_tet_begin_[n]; k < node_tet_begin_[n + 1]; ++k)
-      for (int a = 0; a < 4; ++a)
-        tet_slots_[4 * k + a] = static_cast<int>(
-            std::lower_bound(ring.begin(), ring.end(), model.mesh.tets(a, node_tets_[k])) -
-            ring.begin());
-    for (size_t i = 0; i < ring.size(); ++i)  // ascending: ring[j] ≥ ring[i] for j ≥ i
-      for (size_t j = i; j < ring.size(); ++j)
-        node_pairs.push_back((static_cast<std::uint64_t>(ring[j]) << 32) | ring[i]);
-    ring_.insert(ring_.end(), ring.begin(), ring.end());
-    ring_begin_.push_back(static_cast<int>(ring_.size()));
-    max_ring = std::max(max_ring, ring.size());
-  }
-  ring_gradient_.resize(max_ring);
-  std::sort(node_pairs.begin(), node_pairs.end());
-  node_pairs.erase(std::unique(node_pairs.begin(), node_pairs.end()), node_pairs.end());
-  for (const std::uint64_t pair : node_pairs) {
-    const int i = static_cast<int>(pair >> 32), j = static_cast<int>(pair & 0xffffffffu);
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        if (3 * i + r >= 3 * j + c) entries->emplace_back(3 * i + r, 3 * j + c, 0.0);
-  }
-}
-
-void StiffnessAssembler::IndexNodalPressurePairs() {
-  pair_begin_.assign(1, 0);
-  for (size_t n = 0; n + 1 < ring_begin_.size(); ++n) {
-    for (int i = ring_begin_[n]; i < ring_begin_[n + 1]; ++i)
-      for (int j = i; j < ring_begin_[n + 1]; ++j) {
-        const int low = std::max(ring_[i], ring_[j]), high = std::min(ring_[i], ring_[j]);
-        for (int c = 0; c < 3; ++c)
-          pair_index_.push_back(FindValueIndex(pattern_, 3 * low + (i == j ? c : 0), 3 * high + c));
-      }
-    pair_begin_.push_back(static_cast<int>(pair_index_.size()));
   }
 }
 
@@ -153,14 +93,10 @@ void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::M
     AssembleQuadratic(model, rotations, scale, values);
     return;
   }
-  // With nodal pressure the tets keep their deviatoric part: λ + 2μ/3 of the volumetric term goes
-  // to the nodes (AssembleNodalPressure), −2μ/3 stays.
-  const bool nodal = model.nodal_pressure.enabled();
   for (int t = 0; t < model.num_tets(); ++t) {
     const TetRestData& rest = model.tet_rest[t];
     const double mu_V = scale * rest.lame_mu_Pa * rest.volume_m3;
-    const double lambda_V =
-        scale * (nodal ? -2.0 / 3.0 * rest.lame_mu_Pa : rest.lame_lambda_Pa) * rest.volume_m3;
+    const double lambda_V = scale * rest.lame_lambda_Pa * rest.volume_m3;
     const Eigen::Matrix<double, 3, 4>& b = rest.shape_gradients_1_m;
     const Eigen::Matrix<double, 3, 4> c = rotations[t] * b;
     const Eigen::Matrix4d gram = b.transpose() * b;  // b_a · b_b
@@ -177,34 +113,6 @@ void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::M
                  values);
       }
     }
-  }
-  if (nodal) AssembleNodalPressure(model, rotations, scale, values);
-}
-
-// K_vol = Σ_n κ_n V_n g_n g_nᵀ, g_n = Σ_{e∋n} (V_e/(4 V_n)) R_e b^e over the ring of n.
-void StiffnessAssembler::AssembleNodalPressure(const Model& model,
-                                               const std::vector<Eigen::Matrix3d>& rotations,
-                                               double scale, double* values) const {
-  const NodalPressure& nodal = model.nodal_pressure;
-  for (size_t n = 0; n + 1 < ring_begin_.size(); ++n) {
-    const int first = ring_begin_[n], m = ring_begin_[n + 1] - first;
-    if (!(nodal.node_volume_m3[n] > 0.0)) continue;
-    std::fill(ring_gradient_.begin(), ring_gradient_.begin() + m, Eigen::Vector3d::Zero());
-    for (int k = node_tet_begin_[n]; k < node_tet_begin_[n + 1]; ++k) {
-      const int t = node_tets_[k];
-      const TetRestData& rest = model.tet_rest[t];
-      const double weight = rest.volume_m3 / (4.0 * nodal.node_volume_m3[n]);
-      for (int a = 0; a < 4; ++a)
-        ring_gradient_[tet_slots_[4 * k + a]] +=
-            weight * (rotations[t] * rest.shape_gradients_1_m.col(a));
-    }
-    const double factor = scale * nodal.node_bulk_Pa[n] * nodal.node_volume_m3[n];
-    const int* index = pair_index_.data() + pair_begin_[n];
-    for (int i = 0; i < m; ++i)
-      for (int j = i; j < m; ++j, index += 3) {
-        const Eigen::Matrix3d block = factor * ring_gradient_[i] * ring_gradient_[j].transpose();
-        AddBlock(block, i == j, ring_[first + i] > ring_[first + j], index, values);
-      }
   }
 }
 

@@ -9,10 +9,6 @@
 //   R K_ab Rᵀ = V [ μ (b_a·b_b) I + μ c_b c_aᵀ + λ c_a c_bᵀ ].
 // This is what makes assembly cheap: no 12×12 products per tet.
 //
-// With average nodal pressure (fem/nodal_pressure.h) the tets' blocks are their deviatoric part
-// (λ → −2μ/3) and each node adds κ_n V_n g_n g_nᵀ over the nodes of its tets: the pattern then
-// holds every pair of nodes two tets apart too.
-//
 // Only the lower triangle (row ≥ column) is stored: K is symmetric, CHOLMOD reads only that half,
 // and CG's products with A = M + … K (fem/cg_solver.h MultiplySymmetric) use each stored entry
 // twice. Against
@@ -33,8 +29,7 @@ namespace hapsim::fem {
 class StiffnessAssembler {
  public:
   // Builds the lower triangle (column-major) of the pattern of all node pairs sharing a tet (its 4
-  // corners, or all 10 nodes of a quadratic tet), and with nodal pressure those sharing a node's
-  // tets.
+  // corners, or all 10 nodes of a quadratic tet).
   explicit StiffnessAssembler(const Model& model);
 
   // Overwrites the values of *K (which must have this assembler's pattern; see MakeMatrix) with
@@ -52,11 +47,6 @@ class StiffnessAssembler {
  private:
   void AssembleQuadratic(const Model& model, const std::vector<Eigen::Matrix3d>& rotations,
                          double scale, double* values) const;
-  // Nodal pressure: the ring of each node (the nodes of its tets), the pattern's pairs in it.
-  void BuildNodalPressurePattern(const Model& model, std::vector<Eigen::Triplet<double>>* entries);
-  void IndexNodalPressurePairs();
-  void AssembleNodalPressure(const Model& model, const std::vector<Eigen::Matrix3d>& rotations,
-                             double scale, double* values) const;
 
   int nodes_per_tet_;
   int stride_;  // entries of block_value_index_ per tet: 3 per node pair (30 linear, 165 quadratic)
@@ -68,14 +58,6 @@ class StiffnessAssembler {
   // from the diagonal entry.
   std::vector<int> block_value_index_;
   std::vector<int> diagonal_value_index_;
-  // Nodal pressure only (empty otherwise). Per node n (CSR over nodes): its tets
-  // (node_tets_[node_tet_begin_[n] ..]) and for each of them the ring slots of the tet's 4 nodes
-  // (tet_slots_, 4 per entry); its ring, ascending (ring_[ring_begin_[n] ..]); and per ring pair
-  // (i ≤ j, row by row) the 3 value indices of its block (pair_index_ from pair_begin_[n]).
-  std::vector<int> node_tet_begin_, node_tets_, tet_slots_;
-  std::vector<int> ring_begin_, ring_;
-  std::vector<int> pair_begin_, pair_index_;
-  mutable std::vector<Eigen::Vector3d> ring_gradient_;  // g_n per ring slot: scratch, max ring
 };
 
 }  // namespace hapsim::fem

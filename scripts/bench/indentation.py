@@ -24,9 +24,7 @@ Dimitriadis et al. (Biophys. J. 82, 2002, eq. 12) give
 fitted with the same power law over the same depths. At this block's 0.8 mm it is +11 % at ν 0.45.
 The full run checks that correction against the model itself: P2 m4 pressed again into a block
 twice as deep and wide with twice the cells (the same cells at the focus), where the layer
-formula predicts less stiffening. Issue 27 item 4 measures the linear element's own remedy for
-volumetric locking beside them: average nodal pressure (`body.element: p1_nodal_pressure`,
-fem/nodal_pressure.h), on the coarser lattices (its wider stiffness pattern makes a frame dearer).
+formula predicts less stiffening.
 """
 import math
 
@@ -60,9 +58,7 @@ def meshes(quick):
         return [("p1", 6, 10.0), ("p1", 8, 10.0), ("p2", 3, 10.0)]
     return [("p1", 6, 10.0), ("p1", 8, 10.0), ("p1", 10, 10.0), ("p1", 12, 10.0),
             ("p1", 14, 10.0), ("p1", 16, 10.0), ("p1", 10, 5.0), ("p1", 10, 20.0),
-            ("p2", 3, 10.0), ("p2", 4, 10.0), ("p2", 5, 10.0), ("p2", 6, 10.0),
-            ("p1_nodal_pressure", 6, 10.0), ("p1_nodal_pressure", 8, 10.0),
-            ("p1_nodal_pressure", 10, 10.0)]
+            ("p2", 3, 10.0), ("p2", 4, 10.0), ("p2", 5, 10.0), ("p2", 6, 10.0)]
 
 
 def layer_factor(depth_m, nu, thickness_m=BLOCK_DEPTH_M):
@@ -163,18 +159,11 @@ def locking_markdown(name, at_nu, at_low_nu):
 
 
 SERIES = {("p1", 0.45): ("k", "o"), ("p1", 0.49): ("0.55", "o"),
-          ("p2", 0.45): ("tab:blue", "s"), ("p2", 0.49): ("tab:cyan", "s"),
-          ("p1_nodal_pressure", 0.45): ("tab:red", "^"),
-          ("p1_nodal_pressure", 0.49): ("salmon", "^")}
-# body.element values as the charts and tables name them (ANP: average nodal pressure, the P1
-# remedy for volumetric locking, fem/nodal_pressure.h).
-ELEMENT_NAMES = {"p1": "P1", "p2": "P2", "p1_nodal_pressure": "P1-ANP"}
-LINE_STYLES = {"p1": "-", "p2": "--", "p1_nodal_pressure": ":"}
+          ("p2", 0.45): ("tab:blue", "s"), ("p2", 0.49): ("tab:cyan", "s")}
 
 
 def label_of(r):
-    return (f"{ELEMENT_NAMES[r['element']]} m{r['cells']}"
-            + ("" if r["ratio"] == 10.0 else f" r{r['ratio']:g}"))
+    return f"{r['element'].upper()} m{r['cells']}" + ("" if r["ratio"] == 10.0 else f" r{r['ratio']:g}")
 
 
 def chart(bench, name, case, results):
@@ -190,7 +179,7 @@ def chart(bench, name, case, results):
                   "k:", lw=2, label="bonded 30 mm layer (Dimitriadis et al. 2002)")
     for r in shown:
         left.plot([1e3 * d for d, _ in r["curve"] if d > 0], [f for d, f in r["curve"] if d > 0],
-                  LINE_STYLES[r["element"]], lw=1,
+                  "-" if r["element"] == "p1" else "--", lw=1,
                   label=f"{label_of(r)} ({r['tets']} tets)")
     left.axvspan(1e3 * case["window_m"][0], 1e3 * case["window_m"][1], color="0.9", zorder=0)
     left.set(xlabel="depth below the undeformed top (mm)", ylabel="contact force (N)",
@@ -202,7 +191,7 @@ def chart(bench, name, case, results):
         if series:
             labels += draw_pareto(right, [(r["frame_ms"], 100 * r["relative_error"]) for r in series],
                                   [label_of(r) for r in series], color=color, marker=marker,
-                                  name=f"{ELEMENT_NAMES[element]}, ν {nu:g}")
+                                  name=f"{element.upper()}, ν {nu:g}")
     right.axhline(0.0, color="k", lw=0.8)
     right.set(xscale="log", xlabel="median visual frame (ms)",
               ylabel="error of the fitted coefficient (%)",
@@ -214,9 +203,8 @@ def chart(bench, name, case, results):
     save_figure(fig, bench.path(f"{name}.png"))
     return {"file": f"{name}.png",
             "caption": f"{case['law']}: force against depth per mesh (ν {NU}; linear tets solid, "
-                       "quadratic dashed, linear with average nodal pressure dotted), and the "
-                       "fitted coefficient's error against the median visual frame for the three "
-                       "at ν 0.45 and 0.49."}
+                       "quadratic dashed), and the fitted coefficient's error against the median "
+                       "visual frame for both elements at ν 0.45 and 0.49."}
 
 
 def error_at_cost(front_runs, frame_ms, key):
@@ -235,13 +223,12 @@ def error_at_cost(front_runs, frame_ms, key):
 
 
 def comparison_markdown(name, results):
-    """Per quadratic (and P1-ANP) run: the linear element's error at the same frame cost, and the
-    ratio."""
+    """Per quadratic run: the linear element's error at the same frame cost, and the ratio."""
     lines = []
     key = "layer_relative_error" if name == "hertz" else "relative_error"
     for nu in sorted({r["poisson_ratio"] for r in results}):
         p1 = [r for r in results if r["element"] == "p1" and r["poisson_ratio"] == nu]
-        for r in (r for r in results if r["element"] != "p1" and r["poisson_ratio"] == nu):
+        for r in (r for r in results if r["element"] == "p2" and r["poisson_ratio"] == nu):
             p1_error = error_at_cost(p1, r["frame_ms"], key)
             if p1_error is None or abs(p1_error) < 1e-3:
                 lines.append(f"- ν {nu:g}, {label_of(r)} ({r['frame_ms']:.1f} ms): "
@@ -277,7 +264,7 @@ def table_markdown(name, results):
                 error += f" / {100 * r['layer_relative_error']:+.1f} %"
             cells_md.append(f"{r['frame_ms']:.1f} ms, {error}")
         tets = 20 * cells ** 3
-        md.append(f"| {ELEMENT_NAMES[element]}, m {cells}, ratio {ratio:g} | {tets} | {cells_md[0]} | "
+        md.append(f"| {element.upper()}, m {cells}, ratio {ratio:g} | {tets} | {cells_md[0]} | "
                   f"{cells_md[1]} |")
     return md
 
@@ -319,8 +306,7 @@ def run(bench):
         md.append("")
         md += table_markdown(name, results)
         md.append("")
-        md.append("Quadratic, and linear with average nodal pressure (P1-ANP), against linear at the "
-                  "same frame cost"
+        md.append("Quadratic against linear at the same frame cost"
                   + (" (errors against the bonded layer):" if name == "hertz" else ":"))
         md.append("")
         md += comparison_markdown(name, results)

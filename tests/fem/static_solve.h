@@ -1,5 +1,5 @@
 #pragma once
-// Static solves for the element tests (quadratic_model_test, nodal_pressure_test): K u = f at rest,
+// Static solves for the element tests (quadratic_model_test): K u = f at rest,
 // and the scene cantilever's beam (0.5 m, 5 × 5 cm) clamped at x = 0 under a tenth of its weight
 // with beam theory's answer for it.
 
