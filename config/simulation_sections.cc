@@ -219,9 +219,8 @@ void ReadObjectDynamics(const YamlMap& map, const std::string& name, contact::Ri
     map.FailKey("dynamic", "the dynamic object " + name +
                                " needs its mass: give exactly one of mass_kg, density_kg_m3");
   if (object->script)
-    map.FailKey("dynamic",
-                "a dynamic object moves under gravity and its contacts, not by a "
-                "trajectory");
+    map.FailKey("dynamic", "the dynamic object " + name +
+                               " moves under gravity and its contacts, not by a trajectory");
   const bool by_mass = map.Has("mass_kg");
   const double value =
       by_mass ? map.GetDouble("mass_kg", Above(0.0)) : map.GetDouble("density_kg_m3", Above(0.0));

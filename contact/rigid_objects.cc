@@ -18,6 +18,41 @@ struct SamplePoints {
   double radius_m = 0.0;
 };
 
+SamplePoints MakeSamplePoints(const ToolShape& shape);
+
+// A box's faces sampled inside: each face's centre and the four points halfway from it to the
+// corners. A dynamic box rests on another box of its width face to face: its corners then sit on
+// the other's edges, where the distance field's normal turns sideways (two equal cubes stacked
+// fell through each other on corners alone); these points lie inside the other's face.
+Matrix3Xd MakeBoxFacePoints(const Eigen::Vector3d& half_m) {
+  Matrix3Xd points(3, 30);
+  int k = 0;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const double side : {-1.0, 1.0}) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (const auto& [su, sv] :
+           {std::pair{0.0, 0.0}, {-0.5, -0.5}, {-0.5, 0.5}, {0.5, -0.5}, {0.5, 0.5}}) {
+        Eigen::Vector3d p = Eigen::Vector3d::Zero();
+        p[axis] = side * half_m[axis];
+        p[u] = su * half_m[u];
+        p[v] = sv * half_m[v];
+        points.col(k++) = p;
+      }
+    }
+  return points;
+}
+
+// The sample points of a rigid object: its shape's, and a dynamic box's face points.
+SamplePoints MakeObjectSamplePoints(const RigidObject& object) {
+  SamplePoints samples = MakeSamplePoints(object.shape);
+  if (!object.dynamic || object.shape.kind != ToolShape::Kind::kBox) return samples;
+  const Matrix3Xd faces = MakeBoxFacePoints(object.shape.half_extents_m);
+  Matrix3Xd all(3, samples.points_m.cols() + faces.cols());
+  all << samples.points_m, faces;
+  samples.points_m = all;
+  return samples;
+}
+
 SamplePoints MakeSamplePoints(const ToolShape& shape) {
   SamplePoints samples;
   if (shape.kind == ToolShape::Kind::kSphere) {
@@ -110,7 +145,7 @@ RigidObjectContacts::RigidObjectContacts(std::vector<RigidObject> objects, const
   objects_.reserve(objects.size());
   for (RigidObject& object : objects) {
     ToolDistanceField field(object.shape);
-    SamplePoints samples = MakeSamplePoints(object.shape);
+    SamplePoints samples = MakeObjectSamplePoints(object);
     const Eigen::AlignedBox3d box_W = CalcWorldBox(object);
     objects_.push_back(Placed{std::move(object), std::move(field), std::move(samples.points_m),
                               samples.radius_m, box_W});

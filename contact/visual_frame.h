@@ -206,6 +206,10 @@ class VisualFrame {
   Eigen::VectorXd CalcObjectSeparatingVelocity(const std::vector<Contact>& contacts) const;
   // The dynamic object of rigid object i, or null.
   DynamicObject* FindDynamicObject(int i);
+  // Rigid object i is dynamic and not held by the tool (it moves under its own dynamics).
+  bool IsFreeDynamicObject(int i) const {
+    return i >= 0 && rigid_contacts_.object(i).dynamic && i != grabbed_object();
+  }
   // End of stage 5: dynamic objects stepped with the solve's impulses; objects at their
   // end-of-frame poses; the touched grabbable object selected.
   void FinishRigidObjects(const ToolState& tool);

@@ -2,6 +2,7 @@
 // the sanity pass.
 #include <Eigen/Dense>
 #include <algorithm>
+#include <limits>
 
 #include "contact/visual_frame.h"
 
@@ -234,6 +235,12 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
     }
     const RigidObjectContacts::Penetration d = rigid_contacts_.CalcDeepest(p_W);
     *max_object_penetration_m = std::max(*max_object_penetration_m, -d.distance_m);
+    // A node inside a dynamic object is left to the stabilisation: moving the node alone onto a
+    // surface that moves with the contact's reaction made energy (a cube resting on a soft block
+    // jittered at 2 mm/s; left alone it settles to 1e-5 mm/s: ObjectDynamics.CubeOnASoftBlock...).
+    if (IsFreeDynamicObject(d.object))
+      return SanitySurface{std::numeric_limits<double>::infinity(), p_W, d.normal_W,
+                           Eigen::Vector3d::Zero()};
     return SanitySurface{d.distance_m, d.closest_W_m, d.normal_W,
                          CalcObjectPointVelocity(d.object, p_W, tool)};
   };
@@ -243,13 +250,6 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
     // Two of the body's objects: the stabilisation (β) undoes their overlap; moving a node onto
     // a face that itself moves would need both sides.
     if (KindOf(contact) == ContactKind::kBodyBody) continue;
-    // Likewise a body node on a dynamic object: moving the node alone onto a surface that moves
-    // with the contact's reaction made energy (a cube resting on a soft block jittered at
-    // 2 mm/s; without the move it settles to 1e-5 mm/s: ObjectDynamics.CubeOnASoftBlock...).
-    if (contact.rigid_object >= 0 && !contact.on_tool &&
-        rigid_contacts_.object(contact.rigid_object).dynamic &&
-        contact.rigid_object != grabbed_object())
-      continue;
     if (contact.embedded) {
       corrections += MoveEmbeddedPointOut(contact, body_->dof_is_fixed, options_.sanity_tolerance_m,
                                           surface_of, body);

@@ -1,6 +1,8 @@
 #include "view/depth_cue.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace hapsim::view {
 
@@ -32,18 +34,27 @@ DropHit CastDropLine(const Eigen::Vector3d& from_W_m, const std::vector<DropSurf
   DropHit hit;
   hit.from_W_m = from_W_m;
   const Eigen::Vector3d down_W(0.0, 0.0, -1.0);
+  // Cast from kDropLineLift_m above: a tool resting on a surface, or pressed a little into it,
+  // starts inside it, and the ray would land on its far side (a probe pressing a 6 mm clip read
+  // "6.0 mm above the instrument"). A surface met within the lift is touching: distance 0.
+  const Eigen::Vector3d start_W_m = from_W_m - kDropLineLift_m * down_W;
+  double nearest = std::numeric_limits<double>::infinity();
   for (const DropSurface& surface : surfaces) {
     // In the surface's frame: the same line, so t is the same distance.
     const Eigen::Isometry3d X_SW = surface.X_WS.inverse();
     const double t =
-        CastRay(X_SW * from_W_m, X_SW.linear() * down_W, *surface.vertices_m, *surface.triangles);
-    if (t < hit.distance_m) {
-      hit.distance_m = t;
+        CastRay(X_SW * start_W_m, X_SW.linear() * down_W, *surface.vertices_m, *surface.triangles);
+    if (t < nearest) {
+      nearest = t;
       hit.name = surface.name;
     }
   }
-  hit.to_W_m = std::isfinite(hit.distance_m) ? Eigen::Vector3d(from_W_m + hit.distance_m * down_W)
-                                             : from_W_m;
+  if (std::isfinite(nearest)) {
+    hit.distance_m = std::max(0.0, nearest - kDropLineLift_m);
+    hit.to_W_m = start_W_m + nearest * down_W;
+  } else {
+    hit.to_W_m = from_W_m;
+  }
   return hit;
 }
 

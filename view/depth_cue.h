@@ -36,6 +36,9 @@ struct DropHit {
 };
 
 // The drop line from `from_W_m` straight down to the nearest of `surfaces`.
+// The drop line from from_W_m (the tool's underside) straight down, cast from kDropLineLift_m
+// above it so that a surface the tool rests on or presses into is met at its top (distance 0).
+inline constexpr double kDropLineLift_m = 0.002;
 DropHit CastDropLine(const Eigen::Vector3d& from_W_m, const std::vector<DropSurface>& surfaces);
 
 }  // namespace hapsim::view

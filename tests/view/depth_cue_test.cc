@@ -62,6 +62,14 @@ TEST(DepthCueTest, TheDropLineLandsOnTheNearestSurfaceBelow) {
   EXPECT_TRUE(std::isinf(nothing.distance_m));
   EXPECT_TRUE(nothing.name.empty());
   EXPECT_EQ(nothing.to_W_m, nothing.from_W_m);
+  // Resting on the organ's top, or pressed 0.5 mm into it: touching it, not above its bottom
+  // (a line cast from inside met the far face first: the organ's 20 mm read as the distance).
+  for (const double into_m : {0.0, 0.0005}) {
+    const DropHit touching = CastDropLine({0.05, 0.005, 0.03 - into_m}, surfaces);
+    EXPECT_EQ(touching.name, "organ");
+    EXPECT_NEAR(touching.distance_m, 0.0, 1e-15) << into_m;
+    EXPECT_NEAR(touching.to_W_m.z(), 0.03, 1e-15);
+  }
 }
 
 }  // namespace
