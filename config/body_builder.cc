@@ -7,6 +7,7 @@
 
 #include "config/surface_mesh_cache.h"
 #include "contact/body_body_contacts.h"
+#include "contact/rigid_objects.h"
 #include "core/error.h"
 #include "core/triangle_mesh_io.h"
 #include "fem/curved_boundary.h"
@@ -161,9 +162,51 @@ void CheckObjectsStartApart(const Scene& scene, const Body& body) {
                        "' (move one apart; they touch through contact)");
 }
 
-}  // namespace
+// A dynamic object that starts inside another object or the tissue would be pushed out by the
+// stabilisation from its first frame, as if shot: a scene error at its entry naming both (over
+// 0.1 mm deep). Fixed and scripted objects may overlap each other: they never move apart.
+void CheckDynamicObjectsStartFree(const Scene& scene, const Body* body) {
+  constexpr double kTolerance_m = 1e-4;
+  std::vector<contact::RigidObject> objects;
+  bool any_dynamic = false;
+  for (const RigidObjectScene& rigid : scene.rigid_objects) {
+    objects.push_back(rigid.object);
+    any_dynamic = any_dynamic || rigid.object.dynamic;
+  }
+  if (!any_dynamic || !scene.tool) return;  // rigid objects without a tool: refused elsewhere
+  const contact::RigidObjectContacts placed(objects, scene.tool->model.shape, 0.0);
+  std::vector<contact::Contact> found;
+  placed.AddObjectContacts(&found);
+  if (body != nullptr) {
+    const Eigen::Isometry3d still = Eigen::Isometry3d::Identity();  // no tool motion, no sweep
+    placed.AddBodyContacts(fem::FindFreeSurfaceNodes(body->model), body->model.rest_positions_m,
+                           body->model.rest_positions_m, still, still, &found);
+  }
+  const contact::Contact* deepest = nullptr;
+  for (const contact::Contact& contact : found)
+    if (objects[contact.rigid_object].dynamic && contact.gap_m < -kTolerance_m &&
+        (deepest == nullptr || contact.gap_m < deepest->gap_m))
+      deepest = &contact;
+  if (deepest == nullptr) return;
+  std::string other = "the tissue";
+  if (deepest->other_object >= 0) {
+    other = "'" + objects[deepest->other_object].name + "'";
+  } else if (body != nullptr) {  // the deformable object of the node
+    const std::vector<int>& first = body->model.object_first_nodes;
+    const int object = static_cast<int>(
+        std::upper_bound(first.begin(), first.end(), deepest->nodes[0]) - first.begin() - 1);
+    other = "'" + (object <= 0 ? scene.body_name : scene.more_bodies[object - 1].name) + "'";
+  }
+  const SourceLocation& where = scene.rigid_objects[deepest->rigid_object].location;
+  char depth[32];
+  std::snprintf(depth, sizeof(depth), "%.2f mm", -1e3 * deepest->gap_m);
+  Fail(where, "the dynamic object '" + objects[deepest->rigid_object].name + "' and " + other +
+                  " start interpenetrating, " + depth +
+                  " deep (move it apart: it would be pushed out at its first frame)");
+}
 
-std::optional<Body> MakeSceneBody(const Scene& scene) {
+// The deformable objects as one body (several: one system of them).
+std::optional<Body> MakeDeformableBody(const Scene& scene) {
   if (!scene.body) return std::nullopt;
   Body first = MakeBody(*scene.body, scene.gravity_m_s2);
   if (scene.more_bodies.empty()) return first;
@@ -198,6 +241,14 @@ std::optional<Body> MakeSceneBody(const Scene& scene) {
   merged.visual_surface = fem::MergeEmbeddedSurfaces(visual_surfaces, boundaries, first_nodes);
   CheckObjectsStartApart(scene, merged);
   return merged;
+}
+
+}  // namespace
+
+std::optional<Body> MakeSceneBody(const Scene& scene) {
+  std::optional<Body> body = MakeDeformableBody(scene);
+  CheckDynamicObjectsStartFree(scene, body ? &*body : nullptr);
+  return body;
 }
 
 }  // namespace hapsim::config

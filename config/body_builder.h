@@ -38,6 +38,8 @@ Body MakeBody(const BodyScene& body, const Eigen::Vector3d& gravity_m_s2);
 
 // The scene's deformable objects built as one body (one FEM system, fem::MergeModels; the
 // objects' nodes and tets in scene order), or none: a scene of rigid objects builds no FEM.
+// Throws InputError at the later object's entry if two deformable objects, or a dynamic rigid
+// object and anything, start interpenetrating (over 0.1 mm), naming both and the depth.
 std::optional<Body> MakeSceneBody(const Scene& scene);
 
 }  // namespace hapsim::config

@@ -338,6 +338,42 @@ TEST(ObjectsSceneTest, ADynamicObjectGetsItsMassPropertiesAndAMeshIsReCentredInP
                     .isApprox(before.X_WO * before.shape.mesh.vertices_m.col(v), 1e-12));
 }
 
+// A dynamic object placed inside another object or the tissue is refused when the scene is built,
+// at its entry, naming both and the depth; touching is not interpenetrating.
+TEST(ObjectsSceneTest, ADynamicObjectThatStartsInsideSomethingIsRefused) {
+  const auto dynamic_wall_at = [](const std::string& position) {
+    return Replace(kObjectsScene, "      position_m: [0.05, 0, 0.02]             # 11\n",
+                   "      position_m: " + position + "\n      dynamic: true\n      mass_kg: 0.2\n");
+  };
+  const auto build_error = [](const std::string& text) -> std::optional<InputError> {
+    try {
+      MakeSceneBody(ParseScene(text, kLabel, ""));
+    } catch (const InputError& error) {
+      return error;
+    }
+    return std::nullopt;
+  };
+  // Lying on the tray (its side 20 mm from its axis at z = 20 mm): touching, accepted.
+  EXPECT_FALSE(build_error(dynamic_wall_at("[0.05, 0, 0.02]")).has_value());
+  // 5 mm lower: 5 mm into the tray.
+  const std::optional<InputError> in_tray = build_error(dynamic_wall_at("[0.05, 0, 0.015]"));
+  ASSERT_TRUE(in_tray.has_value());
+  EXPECT_EQ(in_tray->line(), 9);
+  EXPECT_EQ(in_tray->key(), "objects[1].rigid");
+  EXPECT_NE(std::string(in_tray->what())
+                .find("the dynamic object 'wall' and 'tray' start interpenetrating, 5.00 mm deep"),
+            std::string::npos)
+      << in_tray->what();
+  // Over the organ's edge: its corner nodes at (0.02, y, 0.02) lie 20 − √(15² + 10²) = 1.97 mm
+  // inside the cylinder's side.
+  const std::optional<InputError> in_organ = build_error(dynamic_wall_at("[0.035, 0, 0.03]"));
+  ASSERT_TRUE(in_organ.has_value());
+  EXPECT_NE(std::string(in_organ->what())
+                .find("the dynamic object 'wall' and 'organ' start interpenetrating, 1.97 mm deep"),
+            std::string::npos)
+      << in_organ->what();
+}
+
 // A closed mesh object is read from its file, kept in its own frame; an open one is an error
 // naming the mesh file.
 TEST(ObjectsSceneTest, RigidMeshObjectIsReadInItsOwnFrame) {
