@@ -75,6 +75,18 @@ nlohmann::json DescribeShape(const ToolShape& shape) {
   return json;
 }
 
+// A rigid object: its shape, and a dynamic one's mass (its six degrees of freedom are a rigid
+// body's, not FEM dofs).
+nlohmann::json DescribeRigidObject(const contact::RigidObject& rigid) {
+  nlohmann::json object{{"name", rigid.name}, {"kind", "rigid"}, {"dofs", 0}};
+  object.update(DescribeShape(rigid.shape));
+  if (rigid.dynamic) {
+    object["dynamic"] = true;
+    object["mass_kg"] = rigid.mass_kg;
+  }
+  return object;
+}
+
 // The scene's objects and tool as they will be simulated (the body built).
 nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* body) {
   nlohmann::json objects = nlohmann::json::array();
@@ -129,16 +141,8 @@ nlohmann::json DescribeScene(const config::Scene& scene, const config::Body* bod
     for (size_t k = 0; k < scene.more_bodies.size(); ++k)
       describe_deformable(scene.more_bodies[k].name, scene.more_bodies[k].body, body->parts[k + 1]);
   }
-  for (const config::RigidObjectScene& rigid : scene.rigid_objects) {
-    // A dynamic object's six degrees of freedom are a rigid body's, not FEM dofs.
-    nlohmann::json object{{"name", rigid.object.name}, {"kind", "rigid"}, {"dofs", 0}};
-    object.update(DescribeShape(rigid.object.shape));
-    if (rigid.object.dynamic) {
-      object["dynamic"] = true;
-      object["mass_kg"] = rigid.object.mass_kg;
-    }
-    objects.push_back(object);
-  }
+  for (const config::RigidObjectScene& rigid : scene.rigid_objects)
+    objects.push_back(DescribeRigidObject(rigid.object));
   nlohmann::json json{{"scene", scene.name},
                       {"visual_dt_s", scene.dt_s},
                       {"num_frames", scene.num_steps},

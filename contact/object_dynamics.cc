@@ -4,6 +4,17 @@
 #include <stdexcept>
 
 namespace hapsim::contact {
+namespace {
+
+// Its angular velocity ω = M⁻¹ L, world, after the free step (free) or now (M⁻¹ frozen at the
+// step's start).
+Eigen::Vector3d CalcObjectAngularVelocity(const DynamicObject& object, bool free) {
+  const Eigen::Vector3d L =
+      object.state.L_W_kg_m2_s + (free ? object.dL_W_kg_m2_s : Eigen::Vector3d::Zero());
+  return object.system.M_inv_W * L;
+}
+
+}  // namespace
 
 DynamicObject MakeDynamicObject(int index, const RigidObject& object) {
   if (!object.dynamic)
@@ -65,12 +76,6 @@ void SetObjectRows(const std::vector<Contact>& contacts, int rows_per_contact,
       J.J_w.row(row) = sign * r_W_m.cross(directions[d]).transpose();
     }
   }
-}
-
-Eigen::Vector3d CalcObjectAngularVelocity(const DynamicObject& object, bool free) {
-  const Eigen::Vector3d L =
-      object.state.L_W_kg_m2_s + (free ? object.dL_W_kg_m2_s : Eigen::Vector3d::Zero());
-  return object.system.M_inv_W * L;
 }
 
 void AddObjectSeparatingVelocity(const DynamicObject& object, bool free, Eigen::VectorXd* c) {

@@ -60,10 +60,6 @@ void SetObjectRows(const std::vector<Contact>& contacts, int rows_per_contact,
 // c += J_v,o v + J_ω,o ω, with its velocities now (free = false) or after the free step.
 void AddObjectSeparatingVelocity(const DynamicObject& object, bool free, Eigen::VectorXd* c);
 
-// Its angular velocity ω = M⁻¹ L, world, after the free step (free) or now (M⁻¹ frozen at the
-// step's start).
-Eigen::Vector3d CalcObjectAngularVelocity(const DynamicObject& object, bool free);
-
 // Applies the contact impulses to the momentum changes, then advances the state by the step.
 void FinishObjectStep(const Eigen::VectorXd& lambda_N, double dt_s, DynamicObject* object);
 

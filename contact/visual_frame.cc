@@ -224,7 +224,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
       c_object;
   // The dynamic objects' own velocities, through their rows (their motion is not in c_object).
   for (DynamicObject& object : dynamic_objects_) {
-    if (object.object == grabbed_object()) continue;
+    if (!IsFreeDynamicObject(object.object)) continue;
     SetObjectRows(contacts_, rows_per_contact_, &object);
     AddObjectSeparatingVelocity(object, /*free=*/true, &c_free);
     AddObjectSeparatingVelocity(object, /*free=*/false, &c_pre);
@@ -241,7 +241,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
   if (haptic_compliance_)
     W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
   for (const DynamicObject& object : dynamic_objects_) {
-    if (object.object == grabbed_object()) continue;
+    if (!IsFreeDynamicObject(object.object)) continue;
     AddToolDelassus(object.J, object.system, &W_body_);  // a rigid body: the same at either step
     if (haptic_compliance_) AddToolDelassus(object.J, object.system, &W_body_haptic_);
   }

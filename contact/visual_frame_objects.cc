@@ -44,7 +44,7 @@ void VisualFrame::MoveRigidObjects(bool button_down, bool pressed, const ToolSta
   // it would take them (their motion enters the rows through their own Jacobian, not
   // object_motion_, which stays zero for them until the frame's end).
   for (DynamicObject& object : dynamic_objects_) {
-    if (object.object == grabbed_object()) continue;
+    if (!IsFreeDynamicObject(object.object)) continue;
     StartFreeStep(options_.gravity_m_s2, options_.dt_s, &object);
     rigid_contacts_.SetMotion(object.object, CalcPose(object.state),
                               CalcFreeEndPose(object, options_.dt_s));
@@ -108,7 +108,7 @@ void VisualFrame::FinishRigidObjects(const ToolState& tool) {
   // Dynamic objects step with the impulses; from here on (the linear model's targets, the sanity
   // pass) their velocity after the frame is their motion, as a scripted object's is.
   for (DynamicObject& object : dynamic_objects_) {
-    if (object.object == grabbed_object()) continue;
+    if (!IsFreeDynamicObject(object.object)) continue;
     FinishObjectStep(lambda_, options_.dt_s, &object);
     rigid_contacts_.SetPose(object.object, CalcPose(object.state));
     ObjectMotion& motion = object_motion_[object.object];

@@ -43,6 +43,35 @@ fem::Model MakeStack(double gap_m, bool lower_fixed_whole = false) {
       {fem::MakeModel(lower, MakeSoft(30e3), base), fem::MakeModel(upper, MakeSoft(20e3), {})});
 }
 
+// The frame of the stack's tests: a small sphere tool (kept far above), the law and gravity given.
+VisualFrameOptions MakeStackOptions(double dt_s, const Eigen::Vector3d& gravity_m_s2,
+                                    ContactLaw law) {
+  VisualFrameOptions options;
+  options.dt_s = dt_s;
+  options.gravity_m_s2 = gravity_m_s2;
+  options.coupling = CouplingParams{100.0, 1.0, 0.1, 0.001};
+  options.response.solve.law = law;
+  return options;
+}
+
+ToolModel MakeSphereTool() {
+  ToolShape sphere;
+  sphere.kind = ToolShape::Kind::kSphere;
+  sphere.radius_m = 0.005;
+  return MakeToolModelWithMass(sphere, 0.01);
+}
+
+// Runs `frames` frames of the stack from rest with the tool parked far above, out of the way.
+fem::State RunWithTheToolAway(VisualFrame* frame, const fem::Model& stack, int frames) {
+  ToolState tool;
+  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.5);
+  DeviceState device;
+  device.x_W_m = tool.x_W_m;
+  fem::State body = fem::MakeRestState(stack);
+  for (int k = 0; k < frames; ++k) frame->Step(device, &body, &tool);
+  return body;
+}
+
 TEST(BodyBodyContact, ObjectsAreTheMergedModels) {
   const fem::Model stack = MakeStack(0.001);
   const BodyBodyContacts contacts(stack, 0.001);
@@ -93,23 +122,12 @@ class StackedBlock : public testing::TestWithParam<bool> {};
 
 TEST_P(StackedBlock, CarriesExactlyItsWeight) {
   const fem::Model stack = MakeStack(0.001, GetParam());
-  VisualFrameOptions options;
-  options.dt_s = 1.0 / 60.0;
-  options.gravity_m_s2 = Eigen::Vector3d(0, 0, -kGravity_m_s2);
-  options.coupling = CouplingParams{100.0, 1.0, 0.1, 0.001};
-  options.response.solve.law = ContactLaw::kUnilateral;
-  ToolShape sphere;
-  sphere.kind = ToolShape::Kind::kSphere;
-  sphere.radius_m = 0.005;
+  const VisualFrameOptions options =
+      MakeStackOptions(1.0 / 60.0, Eigen::Vector3d(0, 0, -kGravity_m_s2), ContactLaw::kUnilateral);
   VisualFrame frame(stack, fem::FemOptions{}, fem::CalcGravityForce(stack, options.gravity_m_s2),
-                    MakeToolModelWithMass(sphere, 0.01), options);
-  ToolState tool;
-  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.5);  // far above, out of the way
-  DeviceState device;
-  device.x_W_m = tool.x_W_m;
-  fem::State body = fem::MakeRestState(stack);
+                    MakeSphereTool(), options);
+  const fem::State body = RunWithTheToolAway(&frame, stack, 240);  // 4 s
   const BodyBodyContacts objects(stack, 0.001);
-  for (int k = 0; k < 240; ++k) frame.Step(device, &body, &tool);  // 4 s
   Eigen::Vector3d on_upper_N = Eigen::Vector3d::Zero();
   int rows = 0;
   for (size_t i = 0; i < frame.contacts().size(); ++i) {
@@ -155,25 +173,14 @@ INSTANTIATE_TEST_SUITE_P(LowerFixed, StackedBlock, testing::Bool(),
 Eigen::Vector3d SlideOnTheLowerBlock(double tilt_rad, double duration_s,
                                      Eigen::Vector3d* com_velocity_m_s) {
   const fem::Model stack = MakeStack(0.0, /*lower_fixed_whole=*/true);
-  VisualFrameOptions options;
-  options.dt_s = 1.0 / 500.0;
-  options.gravity_m_s2 =
-      kGravity_m_s2 * Eigen::Vector3d(std::sin(tilt_rad), 0.0, -std::cos(tilt_rad));
-  options.coupling = CouplingParams{100.0, 1.0, 0.1, 0.001};
-  options.response.solve.law = ContactLaw::kFriction;
+  VisualFrameOptions options = MakeStackOptions(
+      1.0 / 500.0, kGravity_m_s2 * Eigen::Vector3d(std::sin(tilt_rad), 0.0, -std::cos(tilt_rad)),
+      ContactLaw::kFriction);
   options.response.solve.friction_coefficient = 0.5;
-  ToolShape sphere;
-  sphere.kind = ToolShape::Kind::kSphere;
-  sphere.radius_m = 0.005;
   VisualFrame frame(stack, fem::FemOptions{}, fem::CalcGravityForce(stack, options.gravity_m_s2),
-                    MakeToolModelWithMass(sphere, 0.01), options);
-  ToolState tool;
-  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.5);  // far above, out of the way
-  DeviceState device;
-  device.x_W_m = tool.x_W_m;
-  fem::State body = fem::MakeRestState(stack);
-  const int frames = static_cast<int>(std::lround(duration_s / options.dt_s));
-  for (int k = 0; k < frames; ++k) frame.Step(device, &body, &tool);
+                    MakeSphereTool(), options);
+  const fem::State body =
+      RunWithTheToolAway(&frame, stack, static_cast<int>(std::lround(duration_s / options.dt_s)));
   // The upper block's centre of mass (its nodes come after the lower's 75), moved and moving.
   Eigen::Vector3d moved_m = Eigen::Vector3d::Zero();
   com_velocity_m_s->setZero();
