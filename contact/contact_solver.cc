@@ -25,15 +25,18 @@ ContactSolveReport SolveEquality(const Eigen::MatrixXd& W, const Eigen::VectorXd
 }
 
 // Complementarity residual of the normal rows, max_i |min(λ_i, c_i / (Δt W_ii))|, in impulse
-// units, relative to the largest |λ| (or absolute when λ = 0).
+// units, relative to the largest |λ| (or absolute when λ = 0). Reads W only by the columns of the
+// rows with λ ≠ 0, and its diagonal.
 // A bilateral row's only condition is c_i = 0: its term is |c_i / (Δt W_ii)|.
-double CalcNormalResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
-                          int stride, const Eigen::VectorXd& lambda,
-                          const std::vector<std::uint8_t>* bilateral = nullptr) {
-  const Eigen::VectorXd c = dt_s * (W * lambda) - rhs;  // by columns: W is column-major
+double CalcNormalResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& W_diagonal,
+                          const Eigen::VectorXd& rhs, double dt_s, const Eigen::VectorXd& lambda,
+                          const std::vector<std::uint8_t>* bilateral) {
+  Eigen::VectorXd c = -rhs;
+  for (Eigen::Index col = 0; col < lambda.size(); ++col)
+    if (lambda[col] != 0.0) c.noalias() += (dt_s * lambda[col]) * W.col(col);
   double residual = 0.0;
-  for (Eigen::Index row = 0; row < lambda.size(); row += stride) {
-    const double slack = c[row] / (dt_s * W(row, row));
+  for (Eigen::Index row = 0; row < lambda.size(); ++row) {
+    const double slack = c[row] / (dt_s * W_diagonal[row]);
     const bool equality = bilateral && (*bilateral)[static_cast<size_t>(row)];
     residual = std::max(residual, std::abs(equality ? slack : std::min(lambda[row], slack)));
   }
@@ -77,7 +80,7 @@ double CalcFrictionResidual(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs
 namespace {
 
 // Projected Gauss–Seidel. For each contact: the normal row gets λ_n ← max(0, λ_n − r_n/(ΔtW_nn));
-// with friction, then the tangent pair moves together by one step against its residual and is
+// then the tangent pair moves together by one step against its residual and is
 // projected onto the disc of radius μ λ_n (Jean & Moreau's non-smooth contact dynamics, in its
 // simplest blocked form):
 //   λ_t ← Proj_{|·| ≤ μλ_n}(λ_t − r_t / (Δt ω))   (StepTangentialImpulse).
@@ -87,7 +90,7 @@ namespace {
 // with λ_t ∥ −diag(W_tt)⁻¹ r_t, not opposite the slip when W_t1t1 ≠ W_t2t2.) The residual is
 // CalcFrictionResidual's, so the tangential part is converged too, not only the normal rows.
 ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs,
-                                             double dt_s, int stride, double mu,
+                                             double dt_s, double mu,
                                              const Eigen::VectorXd* mu_per_contact,
                                              const ContactSolveOptions& options,
                                              Eigen::VectorXd* lambda) {
@@ -97,21 +100,18 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
   // tool, not symmetric).
   const Eigen::MatrixXd W_rows = W.transpose();
   for (report.iterations = 1; report.iterations <= options.max_iterations; ++report.iterations) {
-    for (Eigen::Index normal = 0; normal < rows; normal += stride) {
+    for (Eigen::Index normal = 0; normal < rows; normal += 3) {
       // Residual of the normal row of ΔtWλ = rhs, solved for λ_n with the others fixed.
       const double r_n = dt_s * W_rows.col(normal).dot(*lambda) - rhs[normal];
       (*lambda)[normal] = std::max(0.0, (*lambda)[normal] - r_n / (dt_s * W(normal, normal)));
-      if (stride == 3) {
-        const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
-        const Eigen::Vector2d r_t(dt_s * W_rows.col(normal + 1).dot(*lambda) - rhs[normal + 1],
-                                  dt_s * W_rows.col(normal + 2).dot(*lambda) - rhs[normal + 2]);
-        lambda->segment<2>(normal + 1) = StepTangentialImpulse(
-            lambda->segment<2>(normal + 1), r_t, W.block<2, 2>(normal + 1, normal + 1), dt_s,
-            mu_contact * (*lambda)[normal]);
-      }
+      const double mu_contact = mu_per_contact ? (*mu_per_contact)[normal / 3] : mu;
+      const Eigen::Vector2d r_t(dt_s * W_rows.col(normal + 1).dot(*lambda) - rhs[normal + 1],
+                                dt_s * W_rows.col(normal + 2).dot(*lambda) - rhs[normal + 2]);
+      lambda->segment<2>(normal + 1) = StepTangentialImpulse(lambda->segment<2>(normal + 1), r_t,
+                                                             W.block<2, 2>(normal + 1, normal + 1),
+                                                             dt_s, mu_contact * (*lambda)[normal]);
     }
-    report.residual = stride == 3 ? CalcFrictionResidual(W, rhs, dt_s, mu, mu_per_contact, *lambda)
-                                  : CalcNormalResidual(W, rhs, dt_s, stride, *lambda);
+    report.residual = CalcFrictionResidual(W, rhs, dt_s, mu, mu_per_contact, *lambda);
     if (report.residual <= options.tolerance) {
       report.converged = true;
       break;
@@ -120,6 +120,30 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
   report.iterations = std::min(report.iterations, options.max_iterations);
   return report;
 }
+
+// M = Δt W + σ I of the active-set method below, read by columns: the method reads only the
+// columns of its free rows, so W need hold no other (ColumnFiller fills them as rows enter). The
+// shift σ, a relative 1e-10 of the largest diagonal entry, keeps the free-set systems non-singular
+// when contacts are redundant (same body point twice, many on a nearly rigid part): without it the
+// solves return garbage there and the method cycles. It changes λ by ~1e-10 relative.
+class DelassusColumns {
+ public:
+  DelassusColumns(const Eigen::MatrixXd& W, const Eigen::VectorXd& W_diagonal, double dt_s)
+      : W_(W), dt_s_(dt_s), shift_(1e-10 * dt_s * W_diagonal.cwiseAbs().maxCoeff()) {}
+  // Entry (row, col): col's column must be filled.
+  double operator()(Eigen::Index row, Eigen::Index col) const {
+    return dt_s_ * W_(row, col) + (row == col ? shift_ : 0.0);
+  }
+  // *w += scale · M(:, col).
+  void AddColumn(Eigen::Index col, double scale, Eigen::VectorXd* w) const {
+    w->noalias() += (scale * dt_s_) * W_.col(col);
+    (*w)[col] += scale * shift_;
+  }
+
+ private:
+  const Eigen::MatrixXd& W_;
+  const double dt_s_, shift_;
+};
 
 // The free rows of the active-set method below, and an LU factor of M restricted to them in
 // the order they entered. M = ΔtW plus a small diagonal shift is not symmetric when the tool
@@ -133,12 +157,12 @@ ContactSolveReport SolveProjectedGaussSeidel(const Eigen::MatrixXd& W, const Eig
 // A pivot δ below 1e-8 M_ee (a row nearly dependent on the others: elimination without pivoting
 // would amplify round-off) switches this solve to pivoted LU; on block_press and
 // block_press_large the smallest δ / M_ee seen over 18,000 appends was 0.49 (a one-off count
-// with a temporary print, 2026-11-25).
+// with a temporary print, 2026-11-25). Every entry it reads lies in a free row's column.
 class FreeSet {
  public:
   // Rows marked in `bilateral` (may be null: none) are equalities: they never leave.
-  FreeSet(const Eigen::MatrixXd& M, const std::vector<std::uint8_t>* bilateral)
-      : M_(M), LU_(M.rows(), M.rows()), is_free_(M.rows(), false), bilateral_(bilateral) {}
+  FreeSet(const DelassusColumns& M, Eigen::Index n, const std::vector<std::uint8_t>* bilateral)
+      : M_(M), LU_(n, n), is_free_(n, false), bilateral_(bilateral) {}
 
   const std::vector<Eigen::Index>& rows() const { return rows_; }
   bool contains(Eigen::Index row) const { return is_free_[row]; }
@@ -203,7 +227,7 @@ class FreeSet {
     return true;
   }
 
-  const Eigen::MatrixXd& M_;
+  const DelassusColumns& M_;
   Eigen::MatrixXd LU_;  // L below the diagonal (unit diagonal implied), U on and above it
   std::vector<Eigen::Index> rows_;
   std::vector<bool> is_free_;
@@ -250,24 +274,24 @@ bool StepToward(const Eigen::VectorXd& z, const FreeSet& free_set, Eigen::Vector
 // Bilateral rows (a grasp's) make it the mixed problem with those λ unconstrained, still a convex
 // QP: they are free from the start, whatever their λ, never leave and take no part in the ratio
 // test, as equality constraints in an active-set QP method.
-ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
-                                  const ContactSolveOptions& options,
+ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorXd& W_diagonal,
+                                  const ColumnFiller& fill_columns, const Eigen::VectorXd& rhs,
+                                  double dt_s, const ContactSolveOptions& options,
                                   const std::vector<std::uint8_t>* bilateral,
                                   Eigen::VectorXd* lambda) {
   const Eigen::Index n = rhs.size();
-  // A relative 1e-10 on the diagonal keeps the free-set systems non-singular when contacts are
-  // redundant (same body point twice, many on a nearly rigid part): without it the solves return
-  // garbage there and the method cycles. It changes λ by ~1e-10 relative.
-  Eigen::MatrixXd M = dt_s * W;
-  M.diagonal().array() += 1e-10 * M.diagonal().cwiseAbs().maxCoeff();
+  const DelassusColumns M(W, W_diagonal, dt_s);
   const double tolerance = options.tolerance * std::max(1.0, rhs.lpNorm<Eigen::Infinity>());
-  FreeSet free_set(M, bilateral);
+  FreeSet free_set(M, n, bilateral);
+  std::vector<Eigen::Index> start;
   for (Eigen::Index i = 0; i < n; ++i) {
     if ((*lambda)[i] > 0.0 || free_set.is_bilateral(i))
-      free_set.Add(i);
+      start.push_back(i);
     else
       (*lambda)[i] = 0.0;
   }
+  if (fill_columns) fill_columns(start);
+  for (Eigen::Index i : start) free_set.Add(i);
   // The equality on the free rows, stepping back while a free λ would turn negative. Then w, the
   // slack: only free rows carry λ, so O(n k), not O(n²).
   Eigen::VectorXd w(n);
@@ -275,7 +299,7 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
     while (!free_set.rows().empty() && !StepToward(free_set.Solve(rhs), free_set, lambda))
       free_set.RemoveNonPositive(lambda);
     w = -rhs;  // w = Mλ − rhs
-    for (Eigen::Index row : free_set.rows()) w += (*lambda)[row] * M.col(row);
+    for (Eigen::Index row : free_set.rows()) M.AddColumn(row, (*lambda)[row], &w);
   };
   solve_free_set();
   ContactSolveReport report;
@@ -285,10 +309,11 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
     for (Eigen::Index i = 0; i < n; ++i)
       if (!free_set.contains(i) && w[i] < most_violated) most_violated = w[i], entering = i;
     if (entering < 0) break;
+    if (fill_columns) fill_columns({entering});
     free_set.Add(entering);
     solve_free_set();
   }
-  report.residual = CalcNormalResidual(W, rhs, dt_s, 1, *lambda, bilateral);
+  report.residual = CalcNormalResidual(W, W_diagonal, rhs, dt_s, *lambda, bilateral);
   report.converged = report.residual <= std::max(options.tolerance, 1e-9);
   return report;
 }
@@ -331,12 +356,12 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
     case ContactLaw::kUnilateral:
       if (rows_per_contact != 1)
         throw std::invalid_argument("unilateral contact uses normal rows only");
-      return SolveActiveSet(W, rhs, dt_s, options, any_bilateral ? bilateral_rows : nullptr,
-                            lambda);
+      return SolveActiveSet(W, W.diagonal(), nullptr, rhs, dt_s, options,
+                            any_bilateral ? bilateral_rows : nullptr, lambda);
     case ContactLaw::kFriction:
       if (rows_per_contact != 3) throw std::invalid_argument("friction needs 3 rows per contact");
       if (options.friction_method == FrictionMethod::kDenseGaussSeidel)
-        return SolveProjectedGaussSeidel(W, rhs, dt_s, 3, options.friction_coefficient,
+        return SolveProjectedGaussSeidel(W, rhs, dt_s, options.friction_coefficient,
                                          friction_per_contact, options, lambda);
       return SolveFrictionOnWorkingSet(
           W, rhs, dt_s,
@@ -346,6 +371,21 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
           options, lambda);
   }
   throw std::invalid_argument("unknown contact law");
+}
+
+ContactSolveReport SolveUnilateralByColumns(
+    const Eigen::MatrixXd& W, const Eigen::VectorXd& W_diagonal, const ColumnFiller& fill_columns,
+    const Eigen::VectorXd& rhs, double dt_s, const ContactSolveOptions& options,
+    Eigen::VectorXd* lambda, const std::vector<std::uint8_t>* bilateral_rows) {
+  if (W.rows() != rhs.size() || W.cols() != rhs.size() || W_diagonal.size() != rhs.size())
+    throw std::invalid_argument("W must be square and its diagonal hold one entry per row");
+  if (bilateral_rows && static_cast<Eigen::Index>(bilateral_rows->size()) != rhs.size())
+    throw std::invalid_argument("bilateral_rows needs one entry per constraint row");
+  if (options.law != ContactLaw::kUnilateral)
+    throw std::invalid_argument("SolveUnilateralByColumns solves the unilateral law only");
+  if (lambda->size() != rhs.size()) lambda->setZero(rhs.size());
+  if (rhs.size() == 0) return ContactSolveReport{0, 0.0, true};
+  return SolveActiveSet(W, W_diagonal, fill_columns, rhs, dt_s, options, bilateral_rows, lambda);
 }
 
 }  // namespace hapsim::contact

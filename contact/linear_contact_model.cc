@@ -12,18 +12,39 @@ Eigen::MatrixXd CalcToolDelassus(const ContactJacobian& J, const ToolStepSystem&
   return W;
 }
 
-// One rank-6 product [J_v J_ω] S [J_v J_ω]ᵀ, S = blockdiag(A_v⁻¹, M⁻¹A_L⁻¹): a single pass over W
-// (two rank-3 products and their sum made three, and two n × n temporaries: 0.9 ms of
-// block_press_friction's 720-row frame).
 void AddToolDelassus(const ContactJacobian& J, const ToolStepSystem& tool, Eigen::MatrixXd* W) {
   const Eigen::Index n = J.num_rows();
   if (W->rows() != n || W->cols() != n)
     throw std::invalid_argument("AddToolDelassus: W must be rows x rows of J");
-  Eigen::Matrix<double, Eigen::Dynamic, 6> J_tool(n, 6), J_tool_S(n, 6);
-  J_tool << J.J_v, J.J_w;
-  J_tool_S.leftCols<3>().noalias() = J.J_v * tool.A_v.inverse().transpose();
-  J_tool_S.rightCols<3>().noalias() = J.J_w * (tool.M_inv_W * tool.A_L.inverse()).transpose();
-  W->noalias() += J_tool * J_tool_S.transpose();
+  ToolDelassusColumns(J, tool).AddAll(W);
+}
+
+ToolDelassusColumns::ToolDelassusColumns(const ContactJacobian& J, const ToolStepSystem& tool)
+    : J_tool_(J.num_rows(), 6), J_tool_S_(J.num_rows(), 6) {
+  J_tool_ << J.J_v, J.J_w;
+  J_tool_S_.leftCols<3>().noalias() = J.J_v * tool.A_v.inverse().transpose();
+  J_tool_S_.rightCols<3>().noalias() = J.J_w * (tool.M_inv_W * tool.A_L.inverse()).transpose();
+}
+
+void ToolDelassusColumns::AddColumn(Eigen::Index col, Eigen::MatrixXd* W,
+                                    const std::vector<std::uint8_t>* skip) const {
+  if (skip == nullptr) {
+    W->col(col).noalias() += J_tool_ * J_tool_S_.row(col).transpose();
+    return;
+  }
+  const Eigen::Matrix<double, 6, 1> s = J_tool_S_.row(col).transpose();
+  for (Eigen::Index r = 0; r < J_tool_.rows(); ++r)
+    if (!(*skip)[static_cast<size_t>(r)]) (*W)(r, col) += J_tool_.row(r).dot(s);
+}
+
+void ToolDelassusColumns::AddDiagonal(Eigen::VectorXd* diagonal) const {
+  *diagonal += J_tool_.cwiseProduct(J_tool_S_).rowwise().sum();
+}
+
+// One rank-6 product [J_v J_ω] S [J_v J_ω]ᵀ: a single pass over W (two rank-3 products and their
+// sum made three, and two n × n temporaries: 0.9 ms of block_press_friction's 720-row frame).
+void ToolDelassusColumns::AddAll(Eigen::MatrixXd* W) const {
+  W->noalias() += J_tool_ * J_tool_S_.transpose();
 }
 
 LinearContactModel MakeLinearContactModel(const ContactJacobian& J, const Eigen::MatrixXd& W,

@@ -16,6 +16,8 @@
 // one for the offset); evaluating it four 3×3 products.
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <vector>
 
 #include "contact/contact_jacobian.h"
 #include "core/rigid_tool.h"
@@ -55,5 +57,26 @@ Eigen::MatrixXd CalcToolDelassus(const ContactJacobian& J, const ToolStepSystem&
 // W += that part, in place (W: rows x rows), with no rows x rows temporary. Throws
 // std::invalid_argument if W is not rows x rows.
 void AddToolDelassus(const ContactJacobian& J, const ToolStepSystem& tool, Eigen::MatrixXd* W);
+
+// The same rank-6 part [J_v J_ω] S [J_v J_ω]ᵀ, S = blockdiag(A_v⁻¹, M⁻¹A_L⁻¹), a column or the
+// diagonal at a time (6 products an entry), for a W formed by the columns a solve reads
+// (FrameCompliance). A rigid body's rows (a dynamic object's J and system) give its part alike.
+class ToolDelassusColumns {
+ public:
+  ToolDelassusColumns(const ContactJacobian& J, const ToolStepSystem& tool);
+  Eigen::Index rows() const { return J_tool_.rows(); }
+  // W(:, col) += the part's column col (W: rows x rows), but at the rows marked in `skip` (may
+  // be null: none).
+  void AddColumn(Eigen::Index col, Eigen::MatrixXd* W,
+                 const std::vector<std::uint8_t>* skip = nullptr) const;
+  // diagonal += the part's diagonal.
+  void AddDiagonal(Eigen::VectorXd* diagonal) const;
+  // W += the whole part, one product.
+  void AddAll(Eigen::MatrixXd* W) const;
+
+ private:
+  Eigen::Matrix<double, Eigen::Dynamic, 6> J_tool_;    // [J_v J_ω]
+  Eigen::Matrix<double, Eigen::Dynamic, 6> J_tool_S_;  // [J_v J_ω] Sᵀ
+};
 
 }  // namespace hapsim::contact

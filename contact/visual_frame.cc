@@ -232,31 +232,46 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
   b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
   const int num_rows = jacobian_.num_rows();
   Stopwatch stage;
+  // Under the unilateral law every reader of W needs only some of its columns (frame_compliance.h).
+  const bool by_columns = options_.response.solve.law == ContactLaw::kUnilateral;
   if (!stepper_)
-    W_body_.setZero(num_rows, num_rows);  // rigid objects only: nothing yields
-  else if (warped_compliance_)
-    W_body_ = warped_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
+    W_body_.SetWhole(Eigen::MatrixXd::Zero(num_rows, num_rows));  // rigid objects only
+  else if (warped_compliance_ && by_columns) {
+    warped_compliance_->SetRows(jacobian_.J_u, stepper_->rotations());
+    W_body_.SetByColumns(warped_compliance_.get(), num_rows);
+  } else if (warped_compliance_)
+    W_body_.SetWhole(warped_compliance_->Calc(jacobian_.J_u, stepper_->rotations()));
   else
-    W_body_ = stepper_->CalcCompliance(jacobian_.J_u);
-  if (haptic_compliance_)
-    W_body_haptic_ = haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations());
+    W_body_.SetWhole(stepper_->CalcCompliance(jacobian_.J_u));
+  if (haptic_compliance_ && by_columns) {
+    haptic_compliance_->SetRows(jacobian_.J_u, stepper_->rotations());
+    W_body_haptic_.SetByColumns(haptic_compliance_.get(), num_rows);
+  } else if (haptic_compliance_) {
+    W_body_haptic_.SetWhole(haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations()));
+  }
   for (const DynamicObject& object : dynamic_objects_) {
     if (!IsFreeDynamicObject(object.object)) continue;
-    AddToolDelassus(object.J, object.system, &W_body_);  // a rigid body: the same at either step
-    if (haptic_compliance_) AddToolDelassus(object.J, object.system, &W_body_haptic_);
+    W_body_.AddRigidPart(object.J, object.system);  // a rigid body: the same at either step
+    if (haptic_compliance_) W_body_haptic_.AddRigidPart(object.J, object.system);
   }
   stats->compliance_s = stage.Lap();
-  Eigen::MatrixXd W = W_body_;
-  AddToolDelassus(jacobian_, tool_system_, &W);
+  W_.SetAbove(&W_body_);
+  W_.AddRigidPart(jacobian_, tool_system_);
   if (rows_per_contact_ == 3) SetFrictionCoefficients();
   const bool warm = options_.response.solve.law != ContactLaw::kEquality;
   lambda_ = warm ? impulse_start_.Start(contacts_) : Eigen::VectorXd::Zero(num_rows);
   bilateral_rows_.assign(static_cast<size_t>(num_rows), 0);
   for (size_t i = 0; i < contacts_.size(); ++i)
     if (contacts_[i].bilateral) bilateral_rows_[rows_per_contact_ * i] = 1;
-  last_solve_ = SolveContactImpulses(
-      W, b_ - c_free, dt, rows_per_contact_, options_.response.solve, &lambda_,
-      objects_have_own_friction_ ? &mu_per_contact_ : nullptr, grasp_ ? &bilateral_rows_ : nullptr);
+  if (by_columns)
+    last_solve_ = SolveUnilateralByColumns(
+        W_.W(), W_.diagonal(), [this](const std::vector<Eigen::Index>& c) { W_.Fill(c); },
+        b_ - c_free, dt, options_.response.solve, &lambda_, grasp_ ? &bilateral_rows_ : nullptr);
+  else
+    last_solve_ =
+        SolveContactImpulses(W_.W(), b_ - c_free, dt, rows_per_contact_, options_.response.solve,
+                             &lambda_, objects_have_own_friction_ ? &mu_per_contact_ : nullptr,
+                             grasp_ ? &bilateral_rows_ : nullptr);
   if (warm) impulse_start_.Record(contacts_, lambda_);
   stats->solve_s = stage.Lap();
   // Post-collision: A Δv = Δt (F̃ + Jᵀλ) for each body, i.e. the free change plus the impulse's.
@@ -273,7 +288,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
     du_contact_.resize(0);  // nothing was added to du_body_: nothing to take off next frame
   }
   stats->correction_s = stage.Lap();
-  c_post_ = c_free + dt * MultiplyByImpulses(W, lambda_);
+  c_post_ = c_free + dt * MultiplyByImpulses(W_.W(), lambda_);  // columns of λ ≠ 0: formed
 }
 
 void VisualFrame::SetFrictionCoefficients() {

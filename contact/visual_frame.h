@@ -42,6 +42,7 @@
 #include "contact/collision_detection.h"
 #include "contact/collision_response.h"
 #include "contact/contact_jacobian.h"
+#include "contact/frame_compliance.h"
 #include "contact/haptic_contact_rows.h"
 #include "contact/impulse_warm_start.h"
 #include "contact/linear_contact_model.h"
@@ -125,7 +126,9 @@ struct VisualFrameStats {
   // Of response_s: the body's compliance W_body (both steps' when the model takes the haptic
   // step's); the impulse solve with forming W and the warm start; the post-collision correction
   // A_u⁻¹ Δt J_uᵀ λ with the tool's. The rest of response_s (the Jacobian, the targets, c_post)
-  // is in none of the three.
+  // is in none of the three. Where W is formed by columns (FrameCompliance), compliance_s is the
+  // set-up and the diagonal, and the columns are formed within solve_s (the solve's) and model_s
+  // (the model's and the lcp rows').
   double compliance_s = 0.0, solve_s = 0.0, correction_s = 0.0;
   int num_candidates = 0;      // contacts detected
   int num_contacts = 0;        // contacts made constraints
@@ -294,9 +297,11 @@ class VisualFrame {
   std::vector<Contact> contacts_;
   ContactJacobian jacobian_;
   // J_u A_u⁻¹ J_uᵀ at the visual step, the frame's solve, plus the dynamic objects' parts: all
-  // that yields but the tool.
-  Eigen::MatrixXd W_body_;
-  Eigen::MatrixXd W_body_haptic_;  // the same at the haptic step (ModelComplianceStep::kHaptic)
+  // that yields but the tool. By columns (as readers ask) under the unilateral law with the
+  // warped compliance, else whole.
+  FrameCompliance W_body_;
+  FrameCompliance W_body_haptic_;  // the same at the haptic step (ModelComplianceStep::kHaptic)
+  FrameCompliance W_;              // W_body_ and the tool's part: the frame's solve
   Eigen::VectorXd b_, lambda_;
   std::vector<Eigen::Vector3d> object_velocity_;  // w of each contact (CalcObjectVelocities)
   Eigen::VectorXd c_post_;  // separating velocity of each row after the response

@@ -67,7 +67,14 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
       CalcCouplingWrench(options_.coupling, device, tool, CalcAngularVelocity(tool_, tool));
   const ToolStepSystem haptic =
       CalcToolStepSystem(tool_, tool, wrench, options_.gravity_m_s2, options_.haptic_dt_s);
-  const Eigen::MatrixXd& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
+  // The columns read below: the active rows' and those of every row with λ ≠ 0 (a let-go grasp
+  // row keeps its λ).
+  FrameCompliance& W_body_part = haptic_compliance_ ? W_body_haptic_ : W_body_;
+  std::vector<Eigen::Index> loaded(active_rows.begin(), active_rows.end());
+  for (Eigen::Index row = 0; row < lambda_.size(); ++row)
+    if (lambda_[row] != 0.0) loaded.push_back(row);
+  W_body_part.Fill(loaded);
+  const Eigen::MatrixXd& W_body = W_body_part.W();
   Eigen::MatrixXd W = CalcToolDelassus(J, haptic);
   Eigen::VectorXd b(active_rows.size());
   for (size_t r = 0; r < active_rows.size(); ++r) {
@@ -164,9 +171,13 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
   }
   const Eigen::VectorXd mu_ordered =
       Eigen::Map<const Eigen::VectorXd>(mu.data(), static_cast<Eigen::Index>(mu.size()));
-  const Eigen::MatrixXd& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
-  // An uncoupled contact keeps its own block of W_body alone (zeros elsewhere, for dense readers).
-  contact_rows_ = MakeContactRows(J, W_body, rows, rhs, mu_ordered, num_coupled);
+  // An uncoupled contact keeps its own block of W_body alone (zeros elsewhere, for dense readers):
+  // the coupled rows' columns and the others' own entries are all MakeContactRows reads (by
+  // columns, FrameCompliance, the rows are normal rows: a row's own block is its diagonal entry).
+  FrameCompliance& W_body = haptic_compliance_ ? W_body_haptic_ : W_body_;
+  W_body.Fill(std::vector<Eigen::Index>(rows.begin(), rows.begin() + num_coupled));
+  W_body.WriteDiagonalOfUnformedColumns();
+  contact_rows_ = MakeContactRows(J, W_body.W(), rows, rhs, mu_ordered, num_coupled);
   contact_rows_.lambda_frame_N = lambda;
   contact_rows_.gap_m = gap_m;
   contact_rows_.gap_target_m_s = gap_target;

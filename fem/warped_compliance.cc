@@ -47,6 +47,10 @@ void WarpedCompliance::HoldColumnsOf(const std::vector<int>& frame_nodes) {
     const auto column = X.block(0, 3 * k, 3 * (slot + 1), 3);
     held_compliance_.block(0, 3 * slot, 3 * (slot + 1), 3) = column;
     held_compliance_.block(3 * slot, 0, 3, 3 * slot) = column.topRows(3 * slot).transpose();
+    // C₀_aa comes from the float solve, symmetric only to ~1e-7; symmetric, C₀ makes W(r, c) and
+    // W(c, r) equal to round-off however each is summed (CalcColumns).
+    const Eigen::Matrix3d own = held_compliance_.block<3, 3>(3 * slot, 3 * slot);
+    held_compliance_.block<3, 3>(3 * slot, 3 * slot) = 0.5 * (own + own.transpose());
   }
 }
 
@@ -76,15 +80,12 @@ namespace {
 
 // Rows of J_u in groups: consecutive rows that touch the same nodes with their entries (a
 // contact's normal and two tangent rows, at most 3 rows a group). A group's rows share node
-// rotations, so each of its nodes is one entry,
-//
-//   G_ga = R_aᵀ [j_ra]_(r ∈ g)  (3 × rows of g),   W_gh = Σ_a Σ_b G_gaᵀ C₀_ab G_hb,
-//
-// and the products below run over entries, not over rows (for friction rows, 3× fewer).
+// rotations, so each of its nodes is one entry, G_ga = R_aᵀ [j_ra]_(r ∈ g) (3 × rows of g),
+// rotated once for the group's rows together.
 struct GroupEntry {
   int node;
   Eigen::Matrix3d G = Eigen::Matrix3d::Zero();  // column k: the group's row k at the node
-  int block = 0;  // the node's first row and column in the C₀ that MultiplyByEntries reads
+  int block = 0;  // the node's first row and column in the frame's C₀
 };
 struct RowGroup {
   Eigen::Index first_row = 0;
@@ -122,65 +123,10 @@ void GroupRows(const Eigen::SparseMatrix<double>& J_u, std::vector<RowGroup>* gr
   }
 }
 
-// W = U C Uᵀ, with U the rows' rotated entries (U's row r holds Rᵀ j_r at the frame's nodes)
-// and C the held C₀ between the frame's nodes, in two passes that run along columns: Q = C Uᵀ
-// (3 · nodes × rows), each entry adding 3 of C's columns times its G; then W(:, c) = U Q(:, c),
-// each row gathering its entries' 3 values from the column Q(:, c), which stays in cache. Only the
-// lower triangle is computed; C₀_aa is a float solve's, not exactly symmetric, so W mirrors it.
-// Both passes are written as column sums and short dot products, not as products of Eigen blocks:
-// a block product of run-time width goes through Eigen's general product dispatch, which on
-// block_press's ~210 rows cost more than the arithmetic, and a group of one row (normal rows
-// alone) would multiply all three columns of its G (block_press, hybrid, frames with ≥ 200
-// contacts: both compliances 0.75 → 0.52 ms a frame).
-Eigen::MatrixXd MultiplyByEntries(Eigen::Index num_rows, const std::vector<RowGroup>& groups,
-                                  const std::vector<GroupEntry>& entries,
-                                  const Eigen::Ref<const Eigen::MatrixXd>& C) {
-  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(C.rows(), num_rows);
-  for (const RowGroup& h : groups)
-    for (size_t i = 0; i < h.num_entries; ++i) {
-      const GroupEntry& b = entries[h.first_entry + i];
-      for (int k = 0; k < h.num_rows; ++k)
-        Q.col(h.first_row + k).noalias() += b.G(0, k) * C.col(b.block) +
-                                            b.G(1, k) * C.col(b.block + 1) +
-                                            b.G(2, k) * C.col(b.block + 2);
-    }
-  // Each row's entries side by side (a group's entries once for each of its rows, with that
-  // row's weights), so that W(r, c) is one short sum.
-  struct RowEntry {
-    int block;
-    double g0, g1, g2;
-  };
-  std::vector<RowEntry> row_entries;
-  std::vector<size_t> first_of_row(num_rows + 1);
-  for (const RowGroup& group : groups)
-    for (int k = 0; k < group.num_rows; ++k) {
-      first_of_row[group.first_row + k] = row_entries.size();
-      for (size_t i = 0; i < group.num_entries; ++i) {
-        const GroupEntry& a = entries[group.first_entry + i];
-        row_entries.push_back({a.block, a.G(0, k), a.G(1, k), a.G(2, k)});
-      }
-    }
-  first_of_row[num_rows] = row_entries.size();
-  Eigen::MatrixXd W(num_rows, num_rows);
-  for (Eigen::Index c = 0; c < num_rows; ++c) {
-    const double* q = Q.col(c).data();
-    for (Eigen::Index r = c; r < num_rows; ++r) {
-      double sum = 0.0;
-      for (size_t e = first_of_row[r]; e < first_of_row[r + 1]; ++e) {
-        const RowEntry& a = row_entries[e];
-        sum += a.g0 * q[a.block] + a.g1 * q[a.block + 1] + a.g2 * q[a.block + 2];
-      }
-      W(r, c) = sum;
-    }
-  }
-  W.triangularView<Eigen::StrictlyUpper>() = W.transpose();
-  return W;
-}
-
 }  // namespace
 
-Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
-                                       const std::vector<Eigen::Matrix3d>& element_rotations) {
+void WarpedCompliance::SetRows(const Eigen::SparseMatrix<double>& J_u,
+                               const std::vector<Eigen::Matrix3d>& element_rotations) {
   std::vector<RowGroup> groups;
   std::vector<GroupEntry> entries;
   GroupRows(J_u, &groups, &entries);
@@ -200,15 +146,134 @@ Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
   for (size_t k = 0; k < frame_nodes.size(); ++k)
     rotations_T[k] = CalcNodeRotation(frame_nodes[k], element_rotations).transpose();
   for (GroupEntry& entry : entries) entry.G = rotations_T[entry.block / 3] * entry.G;
-  // The dense pass costs 3 · (C's nodes) a column per entry: C₀ is read in place while the held
+  // A pass over C₀ costs 3 · (C's nodes) a column per entry: C₀ is read in place while the held
   // nodes are not many more than the frame's, and gathered for the frame's nodes once they are
   // (a long session that has touched much of the surface).
   const Eigen::Index held_dofs = 3 * static_cast<Eigen::Index>(node_of_slot_.size());
-  if (held_dofs > 2 * 3 * static_cast<Eigen::Index>(frame_nodes.size()))
-    return MultiplyByEntries(J_u.rows(), groups, entries, GatherHeld(frame_nodes));
-  for (GroupEntry& entry : entries) entry.block = 3 * slot_of_node_[frame_nodes[entry.block / 3]];
-  return MultiplyByEntries(J_u.rows(), groups, entries,
-                           held_compliance_.topLeftCorner(held_dofs, held_dofs));
+  frame_C_is_gathered_ = held_dofs > 2 * 3 * static_cast<Eigen::Index>(frame_nodes.size());
+  if (frame_C_is_gathered_)
+    frame_C_ = GatherHeld(frame_nodes);
+  else
+    for (GroupEntry& entry : entries) entry.block = 3 * slot_of_node_[frame_nodes[entry.block / 3]];
+  // Each row's entries side by side (a group's entries once for each of its rows, with that
+  // row's weights), so that a row's product with a column of C₀ is one short sum.
+  num_rows_ = J_u.rows();
+  row_entries_.clear();
+  first_of_row_.assign(static_cast<size_t>(num_rows_) + 1, 0);
+  for (const RowGroup& group : groups)
+    for (int k = 0; k < group.num_rows; ++k) {
+      first_of_row_[group.first_row + k] = row_entries_.size();
+      for (size_t i = 0; i < group.num_entries; ++i) {
+        const GroupEntry& a = entries[group.first_entry + i];
+        row_entries_.push_back({a.block, a.G(0, k), a.G(1, k), a.G(2, k)});
+      }
+    }
+  first_of_row_[num_rows_] = row_entries_.size();
+}
+
+Eigen::Ref<const Eigen::MatrixXd> WarpedCompliance::FrameCompliance() const {
+  if (frame_C_is_gathered_) return frame_C_;
+  const Eigen::Index held_dofs = 3 * static_cast<Eigen::Index>(node_of_slot_.size());
+  return held_compliance_.topLeftCorner(held_dofs, held_dofs);
+}
+
+// q = C Uᵀ e_c: row c's entries, each adding 3 of C's columns times its weights. The columns are
+// summed as columns, not as an Eigen block product of run-time width, whose general product
+// dispatch cost more than the arithmetic on block_press's ~210 rows.
+void WarpedCompliance::MultiplyRowByCompliance(const Eigen::Ref<const Eigen::MatrixXd>& C,
+                                               Eigen::Index c, Eigen::VectorXd* q) const {
+  q->setZero(C.rows());
+  for (size_t e = first_of_row_[c]; e < first_of_row_[c + 1]; ++e) {
+    const RowEntry& b = row_entries_[e];
+    q->noalias() += b.g0 * C.col(b.block) + b.g1 * C.col(b.block + 1) + b.g2 * C.col(b.block + 2);
+  }
+}
+
+// (U q)_r for rows first_row .. num_rows_ − 1: each row gathers its entries' 3 values of q.
+void WarpedCompliance::MultiplyRowsBy(const Eigen::VectorXd& q, Eigen::Index first_row,
+                                      double* out) const {
+  const double* q_data = q.data();
+  for (Eigen::Index r = first_row; r < num_rows_; ++r) {
+    double sum = 0.0;
+    for (size_t e = first_of_row_[r]; e < first_of_row_[r + 1]; ++e) {
+      const RowEntry& a = row_entries_[e];
+      sum += a.g0 * q_data[a.block] + a.g1 * q_data[a.block + 1] + a.g2 * q_data[a.block + 2];
+    }
+    out[r] = sum;
+  }
+}
+
+// W = U C Uᵀ column by column, q = C Uᵀ e_c then W(c.., c) = U q: q stays in cache while the rows
+// read it. Only the lower triangle is computed; C₀_aa is a float solve's, not exactly symmetric,
+// so W mirrors it.
+Eigen::MatrixXd WarpedCompliance::CalcAll() const {
+  const Eigen::Ref<const Eigen::MatrixXd> C = FrameCompliance();
+  Eigen::MatrixXd W(num_rows_, num_rows_);
+  Eigen::VectorXd q;
+  for (Eigen::Index c = 0; c < num_rows_; ++c) {
+    MultiplyRowByCompliance(C, c, &q);
+    MultiplyRowsBy(q, c, W.col(c).data());
+  }
+  W.triangularView<Eigen::StrictlyUpper>() = W.transpose();
+  return W;
+}
+
+void WarpedCompliance::CalcColumns(const std::vector<Eigen::Index>& columns, Eigen::MatrixXd* W,
+                                   std::vector<std::uint8_t>* whole) const {
+  if (W->rows() != num_rows_ || W->cols() != num_rows_ ||
+      whole->size() != static_cast<size_t>(num_rows_))
+    throw std::invalid_argument("WarpedCompliance::CalcColumns: W must be rows x rows");
+  const Eigen::Ref<const Eigen::MatrixXd> C = FrameCompliance();
+  Eigen::VectorXd q;
+  for (Eigen::Index c : columns) {
+    MultiplyRowByCompliance(C, c, &q);
+    // Row by row: W(r, c) = W(c, r) where column r is whole already (C₀ is symmetric), else U_r q.
+    const double* q_data = q.data();
+    for (Eigen::Index r = 0; r < num_rows_; ++r) {
+      if ((*whole)[r]) {
+        (*W)(r, c) = (*W)(c, r);
+        continue;
+      }
+      double sum = 0.0;
+      for (size_t e = first_of_row_[r]; e < first_of_row_[r + 1]; ++e) {
+        const RowEntry& a = row_entries_[e];
+        sum += a.g0 * q_data[a.block] + a.g1 * q_data[a.block + 1] + a.g2 * q_data[a.block + 2];
+      }
+      (*W)(r, c) = sum;
+    }
+    (*whole)[c] = 1;
+  }
+}
+
+// W(r, r) = U_r q_r with only the entries of q_r = C Uᵀ e_r that row r reads, each summed in the
+// order MultiplyRowByCompliance and MultiplyRowsBy sum it: the diagonal is the formed columns'
+// own, bit for bit (a row's own entry exported alone must not depend on whether its column was
+// formed).
+Eigen::VectorXd WarpedCompliance::CalcDiagonal() const {
+  const Eigen::Ref<const Eigen::MatrixXd> C = FrameCompliance();
+  Eigen::VectorXd diagonal(num_rows_);
+  for (Eigen::Index r = 0; r < num_rows_; ++r) {
+    double sum = 0.0;
+    for (size_t e = first_of_row_[r]; e < first_of_row_[r + 1]; ++e) {
+      const RowEntry& a = row_entries_[e];
+      double q[3] = {0.0, 0.0, 0.0};
+      for (size_t f = first_of_row_[r]; f < first_of_row_[r + 1]; ++f) {
+        const RowEntry& b = row_entries_[f];
+        for (int k = 0; k < 3; ++k)
+          q[k] += b.g0 * C(a.block + k, b.block) + b.g1 * C(a.block + k, b.block + 1) +
+                  b.g2 * C(a.block + k, b.block + 2);
+      }
+      sum += a.g0 * q[0] + a.g1 * q[1] + a.g2 * q[2];
+    }
+    diagonal[r] = sum;
+  }
+  return diagonal;
+}
+
+Eigen::MatrixXd WarpedCompliance::Calc(const Eigen::SparseMatrix<double>& J_u,
+                                       const std::vector<Eigen::Matrix3d>& element_rotations) {
+  SetRows(J_u, element_rotations);
+  return CalcAll();
 }
 
 Eigen::MatrixXd WarpedCompliance::GatherHeld(const std::vector<int>& nodes) const {

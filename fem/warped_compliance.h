@@ -16,14 +16,15 @@
 // copy of A₀'s factor (SinglePrecisionFactor::SolveColumnsAt), whose forward sweep works only on
 // the new nodes' elimination-tree paths and whose backward sweep only on those of the nodes held;
 // the columns are then exact to ~2e-7 relative. They fill a dense C₀ between the held nodes
-// (9 H² doubles for H nodes, up to 4 times that with the capacity kept for new ones). A frame then
-// costs two dense passes over the rows' entries (an entry: a row group's weights at one node,
-// rotated), Q = C₀ Uᵀ and W = U Q, instead of a forward solve with the current factor per row
-// (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method). They read C₀ by whole
-// columns; a 3 × 3 product per pair of entries read it at scattered blocks and stalled on cache
-// misses (a temporary stage timer, block_press in the linear mode, frames with ≥ 200 contacts, 212
-// rows over 118 nodes: 0.73 → 0.57 ms; block_press_friction 2.24 against 2.37 ms, within the
-// host's noise; docs/BENCHMARKS.md "fourth pass").
+// (9 H² doubles for H nodes, up to 4 times that with the capacity kept for new ones). A column of
+// W then costs two dense passes over the rows' entries (an entry: a row group's weights at one
+// node, rotated), q = C₀ Uᵀ e_c and W(:, c) = U q, instead of a forward solve with the current
+// factor per row (fem/cholmod_factor.h CalcInverseQuadraticForm, the exact method). They read C₀
+// by whole columns; a 3 × 3 product per pair of entries read it at scattered blocks and stalled on
+// cache misses (a temporary stage timer, block_press in the linear mode, frames with ≥ 200
+// contacts, 212 rows over 118 nodes: 0.73 → 0.57 ms; block_press_friction 2.24 against 2.37 ms,
+// within the host's noise; docs/BENCHMARKS.md "fourth pass"). A frame may form W whole or only
+// the columns its readers ask for (contact/frame_compliance.h).
 //
 // Node rotation: the polar rotation of the sum of the incident elements' rotations (their
 // chordal mean). A node with a fixed dof keeps R = I (rotating would mix a fixed direction into
@@ -32,6 +33,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cstdint>
 #include <vector>
 
 #include "fem/cholmod_factor.h"
@@ -47,9 +49,26 @@ class WarpedCompliance {
   WarpedCompliance(const Model& model, const TimeStepper& stepper);
 
   // W_body ≈ J_u R C₀ Rᵀ J_uᵀ (rows × rows, symmetric) for the element rotations of the current
-  // step (TimeStepper::rotations()). Solves for the nodes of J_u not seen before.
+  // step (TimeStepper::rotations()): SetRows, then CalcAll.
   Eigen::MatrixXd Calc(const Eigen::SparseMatrix<double>& J_u,
                        const std::vector<Eigen::Matrix3d>& element_rotations);
+
+  // The frame's rows: groups them, solves the columns of the nodes of J_u not seen before and
+  // rotates the rows' entries. The calls below read these rows until the next SetRows.
+  void SetRows(const Eigen::SparseMatrix<double>& J_u,
+               const std::vector<Eigen::Matrix3d>& element_rotations);
+  // The whole W_body of the rows set.
+  Eigen::MatrixXd CalcAll() const;
+  // Only the given columns, W_body(:, c) for each c in `columns`, written into W (rows × rows;
+  // its other columns are left as they are): what a solve needs that reads W by the columns of
+  // its loaded rows (one pass over C₀ per column instead of per row). `whole` marks the columns
+  // of W that are whole already (rows entries, 0 or 1): their rows of a new column are copied from
+  // them, as W is symmetric, not computed; the columns formed here are marked. W(r, c) and W(c, r)
+  // of two formed columns may differ by round-off where each was computed.
+  void CalcColumns(const std::vector<Eigen::Index>& columns, Eigen::MatrixXd* W,
+                   std::vector<std::uint8_t>* whole) const;
+  // W_body(r, r) of every row, without a pass over C₀.
+  Eigen::VectorXd CalcDiagonal() const;
 
   // Nodes whose columns of A₀⁻¹ are held (at the rows of the nodes held before them).
   int num_cached_nodes() const { return static_cast<int>(node_of_slot_.size()); }
@@ -63,6 +82,13 @@ class WarpedCompliance {
   void ReserveHeld(int num_nodes);
   Eigen::Matrix3d CalcNodeRotation(int node,
                                    const std::vector<Eigen::Matrix3d>& element_rotations) const;
+  // C₀ between the frame's nodes, at the blocks the row entries name.
+  Eigen::Ref<const Eigen::MatrixXd> FrameCompliance() const;
+  // q = C Uᵀ e_c, U the rows' rotated entries.
+  void MultiplyRowByCompliance(const Eigen::Ref<const Eigen::MatrixXd>& C, Eigen::Index c,
+                               Eigen::VectorXd* q) const;
+  // out[r] = (U q)_r for r = first_row .. rows − 1.
+  void MultiplyRowsBy(const Eigen::VectorXd& q, Eigen::Index first_row, double* out) const;
 
   const Model& model_;
   CholmodFactor factor_;
@@ -75,6 +101,19 @@ class WarpedCompliance {
   // new node's column at the rows of the nodes held by then). Its size is a capacity: only the
   // first 3 · num_cached_nodes() rows and columns are set.
   Eigen::MatrixXd held_compliance_;
+
+  // The rows set by SetRows: row r's entries are row_entries_[first_of_row_[r] ..
+  // first_of_row_[r + 1]), each a node's rotated weights Rᵀ j_r and its block in the frame's C₀
+  // (the held one in place, or frame_C_ gathered for the frame's nodes).
+  struct RowEntry {
+    int block;
+    double g0, g1, g2;
+  };
+  Eigen::Index num_rows_ = 0;
+  std::vector<RowEntry> row_entries_;
+  std::vector<size_t> first_of_row_;
+  bool frame_C_is_gathered_ = false;
+  Eigen::MatrixXd frame_C_;
 };
 
 }  // namespace hapsim::fem

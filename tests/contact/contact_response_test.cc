@@ -247,6 +247,58 @@ TEST(ContactResponse, ActiveSetFromAnyStartEndsAtTheEnumeratedLcp) {
   EXPECT_GT(wrong_starts, 30);
 }
 
+// The unilateral solve reading W by columns (SolveUnilateralByColumns, as the visual frame calls
+// it) gives the dense solve's λ bit for bit, on unsymmetric W from good and wrong starts, while
+// asking for fewer columns than W has: the W it reads holds NaN in every column not asked for, so
+// a read of one would show in λ. Every row left with λ ≠ 0 was asked for (a row that leaves and
+// enters again is asked for again: the caller keeps what it has filled).
+TEST(ContactResponse, UnilateralByColumnsReadsOnlyTheColumnsItAsksFor) {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int columns_asked = 0, columns_whole = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const int n = 40;
+    Eigen::MatrixXd B(n, n), S(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) B(i, j) = normal(rng), S(i, j) = normal(rng);
+    const Eigen::MatrixXd W =
+        B * B.transpose() / n + 0.05 * Eigen::MatrixXd::Identity(n, n) + 0.3 * (S - S.transpose());
+    Eigen::VectorXd rhs(n);
+    for (int i = 0; i < n; ++i) rhs[i] = 1e-3 * (normal(rng) - 0.8);  // most rows idle
+    Eigen::VectorXd start = Eigen::VectorXd::Zero(n);
+    if (trial % 2 == 1)  // a wrong start: some rows loaded that the solution leaves idle
+      for (int i = 0; i < n; ++i) start[i] = uniform(rng) < 0.2 ? std::abs(normal(rng)) : 0.0;
+    const ContactSolveOptions options{ContactLaw::kUnilateral};
+    Eigen::VectorXd dense = start;
+    const ContactSolveReport dense_report = SolveContactImpulses(W, rhs, kDt_s, 1, options, &dense);
+
+    Eigen::MatrixXd W_part = Eigen::MatrixXd::Constant(n, n, std::nan(""));
+    std::vector<int> times_asked(n, 0);
+    const ColumnFiller fill = [&](const std::vector<Eigen::Index>& columns) {
+      for (Eigen::Index c : columns) {
+        W_part.col(c) = W.col(c);
+        ++times_asked[static_cast<size_t>(c)];
+      }
+    };
+    Eigen::VectorXd by_columns = start;
+    const ContactSolveReport report =
+        SolveUnilateralByColumns(W_part, W.diagonal(), fill, rhs, kDt_s, options, &by_columns);
+    EXPECT_TRUE(dense_report.converged) << trial;
+    EXPECT_TRUE(report.converged) << trial;
+    EXPECT_EQ(report.iterations, dense_report.iterations) << trial;
+    for (int i = 0; i < n; ++i) {
+      EXPECT_EQ(by_columns[i], dense[i]) << trial << ", row " << i;
+      if (by_columns[i] != 0.0) {
+        EXPECT_GE(times_asked[static_cast<size_t>(i)], 1) << trial;
+      }
+    }
+    columns_asked += static_cast<int>(n - std::count(times_asked.begin(), times_asked.end(), 0));
+    columns_whole += n;
+  }
+  EXPECT_LT(columns_asked, columns_whole / 2);  // the point of it: most columns never formed
+}
+
 TEST(ContactResponse, CoulombFrictionSticksInsideTheConeAndSlidesOnIt) {
   // One contact whose rows are decoupled (W diagonal): the closed form is λ_n = rhs_n/(ΔtW_nn),
   // λ_t = rhs_t/(ΔtW_tt) if |λ_t| ≤ μλ_n (stick), else μλ_n along it (slide).

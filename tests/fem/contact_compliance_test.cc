@@ -198,6 +198,55 @@ TEST(WarpedCompliance, ExactForFrictionRowsAtRestAndUnderRigidRotation) {
   EXPECT_EQ(W, W.transpose());
 }
 
+// Chosen columns and the diagonal against the whole W of the same rows, rigidly turned (rotated
+// entries), with C₀ read in place and then gathered (a frame on few of the held nodes): the
+// columns asked for, in two calls (the second copying its rows at the first's columns), agree
+// with it to round-off, the diagonal bit for bit; the columns not asked for are left untouched.
+TEST(WarpedCompliance, ColumnsAndDiagonalAgreeWithTheWholeMatrix) {
+  const Model model = MakeBlock({8, 8, 4}, /*fix_bottom=*/false);
+  TimeStepper stepper(model, FemOptions{}, 1.0 / 60.0, Eigen::VectorXd::Zero(model.num_dofs()));
+  WarpedCompliance warped(model, stepper);
+  State state = MakeRestState(model);
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, -2, 1).normalized()).toRotationMatrix();
+  for (int n = 0; n < model.num_nodes(); ++n)
+    state.x_m.segment<3>(3 * n) = R * model.mesh.rest_positions_m.col(n);
+  Eigen::VectorXd dv;
+  stepper.CalcFreeVelocityChange(state, &dv);  // the turned block's element rotations
+  // Many rows first (the held nodes), then few: the second frame's C₀ is gathered.
+  for (const Eigen::SparseMatrix<double>& J :
+       {MakeFrictionRows(model, 60, 3), MakeFrictionRows(model, 6, 4)}) {
+    const Eigen::MatrixXd whole = warped.Calc(J, stepper.rotations());
+    warped.SetRows(J, stepper.rotations());
+    const Eigen::Index n = J.rows();
+    std::vector<Eigen::Index> columns;
+    for (Eigen::Index c = n - 1; c >= 0; c -= 3) columns.push_back(c);  // any order
+    Eigen::MatrixXd W = Eigen::MatrixXd::Constant(n, n, -7.0);
+    std::vector<std::uint8_t> formed(static_cast<size_t>(n), 0);
+    const size_t half = columns.size() / 2;  // in two calls: the second's rows at the first's
+    warped.CalcColumns(std::vector<Eigen::Index>(columns.begin(), columns.begin() + half), &W,
+                       &formed);  // columns are copied from them
+    warped.CalcColumns(std::vector<Eigen::Index>(columns.begin() + half, columns.end()), &W,
+                       &formed);
+    for (Eigen::Index c = 0; c < n; ++c)
+      EXPECT_EQ(formed[static_cast<size_t>(c)] != 0,
+                std::find(columns.begin(), columns.end(), c) != columns.end());
+    const double scale = whole.cwiseAbs().maxCoeff();
+    ASSERT_GT(scale, 0.0);
+    for (Eigen::Index c = 0; c < n; ++c) {
+      const bool asked = std::find(columns.begin(), columns.end(), c) != columns.end();
+      for (Eigen::Index r = 0; r < n; ++r) {
+        if (!asked)
+          EXPECT_EQ(W(r, c), -7.0);
+        else
+          EXPECT_NEAR(W(r, c), whole(r, c), 1e-12 * scale) << r << ", " << c;
+      }
+    }
+    const Eigen::VectorXd diagonal = warped.CalcDiagonal();
+    for (Eigen::Index r = 0; r < n; ++r) EXPECT_EQ(diagonal[r], whole(r, r)) << r;  // bit for bit
+  }
+}
+
 // Nodes met in a later frame: their columns of A₀⁻¹ are solved only at the rows of the nodes held
 // by then (SinglePrecisionFactor::SolveColumnsAt), so W must read each pair from the later of the
 // two columns. At rest the warped compliance is exact (to the float columns), frame after frame,
