@@ -1,6 +1,7 @@
 #include "contact/frame_compliance.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <utility>
 
 namespace hapsim::contact {
@@ -38,6 +39,14 @@ void FrameCompliance::SetAbove(FrameCompliance* base) {
 }
 
 void FrameCompliance::AddRigidPart(const ContactJacobian& J, const ToolStepSystem& system) {
+  if (warped_ != nullptr) {
+    const Eigen::Matrix3d S_v = system.A_v.inverse();
+    const Eigen::Matrix3d S_L = system.M_inv_W * system.A_L.inverse();
+    if (!S_v.isApprox(S_v.transpose(), 1e-12) || !S_L.isApprox(S_L.transpose(), 1e-12))
+      throw std::invalid_argument(
+          "FrameCompliance::AddRigidPart: an unsymmetric part on the warped compliance's columns "
+          "(add it above them, SetAbove)");
+  }
   ToolDelassusColumns part(J, system);
   part.AddDiagonal(&diagonal_);
   if (is_whole())

@@ -7,9 +7,10 @@
 //
 // Under the unilateral law every reader of W needs only some of its columns: the solve those of
 // the rows it loads (SolveUnilateralByColumns), the linear model the active rows', the lcp rows
-// the coupled rows' and the others' own entries. On block_press about 70 of ~210 rows carry load
-// and ~75 are coupled, so two thirds of the columns, each a pass over the held C₀ of the warped
-// compliance, need never be formed (docs/BENCHMARKS.md, issue 25, sixth pass).
+// the coupled rows' and the others' own entries. On block_press's frames with ≥ 200 contacts 68 of
+// 216 rows carry load, so the solve forms a third of the columns, each a pass over the held C₀ of
+// the warped compliance; the model handed to the haptic step forms its coupled rows' columns, 176
+// in the hybrid mode (docs/BENCHMARKS.md, issue 25, sixth pass).
 //
 // Formed columns are whole (every row), so W(r, c) of a formed column c is right whatever r is;
 // the diagonal is formed for every row at the start, without a pass over C₀.
@@ -34,7 +35,11 @@ class FrameCompliance {
   // W = base + the parts added below, by columns as `base` is (base must outlive its use).
   void SetAbove(FrameCompliance* base);
   // Adds a rank-6 part, a rigid body's (a free dynamic object's) or the tool's: at once when
-  // whole, else to each column formed from now on (call before the first Fill).
+  // whole, else to each column formed from now on (call before the first Fill). By columns from
+  // the warped compliance, whose columns take their rows at earlier columns from those by
+  // symmetry, the part must be symmetric (S = blockdiag(A_v⁻¹, M⁻¹A_L⁻¹) is: a free body's, with
+  // no coupling torque); a tool's, unsymmetric under a coupling torque, goes above it (SetAbove).
+  // Throws std::invalid_argument for an unsymmetric part there.
   void AddRigidPart(const ContactJacobian& J, const ToolStepSystem& system);
 
   // Forms those of `columns` not formed yet (nothing to do when whole).

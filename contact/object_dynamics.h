@@ -10,13 +10,13 @@
 //   +d·(v + ω × r) on the row's body side,  −d·(v + ω × r) on its tool side:
 //   J_v,o = ±dᵀ,  J_ω,o = ±(r × d)ᵀ.
 //
-// Its Delassus part J_v,o A_v⁻¹ J_v,oᵀ + J_ω,o M⁻¹ A_L⁻¹ J_ω,oᵀ (AddToolDelassus, with the
-// object's matrices) joins the body's compliance: it is not the tool's, so the frame's solve, the
-// paper's linear contact model and the 1 kHz lcp rows all see an object that yields as its mass
-// and inertia say (a rigid body has no stiffness: its part is the same at the visual and the
-// haptic step). After the solve its momenta change by Δt J_v,oᵀλ and Δt J_ω,oᵀλ, as the tool's do.
-// The torque-free step keeps L (world) exactly and turns ω = M⁻¹(q) L with the body, so a spinning
-// object precesses as Euler's equations say without a gyroscopic term of its own.
+// Its Delassus part J_v,o A_v⁻¹ J_v,oᵀ + J_ω,o M⁻¹ A_L⁻¹ J_ω,oᵀ (FrameCompliance::AddRigidPart,
+// with the object's matrices) joins the body's compliance: it is not the tool's, so the frame's
+// solve, the paper's linear contact model and the 1 kHz lcp rows all see an object that yields as
+// its mass and inertia say (a rigid body has no stiffness: its part is the same at the visual and
+// the haptic step). After the solve its momenta change by Δt J_v,oᵀλ and Δt J_ω,oᵀλ, as the tool's
+// do. The torque-free step keeps L (world) exactly and turns ω = M⁻¹(q) L with the body, so a
+// spinning object precesses as Euler's equations say without a gyroscopic term of its own.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -171,7 +171,7 @@ void WarpedCompliance::SetRows(const Eigen::SparseMatrix<double>& J_u,
   first_of_row_[num_rows_] = row_entries_.size();
 }
 
-Eigen::Ref<const Eigen::MatrixXd> WarpedCompliance::FrameCompliance() const {
+Eigen::Ref<const Eigen::MatrixXd> WarpedCompliance::FrameNodesCompliance() const {
   if (frame_C_is_gathered_) return frame_C_;
   const Eigen::Index held_dofs = 3 * static_cast<Eigen::Index>(node_of_slot_.size());
   return held_compliance_.topLeftCorner(held_dofs, held_dofs);
@@ -189,30 +189,26 @@ void WarpedCompliance::MultiplyRowByCompliance(const Eigen::Ref<const Eigen::Mat
   }
 }
 
-// (U q)_r for rows first_row .. num_rows_ − 1: each row gathers its entries' 3 values of q.
-void WarpedCompliance::MultiplyRowsBy(const Eigen::VectorXd& q, Eigen::Index first_row,
-                                      double* out) const {
-  const double* q_data = q.data();
-  for (Eigen::Index r = first_row; r < num_rows_; ++r) {
-    double sum = 0.0;
-    for (size_t e = first_of_row_[r]; e < first_of_row_[r + 1]; ++e) {
-      const RowEntry& a = row_entries_[e];
-      sum += a.g0 * q_data[a.block] + a.g1 * q_data[a.block + 1] + a.g2 * q_data[a.block + 2];
-    }
-    out[r] = sum;
+// (U q)_r: row r gathers its entries' 3 values of q. The one sum of a row with a column, for
+// CalcAll, CalcColumns and (in the same order) CalcDiagonal.
+double WarpedCompliance::MultiplyRow(Eigen::Index r, const double* q) const {
+  double sum = 0.0;
+  for (size_t e = first_of_row_[r]; e < first_of_row_[r + 1]; ++e) {
+    const RowEntry& a = row_entries_[e];
+    sum += a.g0 * q[a.block] + a.g1 * q[a.block + 1] + a.g2 * q[a.block + 2];
   }
+  return sum;
 }
 
 // W = U C Uᵀ column by column, q = C Uᵀ e_c then W(c.., c) = U q: q stays in cache while the rows
-// read it. Only the lower triangle is computed; C₀_aa is a float solve's, not exactly symmetric,
-// so W mirrors it.
+// read it. Only the lower triangle is computed; W mirrors it.
 Eigen::MatrixXd WarpedCompliance::CalcAll() const {
-  const Eigen::Ref<const Eigen::MatrixXd> C = FrameCompliance();
+  const Eigen::Ref<const Eigen::MatrixXd> C = FrameNodesCompliance();
   Eigen::MatrixXd W(num_rows_, num_rows_);
   Eigen::VectorXd q;
   for (Eigen::Index c = 0; c < num_rows_; ++c) {
     MultiplyRowByCompliance(C, c, &q);
-    MultiplyRowsBy(q, c, W.col(c).data());
+    for (Eigen::Index r = c; r < num_rows_; ++r) W(r, c) = MultiplyRow(r, q.data());
   }
   W.triangularView<Eigen::StrictlyUpper>() = W.transpose();
   return W;
@@ -223,34 +219,23 @@ void WarpedCompliance::CalcColumns(const std::vector<Eigen::Index>& columns, Eig
   if (W->rows() != num_rows_ || W->cols() != num_rows_ ||
       whole->size() != static_cast<size_t>(num_rows_))
     throw std::invalid_argument("WarpedCompliance::CalcColumns: W must be rows x rows");
-  const Eigen::Ref<const Eigen::MatrixXd> C = FrameCompliance();
+  const Eigen::Ref<const Eigen::MatrixXd> C = FrameNodesCompliance();
   Eigen::VectorXd q;
   for (Eigen::Index c : columns) {
     MultiplyRowByCompliance(C, c, &q);
     // Row by row: W(r, c) = W(c, r) where column r is whole already (C₀ is symmetric), else U_r q.
-    const double* q_data = q.data();
-    for (Eigen::Index r = 0; r < num_rows_; ++r) {
-      if ((*whole)[r]) {
-        (*W)(r, c) = (*W)(c, r);
-        continue;
-      }
-      double sum = 0.0;
-      for (size_t e = first_of_row_[r]; e < first_of_row_[r + 1]; ++e) {
-        const RowEntry& a = row_entries_[e];
-        sum += a.g0 * q_data[a.block] + a.g1 * q_data[a.block + 1] + a.g2 * q_data[a.block + 2];
-      }
-      (*W)(r, c) = sum;
-    }
+    for (Eigen::Index r = 0; r < num_rows_; ++r)
+      (*W)(r, c) = (*whole)[r] ? (*W)(c, r) : MultiplyRow(r, q.data());
     (*whole)[c] = 1;
   }
 }
 
 // W(r, r) = U_r q_r with only the entries of q_r = C Uᵀ e_r that row r reads, each summed in the
-// order MultiplyRowByCompliance and MultiplyRowsBy sum it: the diagonal is the formed columns'
+// order MultiplyRowByCompliance and MultiplyRow sum it: the diagonal is the formed columns'
 // own, bit for bit (a row's own entry exported alone must not depend on whether its column was
 // formed).
 Eigen::VectorXd WarpedCompliance::CalcDiagonal() const {
-  const Eigen::Ref<const Eigen::MatrixXd> C = FrameCompliance();
+  const Eigen::Ref<const Eigen::MatrixXd> C = FrameNodesCompliance();
   Eigen::VectorXd diagonal(num_rows_);
   for (Eigen::Index r = 0; r < num_rows_; ++r) {
     double sum = 0.0;

@@ -63,8 +63,8 @@ class WarpedCompliance {
   // its other columns are left as they are): what a solve needs that reads W by the columns of
   // its loaded rows (one pass over C₀ per column instead of per row). `whole` marks the columns
   // of W that are whole already (rows entries, 0 or 1): their rows of a new column are copied from
-  // them, as W is symmetric, not computed; the columns formed here are marked. W(r, c) and W(c, r)
-  // of two formed columns may differ by round-off where each was computed.
+  // them, as W is symmetric, not computed; the columns formed here are marked. The columns so
+  // formed differ from CalcAll's by round-off (each entry is summed once, from one side).
   void CalcColumns(const std::vector<Eigen::Index>& columns, Eigen::MatrixXd* W,
                    std::vector<std::uint8_t>* whole) const;
   // W_body(r, r) of every row, without a pass over C₀.
@@ -83,12 +83,12 @@ class WarpedCompliance {
   Eigen::Matrix3d CalcNodeRotation(int node,
                                    const std::vector<Eigen::Matrix3d>& element_rotations) const;
   // C₀ between the frame's nodes, at the blocks the row entries name.
-  Eigen::Ref<const Eigen::MatrixXd> FrameCompliance() const;
+  Eigen::Ref<const Eigen::MatrixXd> FrameNodesCompliance() const;
   // q = C Uᵀ e_c, U the rows' rotated entries.
   void MultiplyRowByCompliance(const Eigen::Ref<const Eigen::MatrixXd>& C, Eigen::Index c,
                                Eigen::VectorXd* q) const;
-  // out[r] = (U q)_r for r = first_row .. rows − 1.
-  void MultiplyRowsBy(const Eigen::VectorXd& q, Eigen::Index first_row, double* out) const;
+  // (U q)_r, q a column of C Uᵀ.
+  double MultiplyRow(Eigen::Index r, const double* q) const;
 
   const Model& model_;
   CholmodFactor factor_;

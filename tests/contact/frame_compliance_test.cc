@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "fem/lattice_mesher.h"
@@ -131,6 +132,10 @@ TEST(FrameCompliance, ColumnsFormedInBatchesEqualTheWholeMatrix) {
       EXPECT_LT((body.W().col(c) - body_whole.col(c)).cwiseAbs().maxCoeff(), 1e-12 * scale) << c;
     }
   }
+  // The tool's part is unsymmetric: the body's columns, copied by symmetry, refuse it.
+  FrameCompliance refuses;
+  refuses.SetByColumns(&warped, n);
+  EXPECT_THROW(refuses.AddRigidPart(rows.tool, tool), std::invalid_argument);
   body.WriteDiagonalOfUnformedColumns();
   for (Eigen::Index c = 0; c < n; ++c)
     EXPECT_NEAR(body.W()(c, c), body_whole(c, c), 1e-12 * scale) << c;

@@ -112,7 +112,7 @@ Eigen::MatrixXd CalcDenseCompliance(TimeStepper* stepper, const State& state,
 }
 
 // Rows as the friction law makes them: per contact a normal and two tangents with the same
-// weights at the same 1–3 nodes (WarpedCompliance::Calc computes such a group's block at once),
+// weights at the same 1–3 nodes (WarpedCompliance rotates such a group's entries at once),
 // a normal-only contact between them, a row that touches no node (a contact with a rigid
 // object), and two contacts in a row at one node (a group holds at most three rows).
 Eigen::SparseMatrix<double> MakeFrictionRows(const Model& model, int contacts, unsigned seed) {
