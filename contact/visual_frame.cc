@@ -232,28 +232,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
   b_ = CalcConstraintTargets(contacts_, c_pre, rows_per_contact_, dt, options_.response);
   const int num_rows = jacobian_.num_rows();
   Stopwatch stage;
-  // Under the unilateral law every reader of W needs only some of its columns (frame_compliance.h).
-  const bool by_columns = options_.response.solve.law == ContactLaw::kUnilateral;
-  if (!stepper_)
-    W_body_.SetWhole(Eigen::MatrixXd::Zero(num_rows, num_rows));  // rigid objects only
-  else if (warped_compliance_ && by_columns) {
-    warped_compliance_->SetRows(jacobian_.J_u, stepper_->rotations());
-    W_body_.SetByColumns(warped_compliance_.get(), num_rows);
-  } else if (warped_compliance_)
-    W_body_.SetWhole(warped_compliance_->Calc(jacobian_.J_u, stepper_->rotations()));
-  else
-    W_body_.SetWhole(stepper_->CalcCompliance(jacobian_.J_u));
-  if (haptic_compliance_ && by_columns) {
-    haptic_compliance_->SetRows(jacobian_.J_u, stepper_->rotations());
-    W_body_haptic_.SetByColumns(haptic_compliance_.get(), num_rows);
-  } else if (haptic_compliance_) {
-    W_body_haptic_.SetWhole(haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations()));
-  }
-  for (const DynamicObject& object : dynamic_objects_) {
-    if (!IsFreeDynamicObject(object.object)) continue;
-    W_body_.AddRigidPart(object.J, object.system);  // a rigid body: the same at either step
-    if (haptic_compliance_) W_body_haptic_.AddRigidPart(object.J, object.system);
-  }
+  SetBodyCompliance(num_rows);
   stats->compliance_s = stage.Lap();
   W_.SetAbove(&W_body_);
   W_.AddRigidPart(jacobian_, tool_system_);
@@ -263,7 +242,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
   bilateral_rows_.assign(static_cast<size_t>(num_rows), 0);
   for (size_t i = 0; i < contacts_.size(); ++i)
     if (contacts_[i].bilateral) bilateral_rows_[rows_per_contact_ * i] = 1;
-  if (by_columns)
+  if (options_.response.solve.law == ContactLaw::kUnilateral)
     last_solve_ = SolveUnilateralByColumns(
         W_.W(), W_.diagonal(), [this](const std::vector<Eigen::Index>& c) { W_.Fill(c); },
         b_ - c_free, dt, options_.response.solve, &lambda_, grasp_ ? &bilateral_rows_ : nullptr);
@@ -289,6 +268,34 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
   }
   stats->correction_s = stage.Lap();
   c_post_ = c_free + dt * MultiplyByImpulses(W_.W(), lambda_);  // columns of λ ≠ 0: formed
+}
+
+// W_body (and the haptic step's) of the frame's rows, with the free dynamic objects' parts. Under
+// the unilateral law every reader of W needs only some of its columns (frame_compliance.h): it is
+// formed by columns there, whole otherwise.
+void VisualFrame::SetBodyCompliance(int num_rows) {
+  const bool by_columns = options_.response.solve.law == ContactLaw::kUnilateral;
+  if (!stepper_) {
+    W_body_.SetWhole(Eigen::MatrixXd::Zero(num_rows, num_rows));  // rigid objects only
+  } else if (warped_compliance_ && by_columns) {
+    warped_compliance_->SetRows(jacobian_.J_u, stepper_->rotations());
+    W_body_.SetByColumns(warped_compliance_.get(), num_rows);
+  } else if (warped_compliance_) {
+    W_body_.SetWhole(warped_compliance_->Calc(jacobian_.J_u, stepper_->rotations()));
+  } else {
+    W_body_.SetWhole(stepper_->CalcCompliance(jacobian_.J_u));
+  }
+  if (haptic_compliance_ && by_columns) {
+    haptic_compliance_->SetRows(jacobian_.J_u, stepper_->rotations());
+    W_body_haptic_.SetByColumns(haptic_compliance_.get(), num_rows);
+  } else if (haptic_compliance_) {
+    W_body_haptic_.SetWhole(haptic_compliance_->Calc(jacobian_.J_u, stepper_->rotations()));
+  }
+  for (const DynamicObject& object : dynamic_objects_) {
+    if (!IsFreeDynamicObject(object.object)) continue;
+    W_body_.AddRigidPart(object.J, object.system);  // a rigid body: the same at either step
+    if (haptic_compliance_) W_body_haptic_.AddRigidPart(object.J, object.system);
+  }
 }
 
 void VisualFrame::SetFrictionCoefficients() {

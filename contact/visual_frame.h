@@ -225,6 +225,7 @@ class VisualFrame {
                                const Eigen::Vector3d& x_tool_W_m) const;
   // Sets the response's sub-stage times in `stats`.
   void SolveResponse(const ToolState& tool, const fem::State& body, VisualFrameStats* stats);
+  void SetBodyCompliance(int num_rows);  // W_body_, W_body_haptic_ of the frame's rows
   // Friction law: mu_per_contact_ for this frame's contacts_.
   void SetFrictionCoefficients();
   // W λ from λ's nonzero entries alone: of a frame's candidate contacts most carry no force

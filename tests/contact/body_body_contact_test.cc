@@ -14,6 +14,7 @@
 #include "fem/lattice_mesher.h"
 #include "fem/model.h"
 #include "fem/time_stepper.h"
+#include "tests/contact/rigid_object_fixtures.h"
 
 namespace hapsim::contact {
 namespace {
@@ -54,12 +55,7 @@ VisualFrameOptions MakeStackOptions(double dt_s, const Eigen::Vector3d& gravity_
   return options;
 }
 
-ToolModel MakeSphereTool() {
-  ToolShape sphere;
-  sphere.kind = ToolShape::Kind::kSphere;
-  sphere.radius_m = 0.005;
-  return MakeToolModelWithMass(sphere, 0.01);
-}
+ToolModel MakeSphereTool() { return fixtures::MakeSphereTool(0.005, 0.01); }
 
 // Runs `frames` frames of the stack from rest with the tool parked far above, out of the way.
 fem::State RunWithTheToolAway(VisualFrame* frame, const fem::Model& stack, int frames) {

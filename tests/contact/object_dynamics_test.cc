@@ -77,12 +77,7 @@ VisualFrameOptions MakeOptions(std::vector<RigidObject> objects) {
   return options;
 }
 
-ToolModel MakeSphereTool() {
-  ToolShape sphere;
-  sphere.kind = ToolShape::Kind::kSphere;
-  sphere.radius_m = 0.004;
-  return MakeToolModelWithMass(sphere, 0.02);
-}
+ToolModel MakeSphereTool() { return fixtures::MakeSphereTool(0.004, 0.02); }
 
 // The tool parked far above, out of the way, the device where it starts.
 struct ParkedTool {

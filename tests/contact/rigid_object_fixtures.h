@@ -1,6 +1,7 @@
 #pragma once
-// What the rigid-object tests share (rigid_objects_test.cc, moving_objects_test.cc): a free soft
-// block to rest on a plate, and the force the rigid objects put on a body.
+// What the rigid-object tests share (rigid_objects_test.cc, moving_objects_test.cc,
+// object_dynamics_test.cc, body_body_contact_test.cc): a free soft block to rest on a plate, the
+// force the rigid objects put on a body, and a sphere tool.
 
 #include <Eigen/Core>
 
@@ -12,6 +13,14 @@
 namespace hapsim::contact::fixtures {
 
 constexpr double kGravity_m_s2 = 9.81;
+
+// A sphere tool of the given radius and mass.
+inline ToolModel MakeSphereTool(double radius_m, double mass_kg) {
+  ToolShape sphere;
+  sphere.kind = ToolShape::Kind::kSphere;
+  sphere.radius_m = radius_m;
+  return MakeToolModelWithMass(sphere, mass_kg);
+}
 
 // A free 4 x 4 x 2 cm soft block (no fixed node, E 50 kPa) standing on z = 0, its gravity load
 // and its mass ρ V (independent of the mesh).
