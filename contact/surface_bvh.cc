@@ -13,10 +13,13 @@
 #include <fcl/narrowphase/detail/traversal/collision_node.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "core/error.h"
+#include "core/triangle_overlap.h"
 
 namespace hapsim::contact {
 namespace {
@@ -82,6 +85,40 @@ bool CollideAabbWithoutCopy(fcl::BVHModel<fcl::AABBd>* model,
   }
 }
 
+// The triangles of an AABB tree that `overlaps` (a, b, c in the shape's frame S) says meet the
+// shape, visiting only the branches whose boxes meet box_W, the shape's world bounding box: FCL's
+// own traversal (MeshShapeCollisionTraversalNode), with an exact test of our own at the leaves.
+template <typename Overlaps>
+void CollectOverlappingTriangles(const fcl::BVHModel<fcl::AABBd>& model,
+                                 const Eigen::AlignedBox3d& box_W, const Eigen::Isometry3d& X_SW,
+                                 const Overlaps& overlaps, std::vector<int>* triangles) {
+  const fcl::AABBd shape_box(box_W.min(), box_W.max());
+  std::array<int, 128> stack;  // depth first: at most one pending sibling per level
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const fcl::BVNode<fcl::AABBd>& node = model.getBV(stack[--top]);
+    if (!node.bv.overlap(shape_box)) continue;
+    if (!node.isLeaf()) {
+      HAPSIM_INVARIANT(top + 2 <= static_cast<int>(stack.size()));
+      stack[top++] = node.rightChild();
+      stack[top++] = node.leftChild();
+      continue;
+    }
+    const int t = node.primitiveId();
+    const fcl::Triangle& corners = model.tri_indices[t];
+    if (overlaps(X_SW * model.vertices[corners[0]], X_SW * model.vertices[corners[1]],
+                 X_SW * model.vertices[corners[2]]))
+      triangles->push_back(t);
+  }
+}
+
+// The world bounding box of a shape whose frame S is at X_WS and whose own box is ±half_S.
+Eigen::AlignedBox3d CalcWorldBox(const Eigen::Isometry3d& X_WS, const Eigen::Vector3d& half_S) {
+  const Eigen::Vector3d half_W = X_WS.linear().cwiseAbs() * half_S;
+  return Eigen::AlignedBox3d(X_WS.translation() - half_W, X_WS.translation() + half_W);
+}
+
 }  // namespace
 
 struct SurfaceBvh::Impl {
@@ -142,6 +179,36 @@ void SurfaceBvh::FindIntersectingTriangles(const fcl::CollisionGeometry<double>&
                                            const Eigen::Isometry3d& X_WS,
                                            std::vector<int>* triangles) {
   triangles->clear();
+  if (impl_->aabb && shape.getNodeType() == fcl::GEOM_CYLINDER) {
+    const auto& cylinder = static_cast<const fcl::Cylinderd&>(shape);
+    const double r = cylinder.radius, h = 0.5 * cylinder.lz;
+    // A cylinder's world box: along world axis i, |a_i| h + r √(1 − a_i²) for its axis a.
+    const Eigen::Vector3d axis_W = X_WS.linear().col(2);
+    Eigen::Vector3d half_W;
+    for (int i = 0; i < 3; ++i)
+      half_W[i] =
+          std::abs(axis_W[i]) * h + r * std::sqrt(std::max(0.0, 1.0 - axis_W[i] * axis_W[i]));
+    const Eigen::AlignedBox3d box_W(X_WS.translation() - half_W, X_WS.translation() + half_W);
+    CollectOverlappingTriangles(
+        *impl_->aabb, box_W, X_WS.inverse(),
+        [r, h](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+          return TriangleOverlapsCylinder(a, b, c, r, h);
+        },
+        triangles);
+    std::sort(triangles->begin(), triangles->end());
+    return;
+  }
+  if (impl_->aabb && shape.getNodeType() == fcl::GEOM_BOX) {
+    const Eigen::Vector3d half_S = 0.5 * static_cast<const fcl::Boxd&>(shape).side;
+    CollectOverlappingTriangles(
+        *impl_->aabb, CalcWorldBox(X_WS, half_S), X_WS.inverse(),
+        [&half_S](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+          return TriangleOverlapsBox(a, b, c, half_S);
+        },
+        triangles);
+    std::sort(triangles->begin(), triangles->end());
+    return;
+  }
   impl_->result.clear();
   const bool done =
       impl_->aabb != nullptr &&
