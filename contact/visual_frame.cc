@@ -261,7 +261,10 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
     // on block_press this saves about one CG iteration in four.
     if (du_contact_.size() != body_->num_dofs()) du_contact_.setZero(body_->num_dofs());
     stepper_->SolveWithSystemMatrix(dt * (jacobian_.J_u.transpose() * lambda_),
-                                    options_.correction_relative_tolerance, &du_contact_);
+                                    stepper_->has_free_object()
+                                        ? options_.free_body_correction_relative_tolerance
+                                        : options_.correction_relative_tolerance,
+                                    &du_contact_);
     du_body_ += du_contact_;
   } else {
     du_contact_.resize(0);  // nothing was added to du_body_: nothing to take off next frame

@@ -28,6 +28,7 @@ contact::VisualFrameOptions SetUpFrameForMode(contact::VisualFrameOptions visual
   if (mode == HapticMode::kReference) {
     visual.compliance = contact::ComplianceMethod::kExact;
     visual.correction_relative_tolerance = 0.0;
+    visual.free_body_correction_relative_tolerance = 0.0;
   }
   return visual;
 }

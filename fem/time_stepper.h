@@ -57,6 +57,9 @@ class TimeStepper {
   void Advance(const Eigen::VectorXd& dv_m_s, State* state) const;
 
   double dt_s() const { return dt_s_; }
+  // Whether some object of the body (Model::object_first_nodes; the body if one) has no fixed
+  // dof: it rests on others or floats, and nothing but its own dynamics holds it.
+  bool has_free_object() const { return has_free_object_; }
   const Eigen::VectorXd& external_force_N() const { return external_force_N_; }
   // Element rotations of the last step (at the positions it started from).
   const std::vector<Eigen::Matrix3d>& rotations() const { return rotations_; }
@@ -86,6 +89,7 @@ class TimeStepper {
   std::unique_ptr<LinearSolver> solver_;
   std::vector<int> fixed_offdiagonal_value_index_;  // entries in a fixed row or column
   std::vector<int> fixed_dofs_;
+  bool has_free_object_ = false;
   // Scratch.
   std::vector<Eigen::Matrix3d> rotations_;
   Eigen::SparseMatrix<double> system_;  // (Δt β + Δt²) K, then A in place (implicit only)

@@ -340,6 +340,7 @@ TEST(SetUpFrameForMode, GivesEachModeWhatItNeeds) {
   const auto reference = SetUpFrameForMode(scene_options, HapticMode::kReference, 1e-3, 1e-3);
   EXPECT_EQ(reference.compliance, contact::ComplianceMethod::kExact);
   EXPECT_EQ(reference.correction_relative_tolerance, 0.0);
+  EXPECT_EQ(reference.free_body_correction_relative_tolerance, 0.0);
 }
 
 TEST(HapticStep, AllocatesNothing) {

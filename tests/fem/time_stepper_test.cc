@@ -715,5 +715,23 @@ TEST(TimeStepper, FreeBodyConservesLinearMomentum) {
   }
 }
 
+// The contact correction's tolerance follows whether an object of the body is held by nothing
+// but its contacts (contact/visual_frame.h): a body with fixed nodes, a free one, and the two
+// merged into one body (each object keeps its own fixed nodes).
+TEST(TimeStepper, KnowsWhetherAnObjectOfTheBodyIsFree) {
+  const TetMesh mesh = MakeBoxTetMesh({0, 0, 0}, {0.02, 0.02, 0.02}, {2, 2, 2});
+  const Model anchored = MakeModel(mesh, Material{}, {0});  // one node fixed anchors it
+  const Model free = MakeModel(mesh, Material{}, {});
+  const auto has_free_object = [](const Model& model) {
+    return TimeStepper(model, FemOptions{}, 0.01, Eigen::VectorXd::Zero(model.num_dofs()))
+        .has_free_object();
+  };
+  EXPECT_FALSE(has_free_object(anchored));
+  EXPECT_TRUE(has_free_object(free));
+  EXPECT_FALSE(has_free_object(MergeModels({anchored, anchored})));
+  EXPECT_TRUE(has_free_object(MergeModels({anchored, free})));
+  EXPECT_TRUE(has_free_object(MergeModels({free, anchored})));
+}
+
 }  // namespace
 }  // namespace hapsim::fem
