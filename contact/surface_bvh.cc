@@ -13,7 +13,6 @@
 #include <fcl/narrowphase/detail/traversal/collision_node.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -48,7 +47,8 @@ void RefitModel(const std::vector<int>& surface_nodes, const Eigen::VectorXd& x_
 // Ours is in world coordinates (tf1 = identity, so initialize leaves it untouched), and the copy
 // was both a cost (the whole surface tree per query) and, under ASan, an alloc-dealloc mismatch
 // (allocated in libfcl, freed by the header's delete[]). This runs the same traversal node on the
-// model itself. Only the tool primitives below exist; anything else takes fcl::collide.
+// model itself, for the sphere and the capsule (a cylinder or a box takes
+// CollectOverlappingTriangles below); anything else takes fcl::collide.
 template <typename Shape>
 void CollideAabbWithShape(fcl::BVHModel<fcl::AABBd>* model, const Shape& shape,
                           const fcl::Transform3d& X_WS, const fcl::CollisionRequestd& request,
@@ -74,35 +74,30 @@ bool CollideAabbWithoutCopy(fcl::BVHModel<fcl::AABBd>* model,
     case fcl::GEOM_CAPSULE:
       CollideAabbWithShape(model, static_cast<const fcl::Capsuled&>(shape), X_WS, request, result);
       return true;
-    case fcl::GEOM_CYLINDER:
-      CollideAabbWithShape(model, static_cast<const fcl::Cylinderd&>(shape), X_WS, request, result);
-      return true;
-    case fcl::GEOM_BOX:
-      CollideAabbWithShape(model, static_cast<const fcl::Boxd&>(shape), X_WS, request, result);
-      return true;
     default:
       return false;
   }
 }
 
 // The triangles of an AABB tree that `overlaps` (a, b, c in the shape's frame S) says meet the
-// shape, visiting only the branches whose boxes meet box_W, the shape's world bounding box: FCL's
-// own traversal (MeshShapeCollisionTraversalNode), with an exact test of our own at the leaves.
+// shape, visiting only the branches whose boxes meet box_W, the shape's world bounding box: the
+// walk of FCL's MeshShapeCollisionTraversalNode written out, with an exact test of our own at the
+// leaves (one triangle each). *stack is scratch (depth first: one pending sibling per level; it
+// grows only on a deeper tree than any before).
 template <typename Overlaps>
 void CollectOverlappingTriangles(const fcl::BVHModel<fcl::AABBd>& model,
                                  const Eigen::AlignedBox3d& box_W, const Eigen::Isometry3d& X_SW,
-                                 const Overlaps& overlaps, std::vector<int>* triangles) {
+                                 const Overlaps& overlaps, std::vector<int>* stack,
+                                 std::vector<int>* triangles) {
   const fcl::AABBd shape_box(box_W.min(), box_W.max());
-  std::array<int, 128> stack;  // depth first: at most one pending sibling per level
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const fcl::BVNode<fcl::AABBd>& node = model.getBV(stack[--top]);
+  stack->assign(1, 0);
+  while (!stack->empty()) {
+    const fcl::BVNode<fcl::AABBd>& node = model.getBV(stack->back());
+    stack->pop_back();
     if (!node.bv.overlap(shape_box)) continue;
     if (!node.isLeaf()) {
-      HAPSIM_INVARIANT(top + 2 <= static_cast<int>(stack.size()));
-      stack[top++] = node.rightChild();
-      stack[top++] = node.leftChild();
+      stack->push_back(node.rightChild());
+      stack->push_back(node.leftChild());
       continue;
     }
     const int t = node.primitiveId();
@@ -126,6 +121,7 @@ struct SurfaceBvh::Impl {
   std::unique_ptr<fcl::BVHModel<fcl::OBBRSSd>> obbrss;
   fcl::CollisionRequestd request;
   fcl::CollisionResultd result;
+  std::vector<int> stack;  // CollectOverlappingTriangles' scratch
   int num_triangles = 0;
 };
 
@@ -194,7 +190,7 @@ void SurfaceBvh::FindIntersectingTriangles(const fcl::CollisionGeometry<double>&
         [r, h](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
           return TriangleOverlapsCylinder(a, b, c, r, h);
         },
-        triangles);
+        &impl_->stack, triangles);
     std::sort(triangles->begin(), triangles->end());
     return;
   }
@@ -205,7 +201,7 @@ void SurfaceBvh::FindIntersectingTriangles(const fcl::CollisionGeometry<double>&
         [&half_S](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
           return TriangleOverlapsBox(a, b, c, half_S);
         },
-        triangles);
+        &impl_->stack, triangles);
     std::sort(triangles->begin(), triangles->end());
     return;
   }

@@ -93,9 +93,11 @@ struct VisualFrameOptions {
   // next frame's constraint targets correct (docs/CONTACT.md "Response"). How loose depends on
   // what holds the body:
   // - Anchored (every object has a fixed dof): the support takes what the solve leaves. 1e-2:
-  //   on block_press one CG iteration a frame fewer than 1e-4 (correction 0.52 → 0.28 ms at
-  //   ≥ 200 contacts) and the device force against the reference 0.04006 against 0.04004 N RMS;
-  //   a grasped block held 3 s rests to 2e-9 m/s either way (tissue_grasp_test).
+  //   on block_press one CG iteration a frame fewer than 1e-4 (correction 0.52 → 0.30 ms at
+  //   ≥ 200 contacts) and the device force against the reference 0.04003 against 0.04004 N RMS;
+  //   a grasped block held 3 s rests to 2e-9 m/s either way (tissue_grasp_test). One fixed node
+  //   counts: a body pinned at a point could still turn about it, which no shipped scene does
+  //   (they fix a face).
   // - With a free object (resting on a plate or another object): 1e-4. Looser, what the solve
   //   leaves is an impulse the object never receives: at 1e-2 a block on a rising plate carried
   //   its weight 1.05 % short, and a cube on a free soft block, or a block stacked on another,

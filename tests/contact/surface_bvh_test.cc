@@ -1,7 +1,9 @@
-// SurfaceBvh::FindIntersectingTriangles runs FCL's traversal on the tree itself instead of
-// fcl::collide, which copies the tree per call (issue 9). Checked against fcl::collide on an
-// OBBRSS tree over the same triangles (another traversal, not copied), for every tool primitive,
-// at random poses over a deformed, refitted surface: the same triangles, up to grazing ties.
+// SurfaceBvh::FindIntersectingTriangles walks the tree itself instead of calling fcl::collide,
+// which copies the tree per call (issue 9): FCL's traversal node with FCL's triangle test for a
+// sphere or capsule, its own walk with the clipping tests of core/triangle_overlap.h for a
+// cylinder or box (issue 25). Checked against fcl::collide on an OBBRSS tree over the same
+// triangles (another traversal, not copied, and FCL's test), for every tool primitive, at random
+// poses over a deformed, refitted surface: the same triangles, up to grazing ties.
 
 #include "contact/surface_bvh.h"
 

@@ -35,8 +35,10 @@ template <typename Distance>
 int SampledVerdict(const Vector3d& a, const Vector3d& b, const Vector3d& c,
                    const Distance& distance) {
   constexpr int kN = 200;
-  // Every point of the triangle lies within this of a grid point (half the longest cell edge).
-  const double cover = 0.5 * std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()}) / kN;
+  // Every point of the triangle lies within this of a grid point: a cell's circumradius (acute)
+  // or half its longest edge (obtuse), at most the longest edge over √3.
+  const double cover =
+      std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()}) / (std::sqrt(3.0) * kN);
   double least = std::numeric_limits<double>::infinity();
   for (int i = 0; i <= kN; ++i)
     for (int j = 0; i + j <= kN; ++j) {
