@@ -9,11 +9,11 @@
 namespace hapsim::contact {
 BodyBodyContacts::BodyBodyContacts(const fem::Model& body, double margin_m)
     : body_(body), margin_m_(margin_m) {
-  const std::vector<int>& first_nodes = body.object_first_nodes;
-  const int num_objects = std::max<int>(1, static_cast<int>(first_nodes.size()));
+  const int num_objects = body.num_objects();
   object_of_node_.assign(static_cast<size_t>(body.num_nodes()), 0);
   for (int o = 1; o < num_objects; ++o)
-    std::fill(object_of_node_.begin() + first_nodes[o], object_of_node_.end(), o);
+    std::fill(object_of_node_.begin() + body.object_first_node(o),
+              object_of_node_.begin() + body.object_end_node(o), o);
   surface_nodes_.resize(num_objects);
   triangles_.resize(num_objects);
   for (int f = 0; f < body.surface_triangles.cols(); ++f)

@@ -17,9 +17,10 @@ namespace {
 
 using Eigen::Vector3d;
 
-// Extra inflation of the broad-phase shape beyond τ. FCL's triangle tests against boxes,
-// capsules and cylinders run libccd's GJK with a 1e-6 m tolerance; 10 µm more makes sure a face
-// that touches the τ-inflated tool is never dropped (the narrow phase decides exactly).
+// Extra inflation of the broad-phase shape beyond τ. FCL's triangle test against a capsule runs
+// libccd's GJK with a 1e-6 m tolerance (the cylinder's and box's are exact: core/
+// triangle_overlap.h); 10 µm more makes sure a face that touches the τ-inflated tool is never
+// dropped, whatever its shape (the narrow phase decides exactly).
 constexpr double kBroadPhasePad_m = 1e-5;
 
 // A feature point v and the closest point q of a face: the pair counts as a face contact only

@@ -80,10 +80,10 @@ bool CollideAabbWithoutCopy(fcl::BVHModel<fcl::AABBd>* model,
 }
 
 // The triangles of an AABB tree that `overlaps` (a, b, c in the shape's frame S) says meet the
-// shape, visiting only the branches whose boxes meet box_W, the shape's world bounding box: the
-// walk of FCL's MeshShapeCollisionTraversalNode written out, with an exact test of our own at the
-// leaves (one triangle each). *stack is scratch (depth first: one pending sibling per level; it
-// grows only on a deeper tree than any before).
+// shape, ascending, visiting only the branches whose boxes meet box_W, the shape's world bounding
+// box: the walk of FCL's MeshShapeCollisionTraversalNode written out, with an exact test of our
+// own at the leaves (one triangle each). *stack is scratch (depth first: one pending sibling per
+// level; it grows only on a deeper tree than any before).
 template <typename Overlaps>
 void CollectOverlappingTriangles(const fcl::BVHModel<fcl::AABBd>& model,
                                  const Eigen::AlignedBox3d& box_W, const Eigen::Isometry3d& X_SW,
@@ -106,12 +106,7 @@ void CollectOverlappingTriangles(const fcl::BVHModel<fcl::AABBd>& model,
                  X_SW * model.vertices[corners[2]]))
       triangles->push_back(t);
   }
-}
-
-// The world bounding box of a shape whose frame S is at X_WS and whose own box is ±half_S.
-Eigen::AlignedBox3d CalcWorldBox(const Eigen::Isometry3d& X_WS, const Eigen::Vector3d& half_S) {
-  const Eigen::Vector3d half_W = X_WS.linear().cwiseAbs() * half_S;
-  return Eigen::AlignedBox3d(X_WS.translation() - half_W, X_WS.translation() + half_W);
+  std::sort(triangles->begin(), triangles->end());
 }
 
 }  // namespace
@@ -191,18 +186,16 @@ void SurfaceBvh::FindIntersectingTriangles(const fcl::CollisionGeometry<double>&
           return TriangleOverlapsCylinder(a, b, c, r, h);
         },
         &impl_->stack, triangles);
-    std::sort(triangles->begin(), triangles->end());
     return;
   }
   if (impl_->aabb && shape.getNodeType() == fcl::GEOM_BOX) {
     const Eigen::Vector3d half_S = 0.5 * static_cast<const fcl::Boxd&>(shape).side;
     CollectOverlappingTriangles(
-        *impl_->aabb, CalcWorldBox(X_WS, half_S), X_WS.inverse(),
+        *impl_->aabb, Eigen::AlignedBox3d(-half_S, half_S).transformed(X_WS), X_WS.inverse(),
         [&half_S](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
           return TriangleOverlapsBox(a, b, c, half_S);
         },
         &impl_->stack, triangles);
-    std::sort(triangles->begin(), triangles->end());
     return;
   }
   impl_->result.clear();

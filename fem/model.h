@@ -58,6 +58,16 @@ struct Model {
   int num_tets() const { return mesh.num_tets(); }
   bool is_quadratic() const { return mesh.is_quadratic(); }
   int num_fixed_nodes() const;
+  // The objects of the body (MergeModels; 1 unless merged) and the nodes [first, end) of object o.
+  int num_objects() const {
+    return object_first_nodes.empty() ? 1 : static_cast<int>(object_first_nodes.size());
+  }
+  int object_first_node(int o) const {
+    return object_first_nodes.empty() ? 0 : object_first_nodes[o];
+  }
+  int object_end_node(int o) const {
+    return o + 1 < num_objects() ? object_first_nodes[o + 1] : num_nodes();
+  }
 };
 
 // Builds the model. `fixed_nodes` lists nodes whose three dofs are fixed.

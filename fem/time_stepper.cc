@@ -30,12 +30,9 @@ TimeStepper::TimeStepper(const Model& model, const FemOptions& options, double d
         fixed_offdiagonal_value_index_.push_back(k);
     }
   delta_v_m_s_.setZero(model.num_dofs());
-  std::vector<int> firsts = model.object_first_nodes;
-  if (firsts.empty()) firsts.push_back(0);
-  firsts.push_back(model.num_nodes());
-  for (size_t o = 0; o + 1 < firsts.size(); ++o)
-    has_free_object_ |= std::none_of(model.dof_is_fixed.begin() + 3 * firsts[o],
-                                     model.dof_is_fixed.begin() + 3 * firsts[o + 1],
+  for (int o = 0; o < model.num_objects(); ++o)
+    has_free_object_ |= std::none_of(model.dof_is_fixed.begin() + 3 * model.object_first_node(o),
+                                     model.dof_is_fixed.begin() + 3 * model.object_end_node(o),
                                      [](std::uint8_t fixed) { return fixed != 0; });
   if (options.integrator == IntegratorKind::kImplicitEuler) solver_->AnalyzePattern(system_);
 }

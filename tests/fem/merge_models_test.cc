@@ -52,6 +52,14 @@ TEST(MergeModels, TwoBarsSteppedTogetherMoveAsEachSteppedAlone) {
   ASSERT_EQ(merged.num_nodes(), soft.num_nodes() + stiff.num_nodes());
   ASSERT_EQ(merged.num_tets(), soft.num_tets() + stiff.num_tets());
   EXPECT_EQ(merged.num_fixed_nodes(), soft.num_fixed_nodes() + stiff.num_fixed_nodes());
+  // The objects' node ranges, one after the other; a lone model is one object of all its nodes.
+  ASSERT_EQ(merged.num_objects(), 2);
+  EXPECT_EQ(merged.object_first_node(0), 0);
+  EXPECT_EQ(merged.object_end_node(0), soft.num_nodes());
+  EXPECT_EQ(merged.object_first_node(1), soft.num_nodes());
+  EXPECT_EQ(merged.object_end_node(1), merged.num_nodes());
+  EXPECT_EQ(soft.num_objects(), 1);
+  EXPECT_EQ(soft.object_end_node(0), soft.num_nodes());
   EXPECT_EQ(merged.surface_triangles.cols(),
             soft.surface_triangles.cols() + stiff.surface_triangles.cols());
   // Mass: ρ V of each bar (4 cm³), whatever the mesh.
