@@ -41,6 +41,43 @@ void RefitModel(const std::vector<int>& surface_nodes, const Eigen::VectorXd& x_
   HAPSIM_INVARIANT(model->endReplaceModel(/*refit=*/true, /*bottomup=*/true) == fcl::BVH_OK);
 }
 
+// Whether every inner node's children come after it in FCL's node array (FCL's builder appends
+// a node's two children after it), so that one pass from the last node to the first refits the
+// tree bottom-up (RefitAabbModel).
+bool ChildrenFollowParents(const fcl::BVHModel<fcl::AABBd>& model) {
+  for (int id = 0; id < model.getNumBVs(); ++id) {
+    const fcl::BVNode<fcl::AABBd>& node = model.getBV(id);
+    if (!node.isLeaf() && (node.leftChild() <= id || node.rightChild() <= id)) return false;
+  }
+  return true;
+}
+
+// RefitModel's result for an AABB tree, bit for bit (boxes are minima and maxima, exact in any
+// order), by one loop over the node array instead of FCL's recursion through its generic fitter:
+// block_press's refit (~2,500 nodes) 0.07 → 0.02 ms (docs/BENCHMARKS.md, eighth pass). Needs
+// ChildrenFollowParents.
+void RefitAabbModel(const std::vector<int>& surface_nodes, const Eigen::VectorXd& x_m,
+                    fcl::BVHModel<fcl::AABBd>* model) {
+  for (size_t i = 0; i < surface_nodes.size(); ++i)
+    model->vertices[i] = x_m.segment<3>(3 * surface_nodes[i]);
+  for (int id = model->getNumBVs() - 1; id >= 0; --id) {
+    fcl::BVNode<fcl::AABBd>& node = model->getBV(id);
+    if (node.isLeaf()) {
+      const fcl::Triangle& triangle = model->tri_indices[node.primitiveId()];
+      const fcl::Vector3d& a = model->vertices[triangle[0]];
+      const fcl::Vector3d& b = model->vertices[triangle[1]];
+      const fcl::Vector3d& c = model->vertices[triangle[2]];
+      node.bv.min_ = a.cwiseMin(b).cwiseMin(c);
+      node.bv.max_ = a.cwiseMax(b).cwiseMax(c);
+    } else {
+      const fcl::AABBd& left = model->getBV(node.leftChild()).bv;
+      const fcl::AABBd& right = model->getBV(node.rightChild()).bv;
+      node.bv.min_ = left.min_.cwiseMin(right.min_);
+      node.bv.max_ = left.max_.cwiseMax(right.max_);
+    }
+  }
+}
+
 // fcl::collide(BVHModel<AABB>, shape) copies the whole model on every call (FCL 0.7's
 // BVHShapeCollider: `new BVHModel<BV>(*obj1)`), because the traversal's initialize() takes the
 // model by non-const reference to transform its vertices in place when tf1 is not the identity.
@@ -118,6 +155,7 @@ struct SurfaceBvh::Impl {
   fcl::CollisionResultd result;
   std::vector<int> stack;  // CollectOverlappingTriangles' scratch
   int num_triangles = 0;
+  bool refit_by_loop = false;  // RefitAabbModel, when ChildrenFollowParents (checked once)
 };
 
 SurfaceBvh::SurfaceBvh(const Matrix3Xi& faces, const Eigen::VectorXd& rest_positions_m,
@@ -143,10 +181,12 @@ SurfaceBvh::SurfaceBvh(const Matrix3Xi& faces, const Eigen::VectorXd& rest_posit
     triangles.emplace_back(local_index[faces(0, f)], local_index[faces(1, f)],
                            local_index[faces(2, f)]);
   impl_->num_triangles = static_cast<int>(faces.cols());
-  if (kind_ == SurfaceBvhKind::kAabb)
+  if (kind_ == SurfaceBvhKind::kAabb) {
     impl_->aabb = MakeModel<fcl::AABBd>(vertices, triangles);
-  else
+    impl_->refit_by_loop = ChildrenFollowParents(*impl_->aabb);
+  } else {
     impl_->obbrss = MakeModel<fcl::OBBRSSd>(vertices, triangles);
+  }
   // Every intersecting triangle is wanted; contact points and depths are not.
   impl_->request.num_max_contacts = static_cast<size_t>(faces.cols());
   impl_->request.enable_contact = false;
@@ -160,7 +200,9 @@ void SurfaceBvh::Refit(const Eigen::VectorXd& x_m) {
   if (x_m.size() != 3 * num_body_nodes_)
     throw std::invalid_argument("SurfaceBvh::Refit: x_m has " + std::to_string(x_m.size()) +
                                 " entries, expected " + std::to_string(3 * num_body_nodes_));
-  if (impl_->aabb)
+  if (impl_->aabb && impl_->refit_by_loop)
+    RefitAabbModel(surface_nodes_, x_m, impl_->aabb.get());
+  else if (impl_->aabb)
     RefitModel(surface_nodes_, x_m, impl_->aabb.get());
   else
     RefitModel(surface_nodes_, x_m, impl_->obbrss.get());

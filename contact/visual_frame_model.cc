@@ -100,14 +100,18 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
 // its approach now plus up to lcp_reach_m_s more, keep their coupling to one another. Every
 // other contact keeps only its own block of W_body, as if pushing it moved no other contact: a
 // stiffer body, for the rest of a frame the tool was not expected to reach it in, and then the
-// next frame couples it. Row i's target r_i = b_i − J_u,i u̇ + Δt_h (W_body λ_vis)_i is the
-// approach speed it needs to engage (b closes its gap over a frame, less the body's own normal
-// velocity, plus what the frame's force holds back: the 1 kHz solve's W_body λ adds that back
-// while λ stays near λ_vis); the tool approaches it at −(J_v,i v + J_ω,i ω). An uncoupled row
-// sees no other contact's λ, so its target leaves the hold-back out too: the frame's force at
-// the other contacts stays in u̇, as if they kept pushing as they did (its own λ_vis is 0: an
-// active contact is coupled). The grasp's rows come first (ContactRows::num_bilateral_rows), then
-// the coupled contacts, then the others, the nearest to
+// next frame couples it. A coupled row's target is r_i = b_i − J_u,i u̇ + Δt_h (W_body λ_vis)_i
+// (b closes its gap over a frame, less the body's own normal velocity, plus what the frame's force
+// holds back, which the 1 kHz solve's W_body λ adds back while λ stays near λ_vis). So while the
+// other contacts push as the frame had them push, row i engages once the tool's approach
+// −(J_v,i v + J_ω,i ω) reaches b_i − J_u,i u̇: that, less the approach now, is its shortfall.
+// (With the hold-back counted as well, as if every other contact let go, the hybrid mode, whose
+// haptic-step compliance makes the hold-back large, coupled 175 of block_press's 213 contacts
+// instead of 74, for the same device force to 2e-15 N RMS; docs/BENCHMARKS.md, eighth pass.) An
+// uncoupled row sees no other contact's λ, so its target leaves the hold-back out too: the
+// frame's force at the other contacts stays in u̇, as if they kept pushing as they did (its own
+// λ_vis is 0: an active contact is coupled). The grasp's rows come first
+// (ContactRows::num_bilateral_rows), then the coupled contacts, then the others, the nearest to
 // engaging first, as many as lcp_max_rows leaves room for. lcp_reach_m_s = 0 couples them all.
 void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
                                     const Eigen::VectorXd& held_m_s, const ToolState& tool,
@@ -127,7 +131,7 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
     const int normal = rows_per_contact_ * static_cast<int>(i);
     const double tool_separating_m_s =
         J_all.J_v.row(normal).dot(tool.v_W_m_s) + J_all.J_w.row(normal).dot(w_W_rad_s);
-    shortfall_m_s[i] = -(rhs_all[normal] - tool_separating_m_s);
+    shortfall_m_s[i] = tool_separating_m_s - rhs_uncoupled[normal];
     const bool reachable =
         reach_m_s == 0.0 || lambda_[normal] > 0.0 || shortfall_m_s[i] < reach_m_s;
     (reachable ? coupled : uncoupled).push_back(i);
