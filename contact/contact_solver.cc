@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "contact/frame_friction_solver.h"
+#include "core/error.h"
 
 namespace hapsim::contact {
 namespace {
@@ -176,6 +177,22 @@ class FreeSet {
     is_free_[row] = true;
   }
 
+  // Adds `rows` to an empty set at once: the same factor as adding them one by one (up to
+  // round-off), by blocks instead of bordering row by row (block_press's ~70 start rows: 0.07 →
+  // 0.02 ms a frame, docs/BENCHMARKS.md "eighth pass").
+  void AddAll(const std::vector<Eigen::Index>& rows) {
+    HAPSIM_INVARIANT(rows_.empty());
+    for (Eigen::Index row : rows) {
+      rows_.push_back(row);
+      is_free_[row] = true;
+    }
+    const Eigen::Index k = static_cast<Eigen::Index>(rows_.size());
+    Eigen::Block<Eigen::MatrixXd> F = LU_.topLeftCorner(k, k);
+    for (Eigen::Index b = 0; b < k; ++b)
+      for (Eigen::Index a = 0; a < k; ++a) F(a, b) = M_(rows_[a], rows_[b]);
+    factor_holds_ = FactorWithoutPivoting(F);
+  }
+
   // Unilateral rows whose λ is no longer positive leave (their λ set to exactly 0).
   void RemoveNonPositive(Eigen::VectorXd* lambda) {
     std::vector<Eigen::Index> kept;
@@ -188,8 +205,8 @@ class FreeSet {
       }
     }
     rows_.clear();
-    factor_holds_ = true;
-    for (Eigen::Index row : kept) Add(row);
+    for (Eigen::Index row : kept) is_free_[row] = false;
+    AddAll(kept);
   }
 
   // z = M_ff⁻¹ rhs_f, rhs_f the free rows' entries of rhs, in the order of rows().
@@ -224,6 +241,33 @@ class FreeSet {
     LU_.row(k).head(k) = l.transpose();
     LU_.col(k).head(k) = u;
     LU_(k, k) = delta;
+    return true;
+  }
+
+  // LU without pivoting of F = M over rows_, in place, right-looking by blocks of 16 columns: a
+  // panel's columns one by one, then the block row right of it (a unit-lower triangular solve)
+  // and the trailing block (one matrix product). Its pivots are the Schur complements that
+  // Append's δ are, so it fails where some Append would: at a pivot ≤ 1e-8 M(row, row).
+  bool FactorWithoutPivoting(Eigen::Block<Eigen::MatrixXd> F) const {
+    constexpr Eigen::Index kBlock = 16;
+    const Eigen::Index n = F.rows();
+    for (Eigen::Index j0 = 0; j0 < n; j0 += kBlock) {
+      const Eigen::Index width = std::min(kBlock, n - j0), rest = n - j0 - width;
+      for (Eigen::Index j = j0; j < j0 + width; ++j) {
+        const double pivot = F(j, j);
+        if (!(pivot > 1e-8 * M_(rows_[j], rows_[j]))) return false;
+        const Eigen::Index below = n - j - 1, right = j0 + width - j - 1;
+        F.col(j).tail(below) /= pivot;
+        F.block(j + 1, j + 1, below, right).noalias() -=
+            F.col(j).tail(below) * F.row(j).segment(j + 1, right);
+      }
+      if (rest == 0) break;
+      F.block(j0, j0, width, width)
+          .triangularView<Eigen::UnitLower>()
+          .solveInPlace(F.block(j0, j0 + width, width, rest));
+      F.block(j0 + width, j0 + width, rest, rest).noalias() -=
+          F.block(j0 + width, j0, rest, width) * F.block(j0, j0 + width, width, rest);
+    }
     return true;
   }
 
@@ -291,7 +335,7 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
       (*lambda)[i] = 0.0;
   }
   if (fill_columns) fill_columns(start);
-  for (Eigen::Index i : start) free_set.Add(i);
+  free_set.AddAll(start);
   // The equality on the free rows, stepping back while a free λ would turn negative. Then w, the
   // slack: only free rows carry λ, so O(n k), not O(n²).
   Eigen::VectorXd w(n);

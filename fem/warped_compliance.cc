@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "fem/polar_decomposition.h"
+#include "fem/single_precision_factor.h"
 
 namespace hapsim::fem {
 
@@ -178,15 +179,18 @@ Eigen::Ref<const Eigen::MatrixXd> WarpedCompliance::FrameNodesCompliance() const
 }
 
 // q = C Uᵀ e_c: row c's entries, each adding 3 of C's columns times its weights. The columns are
-// summed as columns, not as an Eigen block product of run-time width, whose general product
-// dispatch cost more than the arithmetic on block_press's ~210 rows.
+// summed as columns (fem/compliance_column_kernels.h), not as an Eigen block product of run-time
+// width, whose general product dispatch cost more than the arithmetic on block_press's ~210 rows.
 void WarpedCompliance::MultiplyRowByCompliance(const Eigen::Ref<const Eigen::MatrixXd>& C,
                                                Eigen::Index c, Eigen::VectorXd* q) const {
-  q->setZero(C.rows());
-  for (size_t e = first_of_row_[c]; e < first_of_row_[c + 1]; ++e) {
-    const RowEntry& b = row_entries_[e];
-    q->noalias() += b.g0 * C.col(b.block) + b.g1 * C.col(b.block + 1) + b.g2 * C.col(b.block + 2);
-  }
+  q->resize(C.rows());
+  const RowEntry* entries = row_entries_.data() + first_of_row_[c];
+  const int count = static_cast<int>(first_of_row_[c + 1] - first_of_row_[c]);
+  if (SinglePrecisionFactor::CpuHasVectorKernels())
+    compliance_column::AccumulateAvx2(C.data(), C.outerStride(), C.rows(), entries, count,
+                                      q->data());
+  else
+    compliance_column::Accumulate(C.data(), C.outerStride(), C.rows(), entries, count, q->data());
 }
 
 // (U q)_r: row r gathers its entries' 3 values of q. The one sum of a row with a column, for

@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "fem/cholmod_factor.h"
+#include "fem/compliance_column_kernels.h"
 #include "fem/model.h"
 #include "fem/time_stepper.h"
 
@@ -105,10 +106,7 @@ class WarpedCompliance {
   // The rows set by SetRows: row r's entries are row_entries_[first_of_row_[r] ..
   // first_of_row_[r + 1]), each a node's rotated weights Rᵀ j_r and its block in the frame's C₀
   // (the held one in place, or frame_C_ gathered for the frame's nodes).
-  struct RowEntry {
-    int block;
-    double g0, g1, g2;
-  };
+  using RowEntry = compliance_column::Entry;
   Eigen::Index num_rows_ = 0;
   std::vector<RowEntry> row_entries_;
   std::vector<size_t> first_of_row_;

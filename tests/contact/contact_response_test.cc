@@ -247,6 +247,50 @@ TEST(ContactResponse, ActiveSetFromAnyStartEndsAtTheEnumeratedLcp) {
   EXPECT_GT(wrong_starts, 30);
 }
 
+// A start with many loaded rows is factored by blocks of 16 (the free set's AddAll), not row by
+// row as entering rows are: started from the solution of a cold solve on a 60-row unsymmetric W
+// with ~40 rows loaded, it needs no entering row and returns that solution; the complementarity
+// conditions are checked directly. With a row duplicated in the start (a zero pivot), the blocked
+// factor fails as bordering would, and the solve still ends at a solution of the LCP.
+TEST(ContactResponse, ActiveSetStartedWithManyRowsEndsWhereTheColdSolveDoes) {
+  std::mt19937 rng(31);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const ContactSolveOptions options{ContactLaw::kUnilateral};
+  for (int trial = 0; trial < 10; ++trial) {
+    const int n = 60;
+    Eigen::MatrixXd B(n, n), S(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) B(i, j) = normal(rng), S(i, j) = normal(rng);
+    Eigen::MatrixXd W =
+        B * B.transpose() / n + 0.05 * Eigen::MatrixXd::Identity(n, n) + 0.1 * (S - S.transpose());
+    const bool duplicated = trial % 2 == 1;
+    if (duplicated) {  // row and column 1 repeat row and column 0
+      W.row(1) = W.row(0);
+      W.col(1) = W.col(0);
+    }
+    Eigen::VectorXd rhs(n);
+    for (int i = 0; i < n; ++i) rhs[i] = 1e-3 * (normal(rng) + 1.5);  // most rows loaded
+    if (duplicated) rhs[1] = rhs[0];
+    Eigen::VectorXd cold = Eigen::VectorXd::Zero(n);
+    ASSERT_TRUE(SolveContactImpulses(W, rhs, kDt_s, 1, options, &cold).converged) << trial;
+    Eigen::VectorXd warm = cold;
+    if (duplicated) warm[1] = warm[0] = 0.5 * (cold[0] + cold[1]) + 1e-3;  // both rows loaded
+    ASSERT_GT((warm.array() > 0.0).count(), 32) << trial;                  // two blocks and more
+    const ContactSolveReport report = SolveContactImpulses(W, rhs, kDt_s, 1, options, &warm);
+    EXPECT_TRUE(report.converged) << trial;
+    // The slack, to within the solver's 1e-10 relative shift of W's diagonal.
+    const Eigen::VectorXd w = kDt_s * W * warm - rhs;
+    const double scale = rhs.lpNorm<Eigen::Infinity>();
+    EXPECT_GE(warm.minCoeff(), 0.0) << trial;
+    EXPECT_GT(w.minCoeff(), -1e-8 * scale) << trial;
+    EXPECT_LT(std::abs(warm.dot(w)), 1e-8 * scale * warm.lpNorm<1>()) << trial;
+    if (!duplicated) {
+      EXPECT_EQ(report.iterations, 0) << trial;
+      EXPECT_LT((warm - cold).norm(), 1e-9 * cold.norm()) << trial;
+    }
+  }
+}
+
 // The unilateral solve reading W by columns (SolveUnilateralByColumns, as the visual frame calls
 // it) gives the dense solve's λ bit for bit, on unsymmetric W from good and wrong starts, while
 // asking for fewer columns than W has: the W it reads holds NaN in every column not asked for, so
