@@ -10,7 +10,7 @@
 // the coupled rows' and the others' own entries. On block_press's frames with ≥ 200 contacts 68 of
 // 216 rows carry load, so the solve forms a third of the columns, each a pass over the held C₀ of
 // the warped compliance; the model handed to the haptic step forms its coupled rows' columns, 74
-// in the hybrid mode (176 before the eighth pass of docs/BENCHMARKS.md, issue 25).
+// in the hybrid mode (~175 before the eighth pass of docs/BENCHMARKS.md, issue 25).
 //
 // Formed columns are whole (every row), so W(r, c) of a formed column c is right whatever r is;
 // the diagonal is formed for every row at the start, without a pass over C₀.

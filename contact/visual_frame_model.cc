@@ -103,10 +103,10 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
 // next frame couples it. A coupled row's target is r_i = b_i − J_u,i u̇ + Δt_h (W_body λ_vis)_i
 // (b closes its gap over a frame, less the body's own normal velocity, plus what the frame's force
 // holds back, which the 1 kHz solve's W_body λ adds back while λ stays near λ_vis). So while the
-// other contacts push as the frame had them push, row i engages once the tool's approach
-// −(J_v,i v + J_ω,i ω) reaches b_i − J_u,i u̇: that, less the approach now, is its shortfall.
+// other contacts push as the frame had them push, row i engages once the tool's separating
+// velocity J_v,i v + J_ω,i ω falls to b_i − J_u,i u̇: how far it must still fall is its shortfall.
 // (With the hold-back counted as well, as if every other contact let go, the hybrid mode, whose
-// haptic-step compliance makes the hold-back large, coupled 175 of block_press's 213 contacts
+// haptic-step compliance makes the hold-back large, coupled ~175 of block_press's ~213 contacts
 // instead of 74, for the same device force to 2e-15 N RMS; docs/BENCHMARKS.md, eighth pass.) An
 // uncoupled row sees no other contact's λ, so its target leaves the hold-back out too: the
 // frame's force at the other contacts stays in u̇, as if they kept pushing as they did (its own

@@ -186,11 +186,14 @@ void WarpedCompliance::MultiplyRowByCompliance(const Eigen::Ref<const Eigen::Mat
   q->resize(C.rows());
   const RowEntry* entries = row_entries_.data() + first_of_row_[c];
   const int count = static_cast<int>(first_of_row_[c + 1] - first_of_row_[c]);
-  if (SinglePrecisionFactor::CpuHasVectorKernels())
+#if defined(__x86_64__)  // the AVX2 kernel is built there only
+  if (SinglePrecisionFactor::CpuHasVectorKernels()) {
     compliance_column::AccumulateAvx2(C.data(), C.outerStride(), C.rows(), entries, count,
                                       q->data());
-  else
-    compliance_column::Accumulate(C.data(), C.outerStride(), C.rows(), entries, count, q->data());
+    return;
+  }
+#endif
+  compliance_column::Accumulate(C.data(), C.outerStride(), C.rows(), entries, count, q->data());
 }
 
 // (U q)_r: row r gathers its entries' 3 values of q. The one sum of a row with a column, for

@@ -111,10 +111,14 @@ TEST(VisualFrame, HapticStepComplianceYieldsMoreAndAgreesAtEqualSteps) {
 // The lcp rows that travel (issue 13 item 5): with lcp_reach_m_s the frame exports every contact
 // of the all-rows export, whole (three rows each with friction, and their μ), bit for bit: first,
 // in order, those that are active (λ_n > 0) or that the tool's present approach plus the reach
-// engages (shortfall s_i = −(r_i − (J_v,i v + J_ω,i ω)) < v_reach), with their W_body coupling;
-// then the others by s_i ascending, each with its own block of W_body and zeros to every other
-// row, and a target without the other contacts' hold-back Δt_h (W_body λ_vis)_i. With lcp_max_rows the uncoupled ones nearest to engaging fill what room is left. The
-// frame itself is unchanged.
+// engages while the other contacts push as the frame had them push (shortfall s_i = (J_v,i v +
+// J_ω,i ω) − (r_i − h_i) < v_reach, r_i the all-coupled target and h_i = Δt_h (W_body λ_vis)_i its
+// hold-back), with their W_body coupling; then the others by s_i ascending, each with its own
+// block of W_body and zeros to every other row, and the target r_i − h_i. With lcp_max_rows the
+// uncoupled ones nearest to engaging fill what room is left. The frame itself is unchanged. (On
+// this slab counting h_i in s_i would couple no other contact, so the test does not tell the two
+// rules apart; on block_press in the hybrid mode it coupled 175 contacts instead of 74,
+// docs/BENCHMARKS.md "eighth pass".)
 TEST(VisualFrame, LcpRowsCoupleTheActiveAndTheReachableContacts) {
   const fem::Model body = MakeSlab(0.02, 5e4, false);
   for (const ContactLaw law : {ContactLaw::kUnilateral, ContactLaw::kFriction}) {
@@ -147,8 +151,11 @@ TEST(VisualFrame, LcpRowsCoupleTheActiveAndTheReachableContacts) {
     std::vector<double> shortfall(a.num_rows() / per);
     for (int i = 0; i < a.num_rows() / per; ++i) {
       const int n = per * i;
-      shortfall[i] = -(a.body_rhs[n] - (a.J_v.row(n).dot(tool_all.v_W_m_s) + a.J_w.row(n).dot(w)));
-      (a.lambda_frame_N[n] > 0.0 || shortfall[i] < reach_m_s ? coupled : uncoupled).push_back(i);
+      const double held = 1e-3 * a.W_body.row(n).dot(a.lambda_frame_N);
+      const double tool_separating = a.J_v.row(n).dot(tool_all.v_W_m_s) + a.J_w.row(n).dot(w);
+      shortfall[i] = tool_separating - (a.body_rhs[n] - held);
+      const bool loaded = a.lambda_frame_N[n] > 0.0;
+      (loaded || shortfall[i] < reach_m_s ? coupled : uncoupled).push_back(i);
     }
     std::stable_sort(uncoupled.begin(), uncoupled.end(),
                      [&](int i, int j) { return shortfall[i] < shortfall[j]; });
