@@ -178,8 +178,8 @@ class FreeSet {
   }
 
   // Adds `rows` to an empty set at once: the same factor as adding them one by one (up to
-  // round-off), by blocks instead of bordering row by row (block_press's ~70 start rows: 0.07 →
-  // 0.02 ms a frame, docs/BENCHMARKS.md "eighth pass").
+  // round-off), by blocks instead of bordering row by row (block_press's ~70 start rows: its
+  // solve 0.25 → 0.22 ms a frame, docs/BENCHMARKS.md "eighth pass").
   void AddAll(const std::vector<Eigen::Index>& rows) {
     HAPSIM_INVARIANT(rows_.empty());
     for (Eigen::Index row : rows) {
@@ -205,7 +205,6 @@ class FreeSet {
       }
     }
     rows_.clear();
-    for (Eigen::Index row : kept) is_free_[row] = false;
     AddAll(kept);
   }
 
