@@ -54,7 +54,7 @@ bool ChildrenFollowParents(const fcl::BVHModel<fcl::AABBd>& model) {
 
 // RefitModel's result for an AABB tree, bit for bit (boxes are minima and maxima, exact in any
 // order), by one loop over the node array instead of FCL's recursion through its generic fitter:
-// block_press's refit (~2,500 nodes) 0.07 → 0.02 ms (docs/BENCHMARKS.md, eighth pass). Needs
+// block_press's refit (~2,500 nodes) 0.065 → 0.035 ms (docs/BENCHMARKS.md, eighth pass). Needs
 // ChildrenFollowParents.
 void RefitAabbModel(const std::vector<int>& surface_nodes, const Eigen::VectorXd& x_m,
                     fcl::BVHModel<fcl::AABBd>* model) {
