@@ -1,9 +1,49 @@
 #include "contact/contact_jacobian.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <stdexcept>
 
 namespace hapsim::contact {
+namespace {
+
+// A sparse matrix in compressed column form from its entries in row order (a row's own in any
+// order): a counting sort by column, which leaves each column's rows sorted and adds up an entry
+// given twice (a node listed twice in one contact): the matrix setFromTriplets makes, bit for bit,
+// without its transposed copy. With the node loop below stopping at the first unused slot,
+// block_press's ~210-contact Jacobian went 0.026 → 0.018 ms (a temporary stage timer, frames with
+// ≥ 200 contacts).
+Eigen::SparseMatrix<double> MakeColumnMajor(int num_rows, int num_cols,
+                                            const std::vector<Eigen::Triplet<double>>& entries) {
+  Eigen::SparseMatrix<double> M(num_rows, num_cols);
+  int* starts = M.outerIndexPtr();
+  std::fill_n(starts, num_cols + 1, 0);
+  std::vector<int> last_row(static_cast<size_t>(num_cols), -1);  // a column's latest row
+  for (const Eigen::Triplet<double>& e : entries) {
+    if (last_row[e.col()] == e.row()) continue;  // the same entry again: added below
+    last_row[e.col()] = e.row();
+    ++starts[e.col() + 1];
+  }
+  for (int c = 0; c < num_cols; ++c) starts[c + 1] += starts[c];
+  M.resizeNonZeros(starts[num_cols]);
+  std::vector<int> next(starts, starts + num_cols);
+  std::fill(last_row.begin(), last_row.end(), -1);
+  int* rows = M.innerIndexPtr();
+  double* values = M.valuePtr();
+  for (const Eigen::Triplet<double>& e : entries) {
+    const int c = e.col();
+    if (last_row[c] == e.row()) {
+      values[next[c] - 1] += e.value();
+      continue;
+    }
+    last_row[c] = e.row();
+    rows[next[c]] = e.row();
+    values[next[c]++] = e.value();
+  }
+  return M;
+}
+
+}  // namespace
 
 void CalcTangents(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
   // Cross with the coordinate axis least aligned with n: never near-parallel.
@@ -41,8 +81,8 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
                                        : Eigen::RowVector3d::Zero();
       J.J_w.row(row) = contact.on_tool ? Eigen::RowVector3d(-r_W_m.cross(directions[d]).transpose())
                                        : Eigen::RowVector3d::Zero();
-      for (int k = 0; k < kMaxContactNodes; ++k) {
-        if (contact.nodes[k] < 0 || contact.weights[k] == 0.0) continue;
+      for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k) {  // slots [0, k) used
+        if (contact.weights[k] == 0.0) continue;
         for (int a = 0; a < 3; ++a) {
           const int dof = 3 * contact.nodes[k] + a;
           if (dof_is_fixed[dof]) continue;  // a fixed node does not move: no velocity term
@@ -51,8 +91,7 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
       }
     }
   }
-  J.J_u.resize(num_rows, num_dofs);
-  J.J_u.setFromTriplets(body_entries.begin(), body_entries.end());
+  J.J_u = MakeColumnMajor(num_rows, num_dofs, body_entries);
   return J;
 }
 

@@ -54,10 +54,37 @@ class WarpedCompliance {
   Eigen::MatrixXd Calc(const Eigen::SparseMatrix<double>& J_u,
                        const std::vector<Eigen::Matrix3d>& element_rotations);
 
-  // The frame's rows: groups them, solves the columns of the nodes of J_u not seen before and
-  // rotates the rows' entries. The calls below read these rows until the next SetRows.
+  // J_u's rows rotated to the rest frame, R_aᵀ j_ra at each node a, in groups: consecutive rows
+  // that touch the same nodes (a contact's normal and two tangent rows, at most 3) share one entry
+  // per node, G = R_aᵀ [j_ra]_(r ∈ group) (column k: the group's row k), rotated once for them
+  // all. They depend on the body and its rotations, not on A₀: the visual step's compliance and
+  // the haptic step's share them (RotateRows once, SetRows on each).
+  struct RotatedRows {
+    struct Entry {
+      int frame_node = 0;  // index into frame_nodes
+      Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
+    };
+    struct Group {
+      Eigen::Index first_row = 0;
+      int num_rows = 0;
+      size_t first_entry = 0, num_entries = 0;  // in entries
+    };
+    Eigen::Index num_rows = 0;
+    std::vector<int> frame_nodes;  // the nodes J_u touches, in order of first appearance
+    std::vector<Group> groups;
+    std::vector<Entry> entries;
+  };
+  // The rows of J_u at the element rotations of the current step (TimeStepper::rotations()).
+  RotatedRows RotateRows(const Eigen::SparseMatrix<double>& J_u,
+                         const std::vector<Eigen::Matrix3d>& element_rotations) const;
+  // The frame's rows, from this compliance's RotateRows or another's on the same model: solves
+  // the columns of the nodes not seen before. The calls below read these rows until the next
+  // SetRows. Throws std::invalid_argument for a node outside the model.
+  void SetRows(const RotatedRows& rows);
   void SetRows(const Eigen::SparseMatrix<double>& J_u,
-               const std::vector<Eigen::Matrix3d>& element_rotations);
+               const std::vector<Eigen::Matrix3d>& element_rotations) {
+    SetRows(RotateRows(J_u, element_rotations));
+  }
   // The whole W_body of the rows set.
   Eigen::MatrixXd CalcAll() const;
   // Only the given columns, W_body(:, c) for each c in `columns`, written into W (rows × rows;
@@ -96,7 +123,8 @@ class WarpedCompliance {
   std::vector<std::vector<int>> node_tets_;  // incident tets of each node
   std::vector<int> slot_of_node_;            // -1: not solved yet
   std::vector<int> node_of_slot_;
-  std::vector<int> frame_index_of_node_;  // -1 between frames; Calc's index of each frame node
+  // Scratch of RotateRows: -1 between calls; the index of each frame node during one.
+  mutable std::vector<int> frame_index_of_node_;
   // C₀ between the held nodes, slot by slot: block (s, t) = C₀_ab of the nodes of slots s and t,
   // taken from the column of the later of the two (SinglePrecisionFactor::SolveColumnsAt solves a
   // new node's column at the rows of the nodes held by then). Its size is a capacity: only the

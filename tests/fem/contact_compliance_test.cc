@@ -198,6 +198,31 @@ TEST(WarpedCompliance, ExactForFrictionRowsAtRestAndUnderRigidRotation) {
   EXPECT_EQ(W, W.transpose());
 }
 
+// The rows one compliance rotated serve another of the same body with another A₀ (the visual
+// frame's and the haptic step's, VisualFrame::SetBodyCompliance): its W is its own exact
+// compliance, rigidly turned, and bit for bit what rotating the rows itself gives.
+TEST(WarpedCompliance, RowsRotatedByOneServeAnotherOfTheSameBody) {
+  const Model model = MakeBlock({4, 4, 2}, /*fix_bottom=*/false);
+  const Eigen::VectorXd no_force = Eigen::VectorXd::Zero(model.num_dofs());
+  TimeStepper visual_stepper(model, FemOptions{}, 1.0 / 30.0, no_force);
+  TimeStepper haptic_stepper(model, FemOptions{}, 1.0 / 1000.0, no_force);
+  WarpedCompliance visual(model, visual_stepper), haptic(model, haptic_stepper);
+  const Eigen::SparseMatrix<double> J = MakeFrictionRows(model, 20, 3);
+  State state = MakeRestState(model);
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.9, Eigen::Vector3d(-2, 1, 1).normalized()).toRotationMatrix();
+  for (int n = 0; n < model.num_nodes(); ++n)
+    state.x_m.segment<3>(3 * n) = R * model.mesh.rest_positions_m.col(n);
+  const Eigen::MatrixXd exact = CalcDenseCompliance(&haptic_stepper, state, J);
+  Eigen::VectorXd dv;
+  visual_stepper.CalcFreeVelocityChange(state, &dv);
+  haptic.SetRows(visual.RotateRows(J, visual_stepper.rotations()));
+  const Eigen::MatrixXd shared = haptic.CalcAll();
+  EXPECT_LT((shared - exact).norm(), 1e-6 * exact.norm());
+  EXPECT_GT((CalcDenseCompliance(&visual_stepper, state, J) - exact).norm(), 0.1 * exact.norm());
+  EXPECT_EQ(shared, haptic.Calc(J, haptic_stepper.rotations()));
+}
+
 // Chosen columns and the diagonal against the whole W of the same rows, rigidly turned (rotated
 // entries), with C₀ read in place and then gathered (a frame on few of the held nodes): the
 // columns asked for, in two calls (the second copying its rows at the first's columns), agree

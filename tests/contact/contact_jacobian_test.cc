@@ -1,0 +1,67 @@
+// CalcContactJacobian against the definition in contact/contact_jacobian.h, written out densely
+// entry by entry: J_u,i = Σ_k w_k d_iᵀ at node k's dofs (d the row's direction), none at a fixed
+// dof, an entry of a node listed twice in one contact summed.
+#include "contact/contact_jacobian.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <vector>
+
+namespace hapsim::contact {
+namespace {
+
+// Row i's dense J_u from its contact, one node slot at a time.
+Eigen::MatrixXd DenseBodyRows(const std::vector<Contact>& contacts, int rows_per_contact,
+                              int num_dofs, const std::vector<std::uint8_t>& dof_is_fixed) {
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(rows_per_contact * contacts.size(), num_dofs);
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    Eigen::Vector3d d[3] = {contacts[i].n_W, {}, {}};
+    CalcTangents(contacts[i].n_W, &d[1], &d[2]);
+    for (int r = 0; r < rows_per_contact; ++r)
+      for (int k = 0; k < kMaxContactNodes && contacts[i].nodes[k] >= 0; ++k)
+        for (int a = 0; a < 3; ++a) {
+          const int dof = 3 * contacts[i].nodes[k] + a;
+          if (!dof_is_fixed[dof])
+            J(rows_per_contact * i + r, dof) += contacts[i].weights[k] * d[r][a];
+        }
+  }
+  return J;
+}
+
+TEST(ContactJacobian, BodyRowsMatchTheDefinitionWithRepeatedAndFixedNodes) {
+  const int num_nodes = 9, num_dofs = 3 * num_nodes;
+  std::vector<std::uint8_t> fixed(num_dofs, 0);
+  fixed[3 * 2 + 1] = 1;  // node 2's y
+  std::vector<Contact> contacts(4);
+  contacts[0].SetBodyNodes({5, 1, 8}, {0.2, 0.3, 0.5});    // nodes out of order
+  contacts[1].SetBodyNodes({4, 6, 4}, {0.25, 0.5, 0.25});  // node 4 twice: its entries add up
+  contacts[2].SetBodyNodes({2}, {1.0});                    // a partly fixed node
+  contacts[3].SetBodyNodes({7, 3}, {0.0, 1.0});            // a zero weight: no entry
+  contacts[0].n_W = Eigen::Vector3d(1, 2, 3).normalized();
+  contacts[1].n_W = Eigen::Vector3d(0, 0, 1);
+  contacts[2].n_W = Eigen::Vector3d(-1, 1, 0).normalized();
+  contacts[3].n_W = Eigen::Vector3d(0.3, -1, 0.2).normalized();
+  for (int rows_per_contact : {1, 3}) {
+    const ContactJacobian J =
+        CalcContactJacobian(contacts, Eigen::Vector3d::Zero(), rows_per_contact, num_dofs, fixed);
+    ASSERT_TRUE(J.J_u.isCompressed());
+    const Eigen::MatrixXd expected = DenseBodyRows(contacts, rows_per_contact, num_dofs, fixed);
+    EXPECT_LT((Eigen::MatrixXd(J.J_u) - expected).cwiseAbs().maxCoeff(), 1e-15);
+    // Each column's rows sorted and stored once (what Eigen's sparse products assume), and no
+    // entry at a fixed dof or for the zero weight.
+    for (int j = 0; j < num_dofs; ++j) {
+      int last_row = -1;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(J.J_u, j); it; ++it) {
+        EXPECT_GT(it.row(), last_row) << "column " << j;
+        last_row = static_cast<int>(it.row());
+      }
+      if (fixed[j] || j / 3 == 7) {
+        EXPECT_EQ(J.J_u.col(j).nonZeros(), 0) << "column " << j;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hapsim::contact
