@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <numeric>
 #include <stdexcept>
 
 namespace hapsim::contact {
@@ -93,6 +94,53 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
   }
   J.J_u = MakeColumnMajor(num_rows, num_dofs, body_entries);
   return J;
+}
+
+// Each column of J_u keeps the entries of the rows selected, renumbered; a column holds a few
+// entries (the contacts at one node), so an insertion sort restores their order.
+ContactJacobian SelectRows(const ContactJacobian& J, const std::vector<int>& rows) {
+  const Eigen::Index n = static_cast<Eigen::Index>(rows.size());
+  std::vector<int> new_row(static_cast<size_t>(J.num_rows()), -1);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    const int row = rows[static_cast<size_t>(r)];
+    if (row < 0 || row >= J.num_rows() || new_row[static_cast<size_t>(row)] >= 0)
+      throw std::invalid_argument("SelectRows: a row outside J or given twice");
+    new_row[static_cast<size_t>(row)] = static_cast<int>(r);
+  }
+  ContactJacobian S;
+  S.rows_per_contact = J.rows_per_contact;
+  S.J_v.resize(n, 3);
+  S.J_w.resize(n, 3);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    S.J_v.row(r) = J.J_v.row(rows[static_cast<size_t>(r)]);
+    S.J_w.row(r) = J.J_w.row(rows[static_cast<size_t>(r)]);
+  }
+  const Eigen::Index num_cols = J.J_u.cols();
+  S.J_u.resize(n, num_cols);
+  int* starts = S.J_u.outerIndexPtr();
+  std::fill_n(starts, num_cols + 1, 0);
+  for (Eigen::Index j = 0; j < num_cols; ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(J.J_u, j); it; ++it)
+      starts[j + 1] += new_row[static_cast<size_t>(it.row())] >= 0;
+  std::partial_sum(starts, starts + num_cols + 1, starts);
+  S.J_u.resizeNonZeros(starts[num_cols]);
+  int* inner = S.J_u.innerIndexPtr();
+  double* values = S.J_u.valuePtr();
+  for (Eigen::Index j = 0; j < num_cols; ++j) {
+    int end = starts[j];
+    for (Eigen::SparseMatrix<double>::InnerIterator it(J.J_u, j); it; ++it) {
+      const int row = new_row[static_cast<size_t>(it.row())];
+      if (row < 0) continue;
+      int k = end++;
+      for (; k > starts[j] && inner[k - 1] > row; --k) {  // insert in order
+        inner[k] = inner[k - 1];
+        values[k] = values[k - 1];
+      }
+      inner[k] = row;
+      values[k] = it.value();
+    }
+  }
+  return S;
 }
 
 }  // namespace hapsim::contact

@@ -34,6 +34,12 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
                                     const Eigen::Vector3d& x_tool_W_m, int rows_per_contact,
                                     int num_dofs, const std::vector<std::uint8_t>& dof_is_fixed);
 
+// The rows `rows` of J (row indices, each at most once, in the order given): J_v and J_ω
+// gathered, J_u's entries renumbered with each column's rows sorted again. The Jacobian
+// CalcContactJacobian gives for those rows' contacts at the same tool position, without copying
+// or recomputing them. Throws std::invalid_argument for a row outside J or given twice.
+ContactJacobian SelectRows(const ContactJacobian& J, const std::vector<int>& rows);
+
 // Two unit tangents completing n to a right-handed orthonormal frame (n, t1, t2), chosen
 // continuously away from n = ±x.
 void CalcTangents(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2);

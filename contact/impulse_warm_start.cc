@@ -17,7 +17,9 @@ ImpulseWarmStart::Identity ImpulseWarmStart::IdentityOf(const Contact& contact) 
   // Its surface points, not its nodes: an embedded contact's first nodes are its first point's
   // tet's, which its neighbours share.
   const std::array<int, 3>& points = contact.surface_points;
-  return {points[0], points[1], points[2], contact.rigid_object, contact.on_tool ? 1 : 0};
+  const auto word = [](int index) { return static_cast<std::uint64_t>(index + 1); };  // ≥ −1
+  return {word(points[0]) << 32 | word(points[1]),
+          word(points[2]) << 32 | word(contact.rigid_object) << 1 | (contact.on_tool ? 1u : 0u)};
 }
 
 namespace {

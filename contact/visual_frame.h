@@ -250,9 +250,10 @@ class VisualFrame {
   void BuildLinearModel(const DeviceState& device, const Eigen::Isometry3d& X_WT_start,
                         const ToolState& tool, const ToolState& haptic_tool,
                         const fem::State& body);
-  void ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
-                         const Eigen::VectorXd& held_m_s, const ToolState& tool,
-                         const fem::State& body);
+  // J_all: the Jacobian of `moved` at the haptic tool.
+  void ExportContactRows(const std::vector<Contact>& moved, const ContactJacobian& J_all,
+                         const Eigen::VectorXd& b_all, const Eigen::VectorXd& held_m_s,
+                         const ToolState& tool, const fem::State& body);
   // The frame's contacts as seen from the haptic tool at the end of the frame (points, normals
   // and gaps), with the velocity target b each row holds over the next frame.
   void MoveContactsToHapticTool(const Eigen::Isometry3d& X_WT_start, const ToolState& visual_tool,

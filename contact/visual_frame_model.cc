@@ -54,15 +54,15 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   std::vector<Contact> moved;
   Eigen::VectorXd b_all;
   MoveContactsToHapticTool(X_WT_start, visual_tool, tool, &moved, &b_all);
-  std::vector<Contact> active;
   std::vector<int> active_rows;
   for (size_t i = 0; i < moved.size(); ++i) {
     const int row = rows_per_contact_ * static_cast<int>(i);
     if (IsLetGo(moved[i]) || (!(lambda_[row] > 0.0) && !moved[i].bilateral)) continue;
-    active.push_back(moved[i]);
     for (int d = 0; d < rows_per_contact_; ++d) active_rows.push_back(row + d);
   }
-  const ContactJacobian J = CalcJacobian(active, tool.x_W_m);
+  // Every moved contact's rows once; the model's and the lcp rows' are selections of them.
+  const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
+  const ContactJacobian J = SelectRows(J_all, active_rows);
   const CouplingWrench wrench =
       CalcCouplingWrench(options_.coupling, device, tool, CalcAngularVelocity(tool_, tool));
   const ToolStepSystem haptic =
@@ -90,7 +90,7 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
   Eigen::VectorXd body_rhs = b - J.J_u * body.v_m_s;
   for (size_t r = 0; r < active_rows.size(); ++r) body_rhs[r] += held_m_s[active_rows[r]];
   linear_model_ = MakeLinearContactModel(J, W, haptic, body_rhs);
-  if (options_.export_contact_rows) ExportContactRows(moved, b_all, held_m_s, tool, body);
+  if (options_.export_contact_rows) ExportContactRows(moved, J_all, b_all, held_m_s, tool, body);
 }
 
 // The rows that travel to the lcp step (issue 13 item 5). Every candidate contact travels, for a
@@ -113,10 +113,9 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
 // λ_vis is 0: an active contact is coupled). The grasp's rows come first
 // (ContactRows::num_bilateral_rows), then the coupled contacts, then the others, the nearest to
 // engaging first, as many as lcp_max_rows leaves room for. lcp_reach_m_s = 0 couples them all.
-void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eigen::VectorXd& b_all,
-                                    const Eigen::VectorXd& held_m_s, const ToolState& tool,
-                                    const fem::State& body) {
-  const ContactJacobian J_all = CalcJacobian(moved, tool.x_W_m);
+void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const ContactJacobian& J_all,
+                                    const Eigen::VectorXd& b_all, const Eigen::VectorXd& held_m_s,
+                                    const ToolState& tool, const fem::State& body) {
   const Eigen::VectorXd rhs_uncoupled = b_all - J_all.J_u * body.v_m_s;
   const Eigen::VectorXd rhs_all = rhs_uncoupled + held_m_s;
   const double reach_m_s = options_.lcp_reach_m_s;
@@ -143,18 +142,16 @@ void VisualFrame::ExportContactRows(const std::vector<Contact>& moved, const Eig
     const size_t taken = bilateral.size() + coupled.size();
     uncoupled.resize(std::min(uncoupled.size(), room - std::min(room, taken)));
   }
-  std::vector<Contact> ordered;
   std::vector<int> rows;
   std::vector<double> mu;
   for (const std::vector<size_t>* group : {&bilateral, &coupled, &uncoupled}) {
     for (size_t i : *group) {
-      ordered.push_back(moved[i]);
       for (int d = 0; d < rows_per_contact_; ++d)
         rows.push_back(rows_per_contact_ * static_cast<int>(i) + d);
       if (rows_per_contact_ == 3) mu.push_back(mu_per_contact_[static_cast<Eigen::Index>(i)]);
     }
   }
-  const ContactJacobian J = CalcJacobian(ordered, tool.x_W_m);
+  const ContactJacobian J = SelectRows(J_all, rows);
   // What the hybrid mode follows the rows with (ContactRows::gap_m): b_all = b_gap − c_object.
   const Eigen::VectorXd c_object = CalcObjectSeparatingVelocity(moved);
   const Eigen::VectorXd body_normal_velocity = b_all - rhs_uncoupled;  // J_u u̇

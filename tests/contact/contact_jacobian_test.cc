@@ -63,5 +63,43 @@ TEST(ContactJacobian, BodyRowsMatchTheDefinitionWithRepeatedAndFixedNodes) {
   }
 }
 
+// SelectRows against the second way to the same rows: the Jacobian of the selected contacts,
+// in the selection's (permuted) order, computed anew.
+TEST(ContactJacobian, SelectedRowsAreTheSelectedContactsJacobian) {
+  const int num_nodes = 12, num_dofs = 3 * num_nodes;
+  const std::vector<std::uint8_t> fixed(num_dofs, 0);
+  std::vector<Contact> contacts(6);
+  for (int i = 0; i < 6; ++i) {
+    contacts[i].SetBodyNodes({(5 * i) % num_nodes, (5 * i + 3) % num_nodes, 4}, {0.5, 0.3, 0.2});
+    contacts[i].n_W = Eigen::Vector3d(0.1 * i, 1.0 - 0.2 * i, 0.5).normalized();
+    contacts[i].p_tool_W_m = Eigen::Vector3d(0.01 * i, -0.02, 0.003 * i);
+  }
+  const Eigen::Vector3d x_tool_W_m(0.0, 0.01, 0.05);
+  const std::vector<int> chosen = {4, 0, 5, 2};  // contacts, out of order
+  std::vector<Contact> subset;
+  for (int i : chosen) subset.push_back(contacts[i]);
+  for (int per : {1, 3}) {
+    const ContactJacobian J_all = CalcContactJacobian(contacts, x_tool_W_m, per, num_dofs, fixed);
+    std::vector<int> rows;
+    for (int i : chosen)
+      for (int d = 0; d < per; ++d) rows.push_back(per * i + d);
+    const ContactJacobian S = SelectRows(J_all, rows);
+    const ContactJacobian expected = CalcContactJacobian(subset, x_tool_W_m, per, num_dofs, fixed);
+    EXPECT_EQ(S.rows_per_contact, per);
+    EXPECT_EQ(S.J_v, expected.J_v);
+    EXPECT_EQ(S.J_w, expected.J_w);
+    EXPECT_EQ(Eigen::MatrixXd(S.J_u), Eigen::MatrixXd(expected.J_u));
+    for (int j = 0; j < num_dofs; ++j) {  // the rows of each column sorted
+      int last_row = -1;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(S.J_u, j); it; ++it) {
+        EXPECT_GT(it.row(), last_row) << "column " << j;
+        last_row = static_cast<int>(it.row());
+      }
+    }
+    EXPECT_THROW(SelectRows(J_all, {0, 1, 0}), std::invalid_argument);
+    EXPECT_THROW(SelectRows(J_all, {J_all.num_rows()}), std::invalid_argument);
+  }
+}
+
 }  // namespace
 }  // namespace hapsim::contact
