@@ -361,12 +361,17 @@ void CollisionDetector::MergeDuplicates(int first_feature_contact, std::vector<C
   const int num_contacts = static_cast<int>(contacts->size());
   merged_away_.assign(num_contacts, 0);
   const double radius_m = options_.feature_merge_distance_m;
+  // Most pairs are far apart: a squared distance past a threshold a little above the radius's
+  // rejects them without a square root; the others take the test as it stands (block_press,
+  // frames with ≥ 200 contacts: 0.041 → 0.028 ms, the same contacts).
+  const double far_sq_m2 = radius_m * radius_m * (1.0 + 1e-9);
   for (int i = first_feature_contact; i < num_contacts; ++i) {
     const Contact& feature = (*contacts)[i];
     for (int j = 0; j < i; ++j) {
       if (merged_away_[j]) continue;
       const Contact& other = (*contacts)[j];
-      if ((feature.p_body_W_m - other.p_body_W_m).norm() > radius_m ||
+      const double distance_sq_m2 = (feature.p_body_W_m - other.p_body_W_m).squaredNorm();
+      if (distance_sq_m2 > far_sq_m2 || std::sqrt(distance_sq_m2) > radius_m ||
           feature.n_W.dot(other.n_W) < kMergeCosine)
         continue;
       if (feature.gap_m < other.gap_m) {

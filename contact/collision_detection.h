@@ -192,6 +192,12 @@ class CollisionDetector {
   Matrix3Xd tool_vertices_W_m_;                       // scratch (3 x V_tool), world, m
   Matrix3Xd tool_edge_midpoints_W_m_;                 // scratch (3 x E_tool), world, m
   Eigen::VectorXd tool_edge_half_lengths_m_;          // (E_tool): its bounding sphere's radius
+  // Runs of kToolEdgesPerGroup consecutive tool edges, each run in a sphere that holds its edges'
+  // spheres: centre in T and radius (G = E_tool / kToolEdgesPerGroup rounded up).
+  static constexpr int kToolEdgesPerGroup = 8;
+  Matrix3Xd tool_edge_group_centers_T_m_;    // (3 x G)
+  Eigen::VectorXd tool_edge_group_radii_m_;  // (G)
+  Matrix3Xd tool_edge_group_centers_W_m_;    // scratch (3 x G), world, m
 };
 
 }  // namespace hapsim::contact

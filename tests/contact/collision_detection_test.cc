@@ -518,6 +518,40 @@ TEST(CollisionDetectionTest, ToolEdgeAcrossBodyEdgeMakesOneEdgeContact) {
   }
 }
 
+// Every edge of a cube in turn across the block's edge, as the knife's is: each of the cube's 24
+// rotations S, posed at X_WT S, puts the edge S⁻¹ e (e the knife's) where the knife's edge was,
+// and each such pose makes the one edge contact. Every tool edge, whichever run of edges
+// (CollisionDetector's kToolEdgesPerGroup) its bounding sphere is checked in, is met: a run's
+// sphere of radius 0, or left in T, fails it (one short by less than the pair test's own reach,
+// half a body edge and the margin, would not).
+TEST(CollisionDetectionTest, EveryToolEdgeMeetsTheBodyEdgeItCrosses) {
+  const fem::Model body = MakeReferenceBlock();
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  KnifeEdge knife = MakeKnifeEdge(0.001);
+  const Vector3d middle_T(0.0, knife.box.half_extents_m.y(), knife.box.half_extents_m.z());
+  knife.box.half_extents_m = Vector3d::Constant(0.01);  // a cube: its rotations map it onto itself
+  knife.X_WT.translation() = knife.p_edge_W_m - knife.X_WT.linear() * middle_T;
+  DetectionOptions options;
+  options.continuous = false;
+  CollisionDetector detector(body, knife.box, options);
+  int poses = 0;
+  std::array<int, 3> axes = {0, 1, 2};
+  do {
+    for (int signs = 0; signs < 8; ++signs) {
+      Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+      for (int i = 0; i < 3; ++i) S(i, axes[i]) = (signs >> i & 1) ? -1.0 : 1.0;
+      if (S.determinant() < 0.0) continue;
+      SCOPED_TRACE("rotation " + std::to_string(poses));
+      std::vector<Contact> contacts;
+      detector.Detect(x, knife.X_WT * Isometry3d(S), x, knife.X_WT * Isometry3d(S), &contacts);
+      ASSERT_EQ(EdgeContacts(contacts).size(), 1u);
+      EXPECT_NEAR(EdgeContacts(contacts).front().gap_m, -0.001, kExactTolerance_m);
+      ++poses;
+    }
+  } while (std::next_permutation(axes.begin(), axes.end()));
+  EXPECT_EQ(poses, 24);
+}
+
 // The lowest edge of a box turned 45° about x lies along the block's top-front edge, 1 mm deep:
 // the edges are parallel and the block's nodes on it are inside the box (node contacts hold the
 // box). Turned 0.05 rad about z, the same edge crosses body edges and makes edge contacts.
