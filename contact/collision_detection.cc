@@ -94,6 +94,25 @@ CollisionDetector::CollisionDetector(const fem::Model& body, const ToolShape& to
     for (Eigen::Index i = 0; i < tool.mesh.vertices_m.cols(); ++i)
       mesh_box_T_m_.extend(Vector3d(tool.mesh.vertices_m.col(i)));
   MakeEdgeTopology();
+  MakeFeatureRuns();
+}
+
+// Each run's sphere: centred at its points' mean, reaching a nanometre past the farthest, so that
+// round-off never lets it drop a face one of its points would keep.
+void CollisionDetector::MakeFeatureRuns() {
+  const Matrix3Xd& points_T = tool_features_.vertices_T_m;
+  const Eigen::Index num_runs = (points_T.cols() + kToolFeaturesPerRun - 1) / kToolFeaturesPerRun;
+  feature_run_centers_T_m_.resize(3, num_runs);
+  feature_run_radii_m_.resize(num_runs);
+  for (Eigen::Index g = 0; g < num_runs; ++g) {
+    const Eigen::Index first = g * kToolFeaturesPerRun;
+    const Eigen::Index count = std::min<Eigen::Index>(kToolFeaturesPerRun, points_T.cols() - first);
+    const Vector3d center = points_T.middleCols(first, count).rowwise().mean();
+    feature_run_centers_T_m_.col(g) = center;
+    feature_run_radii_m_[g] =
+        (points_T.middleCols(first, count).colwise() - center).colwise().norm().maxCoeff() + 1e-9;
+  }
+  faces_near_run_.reserve(static_cast<size_t>(surface_triangles_.cols()));
 }
 
 void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
@@ -279,14 +298,28 @@ void CollisionDetector::AddFeatureContacts(const Eigen::VectorXd& x_m,
     double radius_m = 0.0;
     for (int j = 0; j < 3; ++j)
       radius_m = std::max(radius_m, (x_m.segment<3>(3 * tri[j]) - centre).norm());
-    candidate_spheres_[k] = {centre, (radius_m + reach_m) * (radius_m + reach_m)};
+    candidate_spheres_[k] = {centre, radius_m + reach_m,
+                             (radius_m + reach_m) * (radius_m + reach_m)};
   }
   for (Eigen::Index i = 0; i < num_features; ++i) {
+    // A run's faces first: those its sphere comes within reach of, in candidate order (a point
+    // within reach of a face has its run's sphere within reach too). block_press's 64 rim points
+    // each met all ~500 candidate faces, the far rim's as well.
+    if (i % kToolFeaturesPerRun == 0) {
+      const Eigen::Index g = i / kToolFeaturesPerRun;
+      const Vector3d center_W = X_WT * Vector3d(feature_run_centers_T_m_.col(g));
+      faces_near_run_.clear();
+      for (size_t k = 0; k < candidate_triangles_.size(); ++k) {
+        const double apart_m = feature_run_radii_m_[g] + candidate_spheres_[k].reach_m;
+        if ((center_W - candidate_spheres_[k].centre_W_m).squaredNorm() <= apart_m * apart_m)
+          faces_near_run_.push_back(static_cast<int>(k));
+      }
+    }
     const Vector3d v_W = X_WT * tool_features_.vertices_T_m.col(i);
     const Vector3d axis_W = X_WT.linear() * tool_features_.vertex_normals_T.col(i);
     FaceProjection best, projection;
     int best_face = -1;
-    for (size_t k = 0; k < candidate_triangles_.size(); ++k) {
+    for (const int k : faces_near_run_) {
       if ((v_W - candidate_spheres_[k].centre_W_m).squaredNorm() >
           candidate_spheres_[k].reach_sq_m2)
         continue;

@@ -138,6 +138,8 @@ class CollisionDetector {
   void FindCandidateTriangles(const Eigen::Isometry3d& X_WT, double inflation_m);
   void AddNodeContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
                        std::vector<Contact>* contacts);
+  // The feature points' runs and their spheres (feature_run_centers_T_m_, feature_run_radii_m_).
+  void MakeFeatureRuns();
   void AddFeatureContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
                           std::vector<Contact>* contacts);
   // A sphere tool's centre against the candidate faces (pipeline step 4, sphere).
@@ -170,9 +172,17 @@ class CollisionDetector {
   // which no feature point can make a contact with it.
   struct FaceSphere {
     Eigen::Vector3d centre_W_m;
+    double reach_m = 0.0;  // circumradius + reach
     double reach_sq_m2 = 0.0;
   };
   std::vector<FaceSphere> candidate_spheres_;
+  // The tool's feature points in runs of kToolFeaturesPerRun consecutive ones, each run in a
+  // sphere (centre in T, radius); the candidate faces within reach of the run's sphere (scratch,
+  // its capacity the surface's faces: AddFeatureContacts never allocates).
+  static constexpr int kToolFeaturesPerRun = 8;
+  Matrix3Xd feature_run_centers_T_m_;
+  Eigen::VectorXd feature_run_radii_m_;
+  std::vector<int> faces_near_run_;
   std::vector<int> node_visited_;     // frame stamp per body node
   std::vector<int> node_in_contact_;  // frame stamp per body node that made a node contact
   std::vector<char> merged_away_;     // per contact of the current call
