@@ -267,6 +267,8 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
                          CalcObjectPointVelocity(d.object, p_W, tool)};
   };
   int corrections = 0;
+  node_checked_stamp_.resize(static_cast<size_t>(body_->num_nodes()), 0);
+  ++sanity_stamp_;
   for (const Contact& contact : contacts_) {
     if (contact.bilateral) continue;  // a held point sits where the jaws hold it
     // Two of the body's objects: the stabilisation (β) undoes their overlap; moving a node onto
@@ -277,9 +279,16 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
                                           surface_of, body);
       continue;
     }
-    for (int k = 0; k < kMaxContactNodes; ++k) {
+    for (int k = 0; k < kMaxContactNodes && contact.nodes[k] >= 0; ++k) {  // slots [0, k) used
       const int node = contact.nodes[k];
-      if (node < 0 || body_->dof_is_fixed[3 * node]) continue;
+      if (body_->dof_is_fixed[3 * node]) continue;
+      // A node in several of the tool's contacts (a node contact, the feature contacts of its
+      // faces) is checked once: checked again against the same surface it is found where the
+      // first check left it, on or outside it.
+      if (contact.rigid_object < 0) {
+        if (node_checked_stamp_[node] == sanity_stamp_) continue;
+        node_checked_stamp_[node] = sanity_stamp_;
+      }
       const SanitySurface s = surface_of(contact, body->x_m.segment<3>(3 * node));
       if (s.distance_m >= -options_.sanity_tolerance_m) continue;
       body->x_m.segment<3>(3 * node) = s.closest_W_m;

@@ -72,6 +72,29 @@ TEST(VisualFrame, ToolAtRestOnAStiffBodyCarriesItsWeight) {
   EXPECT_LT(tool.v_W_m_s.norm(), 1e-4);
 }
 
+// The sanity pass (stage 7) moves every node the response left inside the tool onto its surface,
+// frame after frame: a box pushed 4 mm into a slab with no stabilisation (β = 0: the response
+// only stops the nodes approaching), then 3 mm further. The depth is checked against the tool's
+// distance field node by node.
+TEST(VisualFrame, SanityPassMovesTheNodesLeftInsideOutEveryFrame) {
+  const fem::Model body = MakeSlab(0.02, 5e4, false);
+  VisualFrameOptions options = MakeOptions(1.0 / 60.0, ContactLaw::kUnilateral, 0.0);
+  options.gravity_m_s2.setZero();
+  options.response.stabilization_beta = 0.0;
+  VisualFrame frame(body, fem::FemOptions{}, Eigen::VectorXd::Zero(body.num_dofs()),
+                    MakeBoxTool(0.2), options);
+  fem::State body_state = fem::MakeRestState(body);
+  ToolState tool;
+  for (const double z_m : {0.01 - 0.004, 0.01 - 0.007}) {
+    tool.x_W_m = Eigen::Vector3d(0.0, 0.0, z_m);
+    tool.v_W_m_s.setZero();
+    ASSERT_GT(CalcPenetration(frame, body_state, tool), 0.002);
+    const VisualFrameStats stats = frame.Step(DeviceState{}, &body_state, &tool);
+    EXPECT_GE(stats.num_sanity_corrections, 9);  // the 3 x 3 nodes under the box's face at least
+    EXPECT_LE(CalcPenetration(frame, body_state, tool), options.sanity_tolerance_m);
+  }
+}
+
 // The linear model's body compliance at the haptic step (ModelComplianceStep::kHaptic). With
 // A(Δt) = M + Δt D + Δt² K, A(Δt_v) − A(Δt_h) ⪰ 0 for Δt_h < Δt_v, so the body compliance
 // J A⁻¹ Jᵀ at the haptic step is at least the visual one: the body yields more, and less of a
