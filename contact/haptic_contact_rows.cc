@@ -134,7 +134,7 @@ ContactRows MakeContactRows(const ContactJacobian& J, const Eigen::MatrixXd& W_b
   // gather read W_body_all(rows[c], rows[r]) across its columns, and 720 friction rows took 0.7 ms
   // with the uncoupled entries zeroed after; about 0.3 ms now, 2026-11-27).
   // The mirror only where the lower triangle was set: a transpose of the whole n × n (block_press,
-  // ~74 of ~213 contacts coupled) took ~0.01 ms of the frame's 0.04 here.
+  // ~74 of ~213 contacts coupled): 0.04 → 0.03 ms here.
   out.W_body.setZero(n, n);
   for (int c = 0; c < n; ++c) {
     const int end = c < coupled ? coupled : FirstRowOfBlock(c, coupled, per) + per;

@@ -280,7 +280,7 @@ void VisualFrame::SolveResponse(const ToolState& tool, const fem::State& body,
 void VisualFrame::SetBodyCompliance(int num_rows) {
   const bool by_columns = options_.response.solve.law == ContactLaw::kUnilateral;
   // The rows rotated once for both compliances (they differ in A₀ alone): block_press, frames
-  // with ≥ 200 contacts, 0.11 → 0.06 ms for the two (docs/BENCHMARKS.md, ninth pass).
+  // with ≥ 200 contacts, 0.11 → 0.07 ms for the two (docs/BENCHMARKS.md, ninth pass).
   std::optional<fem::WarpedCompliance::RotatedRows> rotated;
   if (stepper_ && (warped_compliance_ || haptic_compliance_)) {
     const fem::WarpedCompliance& any =
