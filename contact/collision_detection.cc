@@ -113,6 +113,7 @@ void CollisionDetector::MakeFeatureRuns() {
         (points_T.middleCols(first, count).colwise() - center).colwise().norm().maxCoeff() + 1e-9;
   }
   faces_near_run_.reserve(static_cast<size_t>(surface_triangles_.cols()));
+  candidate_spheres_.reserve(static_cast<size_t>(surface_triangles_.cols()));
 }
 
 void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
@@ -311,7 +312,8 @@ void CollisionDetector::AddFeatureContacts(const Eigen::VectorXd& x_m,
       faces_near_run_.clear();
       for (size_t k = 0; k < candidate_triangles_.size(); ++k) {
         const double apart_m = feature_run_radii_m_[g] + candidate_spheres_[k].reach_m;
-        if ((center_W - candidate_spheres_[k].centre_W_m).squaredNorm() <= apart_m * apart_m)
+        // As the point test below: a face is dropped only when it is certainly far (not on NaN).
+        if (!((center_W - candidate_spheres_[k].centre_W_m).squaredNorm() > apart_m * apart_m))
           faces_near_run_.push_back(static_cast<int>(k));
       }
     }

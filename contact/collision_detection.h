@@ -178,7 +178,8 @@ class CollisionDetector {
   std::vector<FaceSphere> candidate_spheres_;
   // The tool's feature points in runs of kToolFeaturesPerRun consecutive ones, each run in a
   // sphere (centre in T, radius); the candidate faces within reach of the run's sphere (scratch,
-  // its capacity the surface's faces: AddFeatureContacts never allocates).
+  // its capacity the surface's faces, as candidate_spheres_': AddFeatureContacts allocates
+  // nothing).
   static constexpr int kToolFeaturesPerRun = 8;
   Matrix3Xd feature_run_centers_T_m_;
   Eigen::VectorXd feature_run_radii_m_;

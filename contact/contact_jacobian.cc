@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
+#include <utility>
 
 namespace hapsim::contact {
 namespace {
@@ -96,50 +97,48 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
   return J;
 }
 
-// Each column of J_u keeps the entries of the rows selected, renumbered; a column holds a few
-// entries (the contacts at one node), so an insertion sort restores their order.
+// J_u's entries row by row (J_uᵀ by a counting sort), taken in the new rows' order, then by column
+// (MakeColumnMajor): O(entries) however many rows a column holds (an embedded surface puts many
+// contacts on one tet node, where an insertion sort per column was quadratic).
 ContactJacobian SelectRows(const ContactJacobian& J, const std::vector<int>& rows) {
   const Eigen::Index n = static_cast<Eigen::Index>(rows.size());
-  std::vector<int> new_row(static_cast<size_t>(J.num_rows()), -1);
+  const int per = J.rows_per_contact;
+  if (n % per != 0)
+    throw std::invalid_argument("SelectRows: whole contacts, rows_per_contact rows each");
+  std::vector<char> taken(static_cast<size_t>(J.num_rows()), 0);
   for (Eigen::Index r = 0; r < n; ++r) {
     const int row = rows[static_cast<size_t>(r)];
-    if (row < 0 || row >= J.num_rows() || new_row[static_cast<size_t>(row)] >= 0)
+    if (row < 0 || row >= J.num_rows() || taken[static_cast<size_t>(row)])
       throw std::invalid_argument("SelectRows: a row outside J or given twice");
-    new_row[static_cast<size_t>(row)] = static_cast<int>(r);
+    const int first = rows[static_cast<size_t>(r - r % per)];
+    if (first % per != 0 || row != first + r % per)
+      throw std::invalid_argument("SelectRows: a contact's rows must come whole and in order");
+    taken[static_cast<size_t>(row)] = 1;
   }
   ContactJacobian S;
-  S.rows_per_contact = J.rows_per_contact;
+  S.rows_per_contact = per;
   S.J_v.resize(n, 3);
   S.J_w.resize(n, 3);
   for (Eigen::Index r = 0; r < n; ++r) {
     S.J_v.row(r) = J.J_v.row(rows[static_cast<size_t>(r)]);
     S.J_w.row(r) = J.J_w.row(rows[static_cast<size_t>(r)]);
   }
-  const Eigen::Index num_cols = J.J_u.cols();
-  S.J_u.resize(n, num_cols);
-  int* starts = S.J_u.outerIndexPtr();
-  std::fill_n(starts, num_cols + 1, 0);
-  for (Eigen::Index j = 0; j < num_cols; ++j)
+  std::vector<int> start(static_cast<size_t>(J.num_rows()) + 1, 0);
+  for (Eigen::Index j = 0; j < J.J_u.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(J.J_u, j); it; ++it) ++start[it.row() + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<std::pair<int, double>> by_row(static_cast<size_t>(start.back()));  // (col, value)
+  std::vector<int> next(start.begin(), start.end() - 1);
+  for (Eigen::Index j = 0; j < J.J_u.outerSize(); ++j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(J.J_u, j); it; ++it)
-      starts[j + 1] += new_row[static_cast<size_t>(it.row())] >= 0;
-  std::partial_sum(starts, starts + num_cols + 1, starts);
-  S.J_u.resizeNonZeros(starts[num_cols]);
-  int* inner = S.J_u.innerIndexPtr();
-  double* values = S.J_u.valuePtr();
-  for (Eigen::Index j = 0; j < num_cols; ++j) {
-    int end = starts[j];
-    for (Eigen::SparseMatrix<double>::InnerIterator it(J.J_u, j); it; ++it) {
-      const int row = new_row[static_cast<size_t>(it.row())];
-      if (row < 0) continue;
-      int k = end++;
-      for (; k > starts[j] && inner[k - 1] > row; --k) {  // insert in order
-        inner[k] = inner[k - 1];
-        values[k] = values[k - 1];
-      }
-      inner[k] = row;
-      values[k] = it.value();
-    }
+      by_row[static_cast<size_t>(next[it.row()]++)] = {static_cast<int>(j), it.value()};
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index r = 0; r < n; ++r) {
+    const int row = rows[static_cast<size_t>(r)];
+    for (int k = start[row]; k < start[row + 1]; ++k)
+      entries.emplace_back(static_cast<int>(r), by_row[k].first, by_row[k].second);
   }
+  S.J_u = MakeColumnMajor(static_cast<int>(n), static_cast<int>(J.J_u.cols()), entries);
   return S;
 }
 

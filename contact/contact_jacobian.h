@@ -34,10 +34,11 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
                                     const Eigen::Vector3d& x_tool_W_m, int rows_per_contact,
                                     int num_dofs, const std::vector<std::uint8_t>& dof_is_fixed);
 
-// The rows `rows` of J (row indices, each at most once, in the order given): J_v and J_ω
-// gathered, J_u's entries renumbered with each column's rows sorted again. The Jacobian
-// CalcContactJacobian gives for those rows' contacts at the same tool position, without copying
-// or recomputing them. Throws std::invalid_argument for a row outside J or given twice.
+// The rows `rows` of J (row indices, each at most once, in the order given, whole contacts:
+// rows_per_contact consecutive rows of one contact in their order): J_v and J_ω gathered, J_u's
+// entries renumbered with each column's rows sorted again. The Jacobian CalcContactJacobian gives
+// for those contacts at the same tool position, without copying or recomputing them. Throws
+// std::invalid_argument for a row outside J or given twice, or a contact's rows split.
 ContactJacobian SelectRows(const ContactJacobian& J, const std::vector<int>& rows);
 
 // Two unit tangents completing n to a right-handed orthonormal frame (n, t1, t2), chosen

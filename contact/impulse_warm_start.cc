@@ -1,6 +1,7 @@
 #include "contact/impulse_warm_start.h"
 
 #include <algorithm>
+#include <cassert>
 #include <stdexcept>
 #include <utility>
 
@@ -17,7 +18,10 @@ ImpulseWarmStart::Identity ImpulseWarmStart::IdentityOf(const Contact& contact) 
   // Its surface points, not its nodes: an embedded contact's first nodes are its first point's
   // tet's, which its neighbours share.
   const std::array<int, 3>& points = contact.surface_points;
-  const auto word = [](int index) { return static_cast<std::uint64_t>(index + 1); };  // ≥ −1
+  const auto word = [](int index) {  // index ≥ −1
+    assert(index >= -1);
+    return static_cast<std::uint64_t>(static_cast<std::int64_t>(index) + 1);
+  };
   return {word(points[0]) << 32 | word(points[1]),
           word(points[2]) << 32 | word(contact.rigid_object) << 1 | (contact.on_tool ? 1u : 0u)};
 }

@@ -57,6 +57,8 @@ VisualFrame::VisualFrame(const fem::Model* body, const fem::FemOptions* fem_opti
   for (size_t i = 0; i < options.rigid_objects.size(); ++i)
     if (options.rigid_objects[i].dynamic)
       dynamic_objects_.push_back(MakeDynamicObject(static_cast<int>(i), options.rigid_objects[i]));
+  if (!(options.sanity_tolerance_m > 0.0))
+    throw std::invalid_argument("VisualFrame: sanity_tolerance_m must be positive");
   if ((body == nullptr) != (fem_options == nullptr))
     throw std::invalid_argument("VisualFrame: give both the body and its FEM options, or neither");
   if (body_ != nullptr) {
@@ -283,8 +285,7 @@ void VisualFrame::SetBodyCompliance(int num_rows) {
   // with ≥ 200 contacts, 0.11 → 0.07 ms for the two (docs/BENCHMARKS.md, ninth pass).
   std::optional<fem::WarpedCompliance::RotatedRows> rotated;
   if (stepper_ && (warped_compliance_ || haptic_compliance_)) {
-    const fem::WarpedCompliance& any =
-        warped_compliance_ ? *warped_compliance_ : *haptic_compliance_;
+    fem::WarpedCompliance& any = warped_compliance_ ? *warped_compliance_ : *haptic_compliance_;
     rotated = any.RotateRows(jacobian_.J_u, stepper_->rotations());
   }
   if (!stepper_) {

@@ -263,10 +263,10 @@ class VisualFrame {
   // deepest one found.
   // *max_object_penetration_m receives the deepest body node inside a rigid object.
   int RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,
-                    double* max_object_penetration_m) const;
+                    double* max_object_penetration_m);
   // Scratch of RunSanityPass: the pass that last checked each body node against the tool.
-  mutable std::vector<int> node_checked_stamp_;
-  mutable int sanity_stamp_ = 0;
+  std::vector<int> node_checked_stamp_;
+  int sanity_stamp_ = 0;
 
   // A scripted object's mean velocity over the frame, about its origin at the frame's start.
   struct ObjectMotion {

@@ -240,7 +240,7 @@ bool MoveEmbeddedPointOut(const Contact& contact, const std::vector<std::uint8_t
 }  // namespace
 
 int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* max_penetration_m,
-                               double* max_object_penetration_m) const {
+                               double* max_object_penetration_m) {
   *max_penetration_m = 0.0;
   *max_object_penetration_m = 0.0;
   if (body_ == nullptr) return 0;
@@ -268,7 +268,10 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
   };
   int corrections = 0;
   node_checked_stamp_.resize(static_cast<size_t>(body_->num_nodes()), 0);
-  ++sanity_stamp_;
+  if (++sanity_stamp_ == std::numeric_limits<int>::max()) {  // wrap: no stale stamp may match
+    std::fill(node_checked_stamp_.begin(), node_checked_stamp_.end(), 0);
+    sanity_stamp_ = 1;
+  }
   for (const Contact& contact : contacts_) {
     if (contact.bilateral) continue;  // a held point sits where the jaws hold it
     // Two of the body's objects: the stabilisation (β) undoes their overlap; moving a node onto
@@ -284,7 +287,9 @@ int VisualFrame::RunSanityPass(const ToolState& tool, fem::State* body, double* 
       if (body_->dof_is_fixed[3 * node]) continue;
       // A node in several of the tool's contacts (a node contact, the feature contacts of its
       // faces) is checked once: checked again against the same surface it is found where the
-      // first check left it, on or outside it.
+      // first check left it, on it or outside, within sanity_tolerance_m (> 0, far above the
+      // projection's round-off). Nothing else moves it between: the tool's contacts come first
+      // in contacts_ (DetectContacts), before the objects' that also move nodes.
       if (contact.rigid_object < 0) {
         if (node_checked_stamp_[node] == sanity_stamp_) continue;
         node_checked_stamp_[node] = sanity_stamp_;

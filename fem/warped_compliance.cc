@@ -130,8 +130,7 @@ void GroupRows(const Eigen::SparseMatrix<double>& J_u, std::vector<Group>* group
 }  // namespace
 
 WarpedCompliance::RotatedRows WarpedCompliance::RotateRows(
-    const Eigen::SparseMatrix<double>& J_u,
-    const std::vector<Eigen::Matrix3d>& element_rotations) const {
+    const Eigen::SparseMatrix<double>& J_u, const std::vector<Eigen::Matrix3d>& element_rotations) {
   if (J_u.cols() != model_.num_dofs())
     throw std::invalid_argument("WarpedCompliance::RotateRows: J_u needs a column per dof");
   RotatedRows rows;

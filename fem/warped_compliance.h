@@ -75,8 +75,9 @@ class WarpedCompliance {
     std::vector<Entry> entries;
   };
   // The rows of J_u at the element rotations of the current step (TimeStepper::rotations()).
+  // Not const: it uses this object's scratch (frame_index_of_node_).
   RotatedRows RotateRows(const Eigen::SparseMatrix<double>& J_u,
-                         const std::vector<Eigen::Matrix3d>& element_rotations) const;
+                         const std::vector<Eigen::Matrix3d>& element_rotations);
   // The frame's rows, from this compliance's RotateRows or another's on the same model: solves
   // the columns of the nodes not seen before. The calls below read these rows until the next
   // SetRows. Throws std::invalid_argument for a node outside the model.
@@ -124,7 +125,7 @@ class WarpedCompliance {
   std::vector<int> slot_of_node_;            // -1: not solved yet
   std::vector<int> node_of_slot_;
   // Scratch of RotateRows: -1 between calls; the index of each frame node during one.
-  mutable std::vector<int> frame_index_of_node_;
+  std::vector<int> frame_index_of_node_;
   // C₀ between the held nodes, slot by slot: block (s, t) = C₀_ab of the nodes of slots s and t,
   // taken from the column of the later of the two (SinglePrecisionFactor::SolveColumnsAt solves a
   // new node's column at the rows of the nodes held by then). Its size is a capacity: only the

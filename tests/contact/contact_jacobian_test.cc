@@ -98,6 +98,10 @@ TEST(ContactJacobian, SelectedRowsAreTheSelectedContactsJacobian) {
     }
     EXPECT_THROW(SelectRows(J_all, {0, 1, 0}), std::invalid_argument);
     EXPECT_THROW(SelectRows(J_all, {J_all.num_rows()}), std::invalid_argument);
+    if (per == 3) {  // a contact's rows split, or out of order
+      EXPECT_THROW(SelectRows(J_all, {1, 2, 3}), std::invalid_argument);
+      EXPECT_THROW(SelectRows(J_all, {0, 2, 1}), std::invalid_argument);
+    }
   }
 }
 
