@@ -94,26 +94,28 @@ CollisionDetector::CollisionDetector(const fem::Model& body, const ToolShape& to
     for (Eigen::Index i = 0; i < tool.mesh.vertices_m.cols(); ++i)
       mesh_box_T_m_.extend(Vector3d(tool.mesh.vertices_m.col(i)));
   MakeEdgeTopology();
-  MakeFeatureRuns();
-}
-
-// Each run's sphere: centred at its points' mean, reaching a nanometre past the farthest, so that
-// round-off never lets it drop a face one of its points would keep.
-void CollisionDetector::MakeFeatureRuns() {
-  const Matrix3Xd& points_T = tool_features_.vertices_T_m;
-  const Eigen::Index num_runs = (points_T.cols() + kToolFeaturesPerRun - 1) / kToolFeaturesPerRun;
-  feature_run_centers_T_m_.resize(3, num_runs);
-  feature_run_radii_m_.resize(num_runs);
-  for (Eigen::Index g = 0; g < num_runs; ++g) {
-    const Eigen::Index first = g * kToolFeaturesPerRun;
-    const Eigen::Index count = std::min<Eigen::Index>(kToolFeaturesPerRun, points_T.cols() - first);
-    const Vector3d center = points_T.middleCols(first, count).rowwise().mean();
-    feature_run_centers_T_m_.col(g) = center;
-    feature_run_radii_m_[g] =
-        (points_T.middleCols(first, count).colwise() - center).colwise().norm().maxCoeff() + 1e-9;
-  }
+  MakeRunSpheres(tool_features_.vertices_T_m,
+                 Eigen::VectorXd::Zero(tool_features_.vertices_T_m.cols()),
+                 &feature_run_centers_T_m_, &feature_run_radii_m_);
   faces_near_run_.reserve(static_cast<size_t>(surface_triangles_.cols()));
   candidate_spheres_.reserve(static_cast<size_t>(surface_triangles_.cols()));
+}
+
+void CollisionDetector::MakeRunSpheres(const Matrix3Xd& centers_T_m, const Eigen::VectorXd& radii_m,
+                                       Matrix3Xd* run_centers_T_m, Eigen::VectorXd* run_radii_m) {
+  const Eigen::Index num_runs = (centers_T_m.cols() + kToolRun - 1) / kToolRun;
+  run_centers_T_m->resize(3, num_runs);
+  run_radii_m->resize(num_runs);
+  for (Eigen::Index g = 0; g < num_runs; ++g) {
+    const Eigen::Index first = g * kToolRun;
+    const Eigen::Index count = std::min<Eigen::Index>(kToolRun, centers_T_m.cols() - first);
+    const Vector3d center = centers_T_m.middleCols(first, count).rowwise().mean();
+    double radius_m = 0.0;
+    for (Eigen::Index j = first; j < first + count; ++j)
+      radius_m = std::max(radius_m, (centers_T_m.col(j) - center).norm() + radii_m[j]);
+    run_centers_T_m->col(g) = center;
+    (*run_radii_m)[g] = radius_m + 1e-9;
+  }
 }
 
 void CollisionDetector::Detect(const Eigen::VectorXd& x_start_m,
@@ -306,8 +308,8 @@ void CollisionDetector::AddFeatureContacts(const Eigen::VectorXd& x_m,
     // A run's faces first: those its sphere comes within reach of, in candidate order (a point
     // within reach of a face has its run's sphere within reach too). block_press's 64 rim points
     // each met all ~500 candidate faces, the far rim's as well.
-    if (i % kToolFeaturesPerRun == 0) {
-      const Eigen::Index g = i / kToolFeaturesPerRun;
+    if (i % kToolRun == 0) {
+      const Eigen::Index g = i / kToolRun;
       const Vector3d center_W = X_WT * Vector3d(feature_run_centers_T_m_.col(g));
       faces_near_run_.clear();
       for (size_t k = 0; k < candidate_triangles_.size(); ++k) {

@@ -138,8 +138,12 @@ class CollisionDetector {
   void FindCandidateTriangles(const Eigen::Isometry3d& X_WT, double inflation_m);
   void AddNodeContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
                        std::vector<Contact>* contacts);
-  // The feature points' runs and their spheres (feature_run_centers_T_m_, feature_run_radii_m_).
-  void MakeFeatureRuns();
+  // Spheres around runs of kToolRun consecutive spheres (centres in T, radii; 0 for points): each
+  // run's centred at its members' mean centre and reaching a nanometre past the farthest member, so
+  // that round-off never lets it reject what one of its members would keep. The feature points'
+  // runs and the sharp edges' (each edge in the sphere about its midpoint) come from it.
+  static void MakeRunSpheres(const Matrix3Xd& centers_T_m, const Eigen::VectorXd& radii_m,
+                             Matrix3Xd* run_centers_T_m, Eigen::VectorXd* run_radii_m);
   void AddFeatureContacts(const Eigen::VectorXd& x_m, const Eigen::Isometry3d& X_WT,
                           std::vector<Contact>* contacts);
   // A sphere tool's centre against the candidate faces (pipeline step 4, sphere).
@@ -176,11 +180,10 @@ class CollisionDetector {
     double reach_sq_m2 = 0.0;
   };
   std::vector<FaceSphere> candidate_spheres_;
-  // The tool's feature points in runs of kToolFeaturesPerRun consecutive ones, each run in a
-  // sphere (centre in T, radius); the candidate faces within reach of the run's sphere (scratch,
-  // its capacity the surface's faces, as candidate_spheres_': AddFeatureContacts allocates
-  // nothing).
-  static constexpr int kToolFeaturesPerRun = 8;
+  // The tool's feature points in runs of kToolRun consecutive ones, each run in a sphere
+  // (MakeRunSpheres); the candidate faces within reach of the run's sphere (scratch, its capacity
+  // the surface's faces, as candidate_spheres_': AddFeatureContacts allocates nothing).
+  static constexpr int kToolRun = 8;
   Matrix3Xd feature_run_centers_T_m_;
   Eigen::VectorXd feature_run_radii_m_;
   std::vector<int> faces_near_run_;
@@ -203,12 +206,11 @@ class CollisionDetector {
   Matrix3Xd tool_vertices_W_m_;                       // scratch (3 x V_tool), world, m
   Matrix3Xd tool_edge_midpoints_W_m_;                 // scratch (3 x E_tool), world, m
   Eigen::VectorXd tool_edge_half_lengths_m_;          // (E_tool): its bounding sphere's radius
-  // Runs of kToolEdgesPerGroup consecutive tool edges, each run in a sphere that holds its edges'
-  // spheres: centre in T and radius (G = E_tool / kToolEdgesPerGroup rounded up).
-  static constexpr int kToolEdgesPerGroup = 8;
-  Matrix3Xd tool_edge_group_centers_T_m_;    // (3 x G)
-  Eigen::VectorXd tool_edge_group_radii_m_;  // (G)
-  Matrix3Xd tool_edge_group_centers_W_m_;    // scratch (3 x G), world, m
+  // Runs of kToolRun consecutive tool edges, each run in a sphere that holds its edges' spheres
+  // (MakeRunSpheres): centre in T and radius (G = E_tool / kToolRun rounded up).
+  Matrix3Xd tool_edge_run_centers_T_m_;    // (3 x G)
+  Eigen::VectorXd tool_edge_run_radii_m_;  // (G)
+  Matrix3Xd tool_edge_run_centers_W_m_;    // scratch (3 x G), world, m
 };
 
 }  // namespace hapsim::contact

@@ -2,9 +2,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <numeric>
 #include <stdexcept>
-#include <utility>
+
+#include "fem/sparse_rows.h"
 
 namespace hapsim::contact {
 namespace {
@@ -97,7 +97,7 @@ ContactJacobian CalcContactJacobian(const std::vector<Contact>& contacts,
   return J;
 }
 
-// J_u's entries row by row (J_uᵀ by a counting sort), taken in the new rows' order, then by column
+// J_u's entries row by row (fem::GatherRows), taken in the new rows' order, then by column
 // (MakeColumnMajor): O(entries) however many rows a column holds (an embedded surface puts many
 // contacts on one tet node, where an insertion sort per column was quadratic).
 ContactJacobian SelectRows(const ContactJacobian& J, const std::vector<int>& rows) {
@@ -123,20 +123,12 @@ ContactJacobian SelectRows(const ContactJacobian& J, const std::vector<int>& row
     S.J_v.row(r) = J.J_v.row(rows[static_cast<size_t>(r)]);
     S.J_w.row(r) = J.J_w.row(rows[static_cast<size_t>(r)]);
   }
-  std::vector<int> start(static_cast<size_t>(J.num_rows()) + 1, 0);
-  for (Eigen::Index j = 0; j < J.J_u.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(J.J_u, j); it; ++it) ++start[it.row() + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<std::pair<int, double>> by_row(static_cast<size_t>(start.back()));  // (col, value)
-  std::vector<int> next(start.begin(), start.end() - 1);
-  for (Eigen::Index j = 0; j < J.J_u.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(J.J_u, j); it; ++it)
-      by_row[static_cast<size_t>(next[it.row()]++)] = {static_cast<int>(j), it.value()};
+  const fem::SparseRows by_row = fem::GatherRows(J.J_u);
   std::vector<Eigen::Triplet<double>> entries;
   for (Eigen::Index r = 0; r < n; ++r) {
     const int row = rows[static_cast<size_t>(r)];
-    for (int k = start[row]; k < start[row + 1]; ++k)
-      entries.emplace_back(static_cast<int>(r), by_row[k].first, by_row[k].second);
+    for (int k = by_row.start[row]; k < by_row.start[row + 1]; ++k)
+      entries.emplace_back(static_cast<int>(r), by_row.entries[k].first, by_row.entries[k].second);
   }
   S.J_u = MakeColumnMajor(static_cast<int>(n), static_cast<int>(J.J_u.cols()), entries);
   return S;

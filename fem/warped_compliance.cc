@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cstddef>
-#include <numeric>
 #include <stdexcept>
 #include <utility>
 
 #include "fem/polar_decomposition.h"
 #include "fem/single_precision_factor.h"
+#include "fem/sparse_rows.h"
 
 namespace hapsim::fem {
 
@@ -88,23 +88,12 @@ using Entry = WarpedCompliance::RotatedRows::Entry;
 // holds it (not yet rotated).
 void GroupRows(const Eigen::SparseMatrix<double>& J_u, std::vector<Group>* groups,
                std::vector<Entry>* entries) {
-  // Each row's entries in dof order, node by node: J_uᵀ by a counting sort over J_u's columns
-  // (Eigen's transpose into a sparse matrix took 0.015 ms of block_press's frame, ~210 rows).
-  const Eigen::Index num_rows = J_u.rows();
-  std::vector<int> start(static_cast<size_t>(num_rows) + 1, 0);
-  for (Eigen::Index j = 0; j < J_u.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(J_u, j); it; ++it) ++start[it.row() + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<std::pair<int, double>> by_row(static_cast<size_t>(start.back()));  // (dof, value)
-  std::vector<int> next(start.begin(), start.end() - 1);
-  for (Eigen::Index j = 0; j < J_u.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(J_u, j); it; ++it)
-      by_row[next[it.row()]++] = {static_cast<int>(j), it.value()};
+  const SparseRows by_row = GatherRows(J_u);  // each row's entries in dof order, node by node
   std::vector<Entry> row_entries;
-  for (Eigen::Index r = 0; r < num_rows; ++r) {
+  for (Eigen::Index r = 0; r < J_u.rows(); ++r) {
     row_entries.clear();
-    for (int k = start[r]; k < start[r + 1]; ++k) {
-      const auto [dof, value] = by_row[k];
+    for (int k = by_row.start[r]; k < by_row.start[r + 1]; ++k) {
+      const auto [dof, value] = by_row.entries[k];
       const int node = dof / 3;
       if (row_entries.empty() || row_entries.back().frame_node != node)
         row_entries.push_back({node});

@@ -521,7 +521,7 @@ TEST(CollisionDetectionTest, ToolEdgeAcrossBodyEdgeMakesOneEdgeContact) {
 // Every edge of a cube in turn across the block's edge, as the knife's is: each of the cube's 24
 // rotations S, posed at X_WT S, puts the edge S⁻¹ e (e the knife's) where the knife's edge was,
 // and each such pose makes the one edge contact. Every tool edge, whichever run of edges
-// (CollisionDetector's kToolEdgesPerGroup) its bounding sphere is checked in, is met: a run's
+// (CollisionDetector's kToolRun) its bounding sphere is checked in, is met: a run's
 // sphere of radius 0, or left in T, fails it (one short by less than the pair test's own reach,
 // half a body edge and the margin, would not).
 TEST(CollisionDetectionTest, EveryToolEdgeMeetsTheBodyEdgeItCrosses) {
