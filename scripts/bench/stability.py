@@ -1,6 +1,6 @@
 """Stability maps: where each method fails (issue 12, item 3).
 
-Five maps, each a sweep of `hapsim` runs with a stated criterion and the failing region shaded; each
+Six maps, each a sweep of `hapsim` runs with a stated criterion and the failing region shaded; each
 map's module states its runs, its criterion and why:
 
 1. explicit against implicit integration (`hapsim fem`, scenes/block_tiny.yaml undamped): the
@@ -17,12 +17,16 @@ map's module states its runs, its criterion and why:
 5. a stiff body under a fast tool: block_press with E 5e4–5e7 Pa, the device pressed 5 mm in
    0.8–0.01 s; it fails where the haptic tool penetrates more than 1 mm beyond the body's own give
    (both: stability_contact.py).
+6. maps 1–5 again on a quadratic body (`body.element: p2`), compared cell by cell with the
+   linear body's: a new unstable cell is one where only the quadratic body fails
+   (stability_quadratic.py).
 
 The scenes, colours and helpers the maps share are in stability_common.py.
 """
 from stability_contact import fast_map, fast_markdown, release_map, release_markdown
 from stability_explicit import explicit_map, explicit_markdown
 from stability_loops import coupling_map, coupling_markdown, penalty_map, penalty_markdown
+from stability_quadratic import quadratic_map, quadratic_markdown
 
 
 def run(bench):
@@ -36,4 +40,8 @@ def run(bench):
         output[name] = result
         output["figures"].append(figure)
         output["markdown"] += markdown(result)
+    result, figure = quadratic_map(bench, output)
+    output["quadratic"] = result
+    output["figures"].append(figure)
+    output["markdown"] += quadratic_markdown(result)
     return output

@@ -28,7 +28,7 @@ PENETRATION_LIMIT_M = 0.001
 
 # 4. equality against unilateral release --------------------------------------------------------
 
-def release_scene(bench, law, rounded=False):
+def release_scene(bench, law, rounded=False, edits=None, tag=""):
     """block_press pressed 5 mm straight down and lifted 4 mm above the start (no slide)."""
     x0 = press_scene()["tool"]["position_m"]
     z0 = x0[2]
@@ -38,18 +38,20 @@ def release_scene(bench, law, rounded=False):
               {"t_s": 1.2, "position_m": [0.0, 0.0, z0 - 0.005]},
               {"t_s": 2.0, "position_m": [0.0, 0.0, z0 + 0.004]},
               {"t_s": 2.1, "position_m": [0.0, 0.0, z0 + 0.004]}]
-    edits = {"contact.law": law, "device.trajectory": script, "time.num_steps": 70}
+    changes = {"contact.law": law, "device.trajectory": script, "time.num_steps": 70}
     if not rounded:
         cylinder = dict(press_scene()["tool"]["shape"]["cylinder"])
         cylinder.pop("edge_radius_m", None)
-        edits["tool.shape"] = {"cylinder": cylinder}
-    name = f"stab_release_{law}" + ("_rounded" if rounded else "")
-    return bench.scene_variant(PRESS, edits, name)
+        changes["tool.shape"] = {"cylinder": cylinder}
+    changes.update(edits or {})
+    name = f"stab_release_{law}" + ("_rounded" if rounded else "") + tag
+    return bench.scene_variant(PRESS, changes, name)
 
 
-def release_run(bench, law, mode, hz, rounded=False):
-    label = f"stab_release_{law}_{mode}_{hz:g}hz" + ("_rounded" if rounded else "")
-    scene = release_scene(bench, law, rounded)
+def release_run(bench, law, mode, hz, rounded=False, edits=None, tag=""):
+    """One release run; `edits` and `tag` as fast_run's."""
+    label = f"stab_release_{law}_{mode}_{hz:g}hz" + ("_rounded" if rounded else "") + tag
+    scene = release_scene(bench, law, rounded, edits, tag)
     options = ["--mode", mode] + ([] if mode == "reference" else ["--visual-hz", hz])
     summary, frames, folder = bench.sim(scene, label, *options)
     h = haptic(folder)
@@ -65,22 +67,28 @@ def release_run(bench, law, mode, hz, rounded=False):
             "max_contacts": summary["max_contacts"]}
 
 
-def release_map(bench):
-    combos = [("equality", "linear"), ("unilateral", "linear"), ("unilateral", "lcp")]
-    rates = [20.0] if bench.quick else [10.0, 20.0, 25.0, 50.0, 100.0, 200.0]
-    if bench.quick:
-        combos = [("equality", "linear"), ("unilateral", "lcp")]
+def release_grid(quick):
+    """([(law, mode), ...], [visual Hz, ...]): the cells of map 4."""
+    if quick:
+        return [("equality", "linear"), ("unilateral", "lcp")], [20.0]
+    return ([("equality", "linear"), ("unilateral", "linear"), ("unilateral", "lcp")],
+            [10.0, 20.0, 25.0, 50.0, 100.0, 200.0])
+
+
+def release_points(bench, edits=None, tag=""):
+    """Every cell of map 4, each marked `sticks` against the baseline: the 1 kHz reference run
+    on the same body (quick: the lcp mode's median). Returns (points, reference, baseline N,
+    the baseline's name)."""
+    combos, rates = release_grid(bench.quick)
     points = []
     for law, mode in combos:
         for hz in rates:
-            bench.progress(f"stability: release, {law} law, {mode}, visual {hz:g} Hz")
-            points.append(release_run(bench, law, mode, hz))
-    reference, rounded = None, None
+            bench.progress(f"stability: release{tag}, {law} law, {mode}, visual {hz:g} Hz")
+            points.append(release_run(bench, law, mode, hz, edits=edits, tag=tag))
+    reference = None
     if not bench.quick:
-        bench.progress("stability: release, reference (everything at 1 kHz; ~30 s)")
-        reference = release_run(bench, "unilateral", "reference", 1000.0)
-        bench.progress("stability: release, equality law on the scene's rounded rim, 50 Hz")
-        rounded = release_run(bench, "equality", "linear", 50.0, rounded=True)
+        bench.progress(f"stability: release{tag}, reference (everything at 1 kHz; ~30 s)")
+        reference = release_run(bench, "unilateral", "reference", 1000.0, edits=edits, tag=tag)
     if reference is not None:
         baseline, baseline_name = reference["sticking_N"], "the 1 kHz reference"
     else:
@@ -90,6 +98,16 @@ def release_map(bench):
     # A run without a finite device force (None) fails the release as surely as one that sticks.
     for p in points:
         p["sticks"] = p["sticking_N"] is None or p["sticking_N"] < baseline - STICK_MARGIN_N
+    return points, reference, baseline, baseline_name
+
+
+def release_map(bench):
+    combos, rates = release_grid(bench.quick)
+    points, reference, baseline, baseline_name = release_points(bench)
+    rounded = None
+    if not bench.quick:
+        bench.progress("stability: release, equality law on the scene's rounded rim, 50 Hz")
+        rounded = release_run(bench, "equality", "linear", 50.0, rounded=True)
     measured = [p for p in points if p["sticking_N"] is not None]
     fig, axis = plt.subplots(figsize=(8, 4.8))
     low = min([p["sticking_N"] for p in measured] + [baseline]) - 0.1
@@ -226,14 +244,16 @@ FAST_STYLES = {"hybrid": ("C4", "P", "-", 8), "linear": ("C0", "o", "-", 7),
                "penalty": ("C3", "D", "-", 6)}
 
 
+def fast_grid(quick):
+    """(moduli Pa, press times s) of the E × speed grid, the other modes, their times and E."""
+    if quick:
+        return [5e6], [0.8, 0.005], ["lcp"], [0.005], 5e6
+    times = [0.8, 0.2, 0.05, 0.02, 0.01, 0.005]
+    return [5e4, 5e5, 5e6, 5e7], times, ["lcp", "coupling", "penalty"], times, 5e6
+
+
 def fast_map(bench):
-    if bench.quick:
-        moduli, times, others, compare_E = [5e6], [0.8, 0.005], ["lcp"], 5e6
-        other_times = [0.005]
-    else:
-        moduli, times, others, compare_E = [5e4, 5e5, 5e6, 5e7], \
-            [0.8, 0.2, 0.05, 0.02, 0.01, 0.005], ["lcp", "coupling", "penalty"], 5e6
-        other_times = times
+    moduli, times, others, other_times, compare_E = fast_grid(bench.quick)
     points = []
     for mode in GRID_MODES:
         for E in moduli:

@@ -27,11 +27,13 @@ IMPLICIT_FACTOR = 100.0
 IMPLICIT_STEPS = 200
 
 
-def fem_run(bench, label, E, dt, steps, integrator="explicit"):
+def fem_run(bench, label, E, dt, steps, integrator="explicit", edits=None):
+    """One `hapsim fem` run of the undamped block; `edits` (dotted keys, as Bench.scene_variant)
+    change it further (the quadratic element: stability_quadratic.py)."""
     scene = bench.scene_variant(BLOCK, {
         "time.dt_s": dt, "time.num_steps": steps, "body.integrator": integrator,
         "body.material.youngs_modulus_Pa": E, "body.material.rayleigh_alpha_1_s": 0.0,
-        "body.material.rayleigh_beta_s": 0.0}, label)
+        "body.material.rayleigh_beta_s": 0.0, **(edits or {})}, label)
     folder = os.path.dirname(bench.path("runs", label, "summary.json"))
     for name in ("summary.json", "steps.csv"):   # a diverged run writes neither: no stale reads
         if os.path.exists(os.path.join(folder, name)):
@@ -52,31 +54,33 @@ def fem_run(bench, label, E, dt, steps, integrator="explicit"):
             "max_u_m": finite(max_u), "summary": summary}
 
 
-def explicit_limit(bench, E, tolerance):
-    tag = f"stab_explicit_E{E:g}"
-    bench.progress(f"stability: explicit, E {E:g} Pa: ω_max")
-    first = fem_run(bench, f"{tag}_omega", E, 1e-6, 1)
+def explicit_limit(bench, E, tolerance, edits=None, tag=""):
+    """Bisects the explicit limit at E; `edits` and `tag` as fast_run's (a variant's runs)."""
+    name = f"stab_explicit_E{E:g}{tag}"
+    bench.progress(f"stability: explicit{tag}, E {E:g} Pa: ω_max")
+    first = fem_run(bench, f"{name}_omega", E, 1e-6, 1, edits=edits)
     omega = first["summary"]["omega_max_rad_s"]
     theory = 2.0 / omega  # the scene variant is undamped (rayleigh 0): the plain limit
     # The bracket is checked by runs, not assumed: theory/3 must hold, 5 theory must fail
     # (asymmetric, so that no bisection point sits on the theory by construction).
     lo, hi, runs = theory / 3.0, theory * 5.0, []
     for dt, expected in ((lo, True), (hi, False)):
-        bench.progress(f"stability: explicit, E {E:g} Pa, dt {dt:.4g} s (bracket)")
-        run = fem_run(bench, f"{tag}_{len(runs):02d}", E, dt, EXPLICIT_STEPS)
+        bench.progress(f"stability: explicit{tag}, E {E:g} Pa, dt {dt:.4g} s (bracket)")
+        run = fem_run(bench, f"{name}_{len(runs):02d}", E, dt, EXPLICIT_STEPS, edits=edits)
         runs.append(run)
         if run["stable"] != expected:
             raise BenchError(f"explicit E {E:g}: dt {dt:g} s ({dt / theory:g} × 2/ω_max) "
                              f"{'failed' if expected else 'held'}; the bracket is wrong")
     while hi / lo > 1.0 + tolerance:
         dt = math.sqrt(lo * hi)
-        bench.progress(f"stability: explicit, E {E:g} Pa, dt {dt:.5g} s ({dt / theory:.4f} × 2/ω)")
-        run = fem_run(bench, f"{tag}_{len(runs):02d}", E, dt, EXPLICIT_STEPS)
+        bench.progress(f"stability: explicit{tag}, E {E:g} Pa, dt {dt:.5g} s "
+                       f"({dt / theory:.4f} × 2/ω)")
+        run = fem_run(bench, f"{name}_{len(runs):02d}", E, dt, EXPLICIT_STEPS, edits=edits)
         runs.append(run)
         lo, hi = (dt, hi) if run["stable"] else (lo, dt)
-    bench.progress(f"stability: implicit, E {E:g} Pa at {IMPLICIT_FACTOR:g} × the limit")
-    implicit = fem_run(bench, f"{tag}_implicit", E, IMPLICIT_FACTOR * theory, IMPLICIT_STEPS,
-                       "implicit")
+    bench.progress(f"stability: implicit{tag}, E {E:g} Pa at {IMPLICIT_FACTOR:g} × the limit")
+    implicit = fem_run(bench, f"{name}_implicit", E, IMPLICIT_FACTOR * theory, IMPLICIT_STEPS,
+                       "implicit", edits=edits)
     measured = math.sqrt(lo * hi)
     return {"youngs_modulus_Pa": E, "omega_max_rad_s": omega, "theory_dt_s": theory,
             "largest_stable_dt_s": lo, "smallest_unstable_dt_s": hi, "measured_dt_s": measured,
@@ -87,9 +91,13 @@ def explicit_limit(bench, E, tolerance):
                       "max_u_m": r["max_u_m"]} for r in runs]}
 
 
+def explicit_grid(quick):
+    """The moduli mapped and the bisection's relative tolerance."""
+    return ([5e4], 0.02) if quick else ([1e4, 3e4, 1e5, 3e5, 1e6, 3e6, 1e7], 0.002)
+
+
 def explicit_map(bench):
-    moduli = [5e4] if bench.quick else [1e4, 3e4, 1e5, 3e5, 1e6, 3e6, 1e7]
-    tolerance = 0.02 if bench.quick else 0.002
+    moduli, tolerance = explicit_grid(bench.quick)
     points = [explicit_limit(bench, E, tolerance) for E in moduli]
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.6),
                                       gridspec_kw={"width_ratios": [1.6, 1]})

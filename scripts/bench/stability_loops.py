@@ -54,22 +54,29 @@ def hand_run(bench, label, edits, *options):
             "max_device_travel_m": finite(np.ptp(h["device_z_m"]))}
 
 
+def coupling_grid(quick):
+    """{mode: [(k_lin N/m, visual Hz), ...]}: the cells of map 2."""
+    if quick:
+        return {"coupling": [(250.0, 50.0), (16000.0, 10.0)]}
+    ks = [250.0, 500.0, 1000.0, 2000.0, 4000.0, 8000.0, 16000.0, 32000.0]
+    rates = [10.0, 20.0, 50.0, 100.0, 200.0]
+    return {mode: [(k, hz) for k in ks for hz in rates] for mode in ("coupling", "linear")}
+
+
+def coupling_point(bench, mode, k, hz, edits=None, tag=""):
+    """One cell of map 2; `edits` and `tag` as stability_contact.fast_run's."""
+    label = f"stab_{mode}_k{k:g}_{hz:g}hz{tag}"
+    bench.progress(f"stability: {mode}{tag}, coupling k {k:g} N/m, visual {hz:g} Hz, hand")
+    point = {"mode": mode, "k_lin_N_m": k, "visual_hz": hz, "k_times_T_N_s_m": k / hz}
+    point.update(hand_run(bench, label, {"coupling.k_lin_N_m": k, "time.num_steps": 70,
+                                         **(edits or {})},
+                          "--mode", mode, "--visual-hz", hz))
+    return point
+
+
 def coupling_map(bench):
-    if bench.quick:
-        grid = {"coupling": [(250.0, 50.0), (16000.0, 10.0)]}
-    else:
-        ks = [250.0, 500.0, 1000.0, 2000.0, 4000.0, 8000.0, 16000.0, 32000.0]
-        rates = [10.0, 20.0, 50.0, 100.0, 200.0]
-        grid = {mode: [(k, hz) for k in ks for hz in rates] for mode in ("coupling", "linear")}
-    points = []
-    for mode, cells in grid.items():
-        for k, hz in cells:
-            label = f"stab_{mode}_k{k:g}_{hz:g}hz"
-            bench.progress(f"stability: {mode}, coupling k {k:g} N/m, visual {hz:g} Hz, hand")
-            point = {"mode": mode, "k_lin_N_m": k, "visual_hz": hz, "k_times_T_N_s_m": k / hz}
-            point.update(hand_run(bench, label, {"coupling.k_lin_N_m": k, "time.num_steps": 70},
-                                  "--mode", mode, "--visual-hz", hz))
-            points.append(point)
+    grid = coupling_grid(bench.quick)
+    points = [coupling_point(bench, mode, k, hz) for mode, cells in grid.items() for k, hz in cells]
     figure = coupling_chart(bench, points, list(grid))
     return {"scene": PRESS, "hand": HAND, "criterion": f"oscillation RMS > {OSC_LIMIT_N} N over "
             f"{PRESS_WINDOW_S} s", "points": points}, figure
@@ -177,24 +184,30 @@ def coupling_markdown(result):
     return md
 
 
+def penalty_grid(quick):
+    """[(penalty k N/m, haptic Hz), ...]: the cells of map 3."""
+    if quick:
+        return [(1200.0, 1000.0), (38400.0, 1000.0)]
+    return [(k, rate) for k in (600.0, 1200.0, 2400.0, 4800.0, 9600.0, 19200.0, 38400.0)
+            for rate in (250.0, 500.0, 1000.0, 2000.0)]
+
+
+def penalty_point(bench, k, rate, edits=None, tag=""):
+    """One cell of map 3; `edits` and `tag` as stability_contact.fast_run's."""
+    label = f"stab_penalty_k{k:g}_{rate:g}hz{tag}"
+    bench.progress(f"stability: penalty{tag} k {k:g} N/m, haptic {rate:g} Hz, hand")
+    point = {"mode": "penalty", "stiffness_N_m": k, "haptic_rate_hz": rate,
+             "omega_dt": math.sqrt(k / press_scene()["tool"]["mass_kg"]) / rate}
+    point.update(hand_run(bench, label, {"haptic.penalty": {"stiffness_N_m": k},
+                                         "haptic.rate_hz": rate, "time.dt_s": 0.02,
+                                         "time.num_steps": 105, **(edits or {})},
+                          "--mode", "penalty", "--visual-hz", 50))
+    return point
+
+
 def penalty_map(bench):
-    if bench.quick:
-        cells = [(1200.0, 1000.0), (38400.0, 1000.0)]
-    else:
-        cells = [(k, rate) for k in (600.0, 1200.0, 2400.0, 4800.0, 9600.0, 19200.0, 38400.0)
-                 for rate in (250.0, 500.0, 1000.0, 2000.0)]
     tool_kg = press_scene()["tool"]["mass_kg"]
-    points = []
-    for k, rate in cells:
-        label = f"stab_penalty_k{k:g}_{rate:g}hz"
-        bench.progress(f"stability: penalty k {k:g} N/m, haptic {rate:g} Hz, hand")
-        point = {"mode": "penalty", "stiffness_N_m": k, "haptic_rate_hz": rate,
-                 "omega_dt": math.sqrt(k / tool_kg) / rate}
-        point.update(hand_run(bench, label, {"haptic.penalty": {"stiffness_N_m": k},
-                                             "haptic.rate_hz": rate, "time.dt_s": 0.02,
-                                             "time.num_steps": 105},
-                              "--mode", "penalty", "--visual-hz", 50))
-        points.append(point)
+    points = [penalty_point(bench, k, rate) for k, rate in penalty_grid(bench.quick)]
     fig, axis = plt.subplots(figsize=(7, 4.8))
     cell_map(axis, points, "haptic_rate_hz", "stiffness_N_m", lambda p: p["unstable"],
              lambda p: f"{p['oscillation_rms_N']:.3f}",
