@@ -92,6 +92,9 @@ def check(results, results_dir):
                         f"({large['linear']['axial_error']:+.2f}) and caught by corotational "
                         f"({large['corotational']['axial_error']:+.2f})")
 
+    for name, c in experiments["stability"]["quadratic"]["comparison"].items():
+        if c["unmatched"]:
+            problems.append(f"quadratic {name} map: cells with no linear run {c['unmatched']}")
     for point in (experiments["stability"]["explicit"]["points"]
                   + experiments["stability"]["quadratic"]["points"]["explicit"]):
         if not abs(point["measured_over_theory"] - 1.0) < 0.02:

@@ -47,7 +47,8 @@ def hand_run(bench, label, edits, *options):
     press = oscillation(h, PRESS_WINDOW_S)
     slide = oscillation(h, SLIDE_WINDOW_S)
     return {"oscillation_rms_N": press, "slide_oscillation_rms_N": slide,
-            "unstable": press > OSC_LIMIT_N, "sustained": slide > OSC_LIMIT_N,
+            # A run whose force went non-finite fails: NaN compares false either way.
+            "unstable": not press <= OSC_LIMIT_N, "sustained": not slide <= OSC_LIMIT_N,
             "passivity_min_energy_J": finite(summary["passivity_min_energy_J"]),
             "passivity_active_at_s": finite(summary["passivity_active_at_s"]),
             "peak_force_N": finite(summary["peak_force_N"]),

@@ -62,8 +62,9 @@ def quadratic_points(bench):
 def compare(linear_points, quadratic_points, key, failed):
     """Cell by cell: the cells where only the quadratic body fails, and where only the linear."""
     linear = {key(p): failed(p) for p in linear_points}
-    new = [key(p) for p in quadratic_points if failed(p) and linear.get(key(p)) is False]
-    gone = [key(p) for p in quadratic_points if not failed(p) and linear.get(key(p)) is True]
+    new = [key(p) for p in quadratic_points if failed(p) and key(p) in linear
+           and not linear[key(p)]]
+    gone = [key(p) for p in quadratic_points if not failed(p) and linear.get(key(p), False)]
     unmatched = [key(p) for p in quadratic_points if key(p) not in linear]
     return {"cells": len(quadratic_points),
             "linear_failing": sum(linear.values()),
@@ -153,7 +154,8 @@ def quadratic_markdown(result):
           "lattice, 1,445 nodes against the linear body's 1,024; each map's own criterion, the "
           f"release against the quadratic body's own baseline, {result['points']['release_baseline']}"
           f" {result['points']['release_baseline_N']:+.3f} N): "
-          + (f"**{total_new} new unstable cells**" if total_new else "no new unstable cell")
+          + (f"**{total_new} new unstable cell{'s' if total_new > 1 else ''}**" if total_new
+             else "no new unstable cell")
           + f" in {sum(x['cells'] for x in c.values())}. Explicit Euler on the quadratic "
           f"block_tiny holds up to between {low:.4f} and {high:.4f} × its own 2/ω_max; its ω_max "
           f"is {explicit[0]['omega_max_rad_s']:.0f} rad/s at E {explicit[0]['youngs_modulus_Pa']:g}"
