@@ -133,6 +133,11 @@
 //     stabilization_beta: 0.2          # in [0, 1]: fraction of a penetration undone per frame
 //     restitution: 0.0                 # in [0, 1]
 //     margin_m: 0.001                  # ≥ 0: contacts are detected up to this gap
+//     tool_features: true              # false: only the body's nodes (or collision-surface
+//                                      # points) touch the tool: no contact where a tool corner,
+//                                      # rim point or sharp edge presses a face between nodes
+//                                      # (node-to-surface contact, the FE convention for a rigid
+//                                      # indenter; a tool narrower than a face then cuts in)
 //     compliance: warped               # warped | exact: the body's contact compliance
 //                                      # (contact/visual_frame.h ComplianceMethod)
 //     model_compliance_step: auto      # visual | haptic | auto: the step the linear contact
@@ -333,6 +338,7 @@ struct ContactScene {
   double stabilization_beta = 0.2;    // in [0, 1]
   double restitution = 0.0;           // e in [0, 1]
   double margin_m = 1e-3;             // detection margin, m
+  bool tool_features = true;          // tool features and edges against faces (detection)
   contact::ComplianceMethod compliance = contact::ComplianceMethod::kWarped;
   contact::ModelComplianceStep model_compliance_step = contact::ModelComplianceStep::kAuto;
 };

@@ -13,6 +13,8 @@ contact::VisualFrameOptions MakeVisualFrameOptions(const Scene& scene) {
   options.gravity_m_s2 = scene.gravity_m_s2;
   options.coupling = scene.coupling;
   options.detection.margin_m = scene.contact.margin_m;
+  options.detection.feature_contacts = scene.contact.tool_features;
+  options.detection.edge_contacts = scene.contact.tool_features;
   options.response.solve.law = scene.contact.law;
   options.response.solve.friction_coefficient = scene.contact.friction_coefficient;
   options.response.stabilization_beta = scene.contact.stabilization_beta;

@@ -294,7 +294,7 @@ CouplingParams ReadCoupling(const YamlMap& map) {
 
 ContactScene ReadContact(const YamlMap& map) {
   map.CheckKeys({"law", "friction_coefficient", "stabilization_beta", "restitution", "margin_m",
-                 "compliance", "model_compliance_step"});
+                 "compliance", "model_compliance_step", "tool_features"});
   ContactScene contact;
   contact.law = map.GetEnumOr("law", Choices(kContactLaws), contact.law);
   if (contact.law == ContactLaw::kFriction) {
@@ -309,6 +309,7 @@ ContactScene ReadContact(const YamlMap& map) {
   contact.restitution =
       map.GetDoubleOr("restitution", contact.restitution, ClosedInterval(0.0, 1.0));
   contact.margin_m = map.GetDoubleOr("margin_m", contact.margin_m, AtLeast(0.0));
+  contact.tool_features = map.GetBoolOr("tool_features", contact.tool_features);
   contact.compliance = map.GetEnumOr("compliance", Choices(kComplianceMethods), contact.compliance);
   contact.model_compliance_step = map.GetEnumOr(
       "model_compliance_step", Choices(kModelComplianceSteps), contact.model_compliance_step);

@@ -146,6 +146,25 @@ def sticking_text(value_N):
     return "no finite force" if value_N is None else f"{value_N:+.3f}"
 
 
+def release_table(points):
+    """Markdown rows: the sticking force (N) per law and mode against the visual rate, in bold
+    where it sticks."""
+    rates = sorted({p["visual_hz"] for p in points})
+    combos = []
+    for p in points:
+        if (p["law"], p["mode"]) not in combos:
+            combos.append((p["law"], p["mode"]))
+    md = ["| law, mode | " + " | ".join(f"{hz:g} Hz" for hz in rates) + " |",
+          "|---|" + "---:|" * len(rates)]
+    for law, mode in combos:
+        row = {p["visual_hz"]: p for p in points if (p["law"], p["mode"]) == (law, mode)}
+        md.append(f"| {law}, {mode} | " + " | ".join(
+            (f"**{sticking_text(row[hz]['sticking_N'])}**" if row[hz]["sticks"]
+             else sticking_text(row[hz]["sticking_N"])) if hz in row else "" for hz in rates)
+            + " |")
+    return md
+
+
 def release_markdown(result):
     points = result["points"]
     rates = sorted({p["visual_hz"] for p in points})
@@ -190,14 +209,7 @@ def release_markdown(result):
                    f"{rounded['max_contacts']} contacts at {rounded['visual_hz']:g} Hz (the "
                    "rim's feature points; the sharp rim has at most "
                    f"{max(p['max_contacts'] for p in points if p['law'] == 'equality')}).")
-    md += ["", "| law, mode | " + " | ".join(f"{hz:g} Hz" for hz in rates) + " |",
-           "|---|" + "---:|" * len(rates)]
-    for law, mode in combos:
-        row = {p["visual_hz"]: p for p in points if (p["law"], p["mode"]) == (law, mode)}
-        md.append(f"| {law}, {mode} | " + " | ".join(
-            (f"**{sticking_text(row[hz]['sticking_N'])}**" if row[hz]["sticks"]
-             else sticking_text(row[hz]["sticking_N"])) if hz in row else "" for hz in rates)
-            + " |")
+    md += [""] + release_table(points)
     md += ["", "(N; bold: sticks)", ""]
     return md
 

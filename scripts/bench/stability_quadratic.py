@@ -18,7 +18,8 @@ from matplotlib.patches import Patch
 
 from common import plt, save_figure
 from stability_common import FAIL_COLOR, STABLE_COLOR, cell_map
-from stability_contact import GRID_MODES, fast_grid, fast_run, release_points
+from stability_contact import (GRID_MODES, STICK_MARGIN_N, fast_grid, fast_run, release_points,
+                               release_table)
 from stability_explicit import explicit_grid, explicit_limit
 from stability_loops import coupling_grid, coupling_point, penalty_grid, penalty_point
 
@@ -81,17 +82,54 @@ def quadratic_map(bench, linear):
                     for p in linear["explicit"]["points"]}
     omega_ratios = [p["omega_max_rad_s"] / linear_omega[p["youngs_modulus_Pa"]]
                     for p in runs["explicit"] if p["youngs_modulus_Pa"] in linear_omega]
-    figure = quadratic_chart(bench, runs, comparison, linear["explicit"]["points"])
+    figure = quadratic_chart(bench, runs, comparison, linear["explicit"]["points"],
+                             linear["release"]["points"])
     return {"tiny_edits": TINY_EDITS, "press_edits": PRESS_EDITS, "points": runs,
             "comparison": comparison, "omega_max_over_linear": omega_ratios}, figure
 
 
-def quadratic_chart(bench, runs, comparison, linear_explicit):
-    fig, axes = plt.subplots(2, 3, figsize=(17.5, 9.6))
+def release_panel(axis, runs, linear_release, new_cells):
+    """The sticking force against the visual rate per law and mode, P2 solid, P1 dashed; red below
+    the P2 baseline by more than the margin; rings on the cells where only P2 sticks."""
+    baseline = runs["release_baseline_N"]
+    measured = [p for p in runs["release"] + linear_release if p["sticking_N"] is not None]
+    low = min([p["sticking_N"] for p in measured] + [baseline]) - 0.1
+    axis.axhspan(low, baseline - STICK_MARGIN_N, color=FAIL_COLOR, alpha=0.8, lw=0)
+    axis.axhline(baseline, color="k", ls="--", lw=1, label=f"P2 1 kHz reference {baseline:+.3f} N")
+    styles = {("equality", "linear"): "C3", ("unilateral", "linear"): "C0",
+              ("unilateral", "lcp"): "C2"}
+    for (law, mode), color in styles.items():
+        for points, line, body in ((runs["release"], "-", "P2"), (linear_release, "--", "P1")):
+            chosen = sorted((p for p in points if (p["law"], p["mode"]) == (law, mode)
+                             and p["sticking_N"] is not None), key=lambda p: p["visual_hz"])
+            axis.plot([p["visual_hz"] for p in chosen], [p["sticking_N"] for p in chosen],
+                      marker="o" if body == "P2" else ".", ls=line, color=color, lw=1,
+                      label=f"{body}: {law} law, --mode {mode}")
+    for p in runs["release"]:
+        if (p["law"], p["mode"], p["visual_hz"]) in new_cells and p["sticking_N"] is not None:
+            axis.plot(p["visual_hz"], p["sticking_N"], "o", ms=13, mfc="none", mec="k")
+    axis.plot([], [], "o", ms=10, mfc="none", mec="k", ls="", label="new: sticks on P2 only")
+    rates = sorted({p["visual_hz"] for p in runs["release"]})
+    axis.set(xscale="log", ylim=(low, 0.05), xlabel="visual rate (Hz)",
+             ylabel="sticking force while lifting (N)",
+             title="P2 body: release (sticking force; red: sticks)")
+    axis.set_xticks(rates)
+    axis.set_xticklabels([f"{r:g}" for r in rates])
+    axis.minorticks_off()
+    axis.title.set_fontsize(9)
+    axis.grid(True, alpha=0.3)
+    axis.legend(fontsize=6, loc="lower right")
+
+
+def quadratic_chart(bench, runs, comparison, linear_explicit, linear_release):
+    fig, axes = plt.subplots(2, 4, figsize=(22, 9.6))
     new = {name: set(c["new_failing"]) for name, c in comparison.items()}
 
     def mark(name, key):
-        return lambda p: "new" if key(p) in new[name] else ""
+        def text(p):
+            marks = ["new"] if key(p) in new[name] else []
+            return ", ".join(marks + (["tunnels"] if p.get("tunnelled") else []))
+        return text
     panels = [("coupling", "coupling", "visual_hz", "k_lin_N_m", "visual rate (Hz)",
                "coupling stiffness k_lin (N/m)"),
               ("coupling", "linear", "visual_hz", "k_lin_N_m", "visual rate (Hz)",
@@ -115,7 +153,9 @@ def quadratic_chart(bench, runs, comparison, linear_explicit):
                  title=f"P2 body, --mode {mode}: "
                        + ("penetration (mm)" if name == "fast_tool" else "oscillation RMS (N)"))
         axis.title.set_fontsize(9)
-    last = axes.flat[-1]
+    release_panel(axes.flat[5], runs, linear_release, new["release"])
+    last = axes.flat[6]
+    axes.flat[7].set_visible(False)
     for points, label, color in ((linear_explicit, "P1 (linear tets)", "k"),
                                  (runs["explicit"], "P2 (quadratic tets)", "C0")):
         Es = [p["youngs_modulus_Pa"] for p in points]
@@ -132,9 +172,11 @@ def quadratic_chart(bench, runs, comparison, linear_explicit):
                         fontsize=7, loc="upper left")
     save_figure(fig, bench.path("stability_p2.png"))
     return {"file": "stability_p2.png",
-            "caption": "Maps 2, 3 and 5 on a quadratic (P2) block_press, cell by cell as on the "
-                       "linear body ('new': fails where the linear body held), and the explicit "
-                       "limit of block_tiny with both elements against each one's 2/ω_max."}
+            "caption": "Maps 2–5 on a quadratic (P2) block_press, cell by cell as on the linear "
+                       "body ('new': fails where the linear body held; 'tunnels': no contact in "
+                       "the model while the tool is through; the release against the P1 body's "
+                       "forces, dashed), and the explicit limit of block_tiny with both elements "
+                       "against each one's 2/ω_max."}
 
 
 def ratio_text(ratios):
@@ -171,5 +213,7 @@ def quadratic_markdown(result):
                              for k in keys) or "none"
         md.append(f"| {name} | {x['cells']} | {x['linear_failing']} | {x['quadratic_failing']} | "
                   f"{cells(x['new_failing'])} | {cells(x['no_longer_failing'])} |")
-    md.append("")
+    md += ["", "The release map on the quadratic body: sticking force (N), in bold where it sticks "
+           "against the quadratic body's own baseline:", ""] + release_table(
+               result["points"]["release"]) + [""]
     return md

@@ -134,6 +134,9 @@ TEST(SimSceneTest, OptionalSectionsTakeDefaults) {
   EXPECT_EQ(scene.haptic.rate_hz, 1000.0);
   EXPECT_EQ(scene.haptic.mode, HapticMode::kHybrid);  // issue 25: the default holds a fast tool
   EXPECT_EQ(scene.contact.model_compliance_step, contact::ModelComplianceStep::kAuto);
+  EXPECT_TRUE(scene.contact.tool_features);
+  EXPECT_TRUE(MakeVisualFrameOptions(scene).detection.feature_contacts);
+  EXPECT_TRUE(MakeVisualFrameOptions(scene).detection.edge_contacts);
   EXPECT_EQ(scene.haptic.steps_per_frame, 1);
   ASSERT_EQ(scene.trajectory.size(), 1u);
 }
@@ -228,6 +231,8 @@ const BadCase kBadCases[] = {
      "allowed keys here: law, friction_coefficient"},
     {"UnknownCompliance", "margin_m: 0.002", "margin_m: 0.002\n  compliance: cached", 16,
      "contact.compliance", "one of: warped, exact"},
+    {"ToolFeaturesNotABool", "margin_m: 0.002", "margin_m: 0.002\n  tool_features: no", 16,
+     "contact.tool_features", "one of: true, false"},
     {"UnknownModelComplianceStep", "margin_m: 0.002",
      "margin_m: 0.002\n  model_compliance_step: frame", 16, "contact.model_compliance_step",
      "one of: visual, haptic, auto"},
@@ -341,6 +346,18 @@ TEST(SimSceneTest, HapticStepComplianceOnlyWithTheLinearModelsModes) {
           << error.what();
     }
   }
+}
+
+// tool_features: false leaves the detector the body's nodes alone (node-to-surface contact): the
+// feature and edge stages are both off, and nothing else in the frame's options moves.
+TEST(SimSceneTest, ToolFeaturesOffTurnsOffTheFeatureAndEdgeStages) {
+  const Scene scene = ParseScene(
+      Replace(kSimScene, "margin_m: 0.002", "margin_m: 0.002\n  tool_features: false"), kLabel, "");
+  EXPECT_FALSE(scene.contact.tool_features);
+  const contact::VisualFrameOptions options = MakeVisualFrameOptions(scene);
+  EXPECT_FALSE(options.detection.feature_contacts);
+  EXPECT_FALSE(options.detection.edge_contacts);
+  EXPECT_EQ(options.detection.margin_m, 0.002);
 }
 
 // lcp with the friction law (issue 13): accepted, the sweeps read and handed to the haptic side;

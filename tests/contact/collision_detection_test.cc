@@ -164,6 +164,43 @@ TEST(CollisionDetectionTest, SphereRestingOnBlockFindsExactlyTheNodesInside) {
   EXPECT_EQ(detector.statistics().num_contacts_after_merge, static_cast<int>(contacts.size()));
 }
 
+// A flat punch (a sharp-rimmed cylinder, radius 13 mm over 1 cm cells) pressed 2 mm into the top:
+// its rim crosses faces between their nodes. By default the rim's points and segments press those
+// faces (feature and edge contacts); with both stages off (a scene's contact.tool_features:
+// false, node-to-surface contact) exactly the surface nodes within the margin of the tool are in
+// contact, each at its closed-form signed distance, and nothing else.
+TEST(CollisionDetectionTest, PunchWithoutToolFeaturesTouchesOnlyTheNodes) {
+  const fem::Model body = MakeReferenceBlock();
+  ToolShape punch;
+  punch.kind = ToolShape::Kind::kCylinder;
+  punch.radius_m = 0.013;
+  punch.length_m = 0.02;
+  const Isometry3d X_WT =
+      Pose(Eigen::Matrix3d::Identity(), Vector3d(0.052, 0.047, 0.05 + 0.01 - 0.002));
+  const Eigen::VectorXd& x = body.rest_positions_m;
+  const auto is_node = [](const Contact& k) { return k.nodes[1] < 0; };
+  for (const bool features : {true, false}) {
+    DetectionOptions options;
+    options.continuous = false;
+    options.feature_contacts = features;
+    options.edge_contacts = features;
+    CollisionDetector detector(body, punch, options);
+    std::vector<Contact> contacts;
+    detector.Detect(x, X_WT, x, X_WT, &contacts);
+    const auto num_nodes = std::count_if(contacts.begin(), contacts.end(), is_node);
+    if (features) {
+      EXPECT_GT(detector.statistics().num_feature_contacts, 0);
+      EXPECT_GT(static_cast<long>(contacts.size()), num_nodes) << "no rim contact on a face";
+    } else {
+      EXPECT_EQ(detector.statistics().num_feature_contacts, 0);
+      EXPECT_EQ(detector.statistics().num_edge_contacts, 0);
+      EXPECT_EQ(static_cast<long>(contacts.size()), num_nodes);
+      ExpectSameGaps(NodeContactGaps(contacts),
+                     BruteForceGaps(body, x, punch, X_WT, options.margin_m));
+    }
+  }
+}
+
 // A sphere much smaller than the faces, 0.5 mm into the top between nodes (1 cm cells): no node
 // is near it, so its centre against the face under it holds it, with gap −0.5 mm along the
 // face normal. Without that contact the sphere would fall through the face.
