@@ -40,10 +40,12 @@ fem::TetMesh MakeMesh(const MeshSource& source) {
   try {
     switch (source.kind) {
       case MeshSource::Kind::kBox:
-        if (source.grading_ratio == 1.0)  // the uniform lattice, bit for bit as before grading
+        // The uniform lattice, bit for bit as before grading.
+        if (source.grading_ratio == 1.0 && source.grading_circle_radius_m == 0.0)
           return fem::MakeBoxTetMesh(source.box.min_m, source.box.max_m, source.cells);
         return fem::MakeGradedBoxTetMesh(source.box.min_m, source.box.max_m, source.cells,
-                                         source.grading_focus_m, source.grading_ratio);
+                                         source.grading_focus_m, source.grading_ratio,
+                                         source.grading_circle_radius_m);
       case MeshSource::Kind::kEllipsoid: {
         // A lattice of an even number of cells centred on the ellipsoid, with a margin: the
         // five-tet cut is then mirror-symmetric about the centre, so is the mesh.

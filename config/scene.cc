@@ -136,9 +136,11 @@ MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
     mesh.cells = box->GetVector3i("cells", AtLeast(1));
     CheckLatticeFitsMemory(*box, "cells", mesh.cells.cast<double>());
     if (const std::optional<YamlMap> graded = box->FindMap("graded")) {
-      graded->CheckKeys({"focus_m", "ratio"});
+      graded->CheckKeys({"focus_m", "ratio", "circle_radius_m"});
       mesh.grading_focus_m = graded->GetVector3("focus_m");
       mesh.grading_ratio = graded->GetDouble("ratio", AtLeast(1.0));
+      if (graded->Has("circle_radius_m"))
+        mesh.grading_circle_radius_m = graded->GetDouble("circle_radius_m", Above(0.0));
       const bool inside = (mesh.grading_focus_m.array() >= mesh.box.min_m.array()).all() &&
                           (mesh.grading_focus_m.array() <= mesh.box.max_m.array()).all();
       if (!inside) graded->FailKey("focus_m", "must lie inside the box (min_m to max_m)");

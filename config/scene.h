@@ -16,7 +16,11 @@
 //     mesh:                            # exactly one of box / ellipsoid / file / surface
 //       box: {min_m: [x,y,z], max_m: [x,y,z], cells: [nx,ny,nz]}   # max > min, cells ≥ 1
 //         # optional in box: graded: {focus_m: [x,y,z], ratio: 5}: cells grow linearly with the
-//         # distance from focus_m (inside the box) to `ratio` (≥ 1) times at the farthest face
+//         # distance from focus_m (inside the box) to `ratio` (≥ 1) times at the farthest face;
+//         # in graded, circle_radius_m: 0.003 (> 0) bends the lattice into an O-grid about the
+//         # vertical through the focus, a ring of nodes on that circle (a punch's rim;
+//         # fem::MakeGradedBoxTetMesh; the focus at the box's centre in x and y, cells in x and
+//         # y equal and even)
 //       ellipsoid: {center_m: [..], radii_m: [..], cell_size_m: h} # radii > 0, h > 0
 //       file: meshes/liver.msh         # .msh (Gmsh, any version), .node (TetGen, + .ele) or .vtk
 //                                      # (legacy VTK unstructured grid, ASCII or binary),
@@ -253,6 +257,7 @@ struct MeshSource {
   // (fem::MakeGradedAxis); ratio 1: uniform.
   Eigen::Vector3d grading_focus_m = Eigen::Vector3d::Zero();
   double grading_ratio = 1.0;
+  double grading_circle_radius_m = 0.0;  // kBox: > 0, a ring of nodes on this circle (O-grid)
   Eigen::Vector3d center_m = Eigen::Vector3d::Zero();  // kEllipsoid
   Eigen::Vector3d radii_m = Eigen::Vector3d::Ones();   // kEllipsoid
   double cell_size_m = 0.0;  // kEllipsoid: lattice cell edge; kSurface: the tets' edge

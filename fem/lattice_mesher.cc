@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace hapsim::fem {
@@ -120,6 +121,62 @@ void SnapBoundaryNodes(const ImplicitFunction& phi, double cell_size_m, TetMesh*
   }
 }
 
+// The O-grid bend of MakeGradedBoxTetMesh (lattice_mesher.h). With d the node's offset from the
+// focus in the xy-plane, ρ∞ = max(|d_x|, |d_y|) = s_m on ring m (s_m: the axis's m-th node from the
+// focus) and ρ = |d|, the node moves along d to the radius
+//   r' = R s_m / s_k                                 m ≤ k   (square ring m → circle)
+//   r' = (1 − t) R s_m / s_k + t ρ,  t = (s_m − s_k) / (s_K − s_k)   k < m < K = 2k   (fade)
+//   r' = ρ                                           m ≥ K
+// where ring k is the one whose s_k is nearest R. Along a ray at ρ∞ = c ρ, dr'/dρ stays positive
+// while (R/s_k) c − 1 < (s_K − s_k)/s_K (at least ½ on a graded axis), so the rings keep their
+// order; past that a ring may overtake the next, which the check of every tet's volume refuses.
+void BendIntoCircle(const LatticeAxes& axes, const Eigen::Vector3d& focus_m, double radius_m,
+                    TetMesh* mesh) {
+  const Eigen::VectorXd& x = axes[0];
+  const Eigen::VectorXd& y = axes[1];
+  const double tolerance_m = 1e-9 * (x[x.size() - 1] - x[0]);
+  int i0 = -1;
+  for (int i = 0; i < x.size(); ++i)
+    if (std::abs(x[i] - focus_m.x()) <= tolerance_m) i0 = i;
+  const int rings = std::min<int>(i0, static_cast<int>(x.size()) - 1 - i0);
+  bool same_axes = i0 >= 0 && x.size() == y.size() && std::abs(y[i0] - focus_m.y()) <= tolerance_m;
+  for (int m = 1; same_axes && m <= rings; ++m)
+    same_axes = std::abs((x[i0 + m] - x[i0]) - (x[i0] - x[i0 - m])) <= tolerance_m &&
+                std::abs((y[i0 + m] - y[i0]) - (x[i0 + m] - x[i0])) <= tolerance_m &&
+                std::abs((y[i0] - y[i0 - m]) - (x[i0 + m] - x[i0])) <= tolerance_m;
+  if (!same_axes)
+    throw std::invalid_argument(
+        "circle: the lattice needs a node at the focus in x and y and the same nodes in x and y "
+        "about it (the focus at the box's centre in x and y, as many cells in x as in y, an even "
+        "number)");
+  std::vector<double> s(static_cast<size_t>(rings) + 1);
+  for (int m = 0; m <= rings; ++m) s[m] = x[i0 + m] - x[i0];
+  int k = 1;
+  for (int m = 2; m <= rings; ++m)
+    if (std::abs(s[m] - radius_m) < std::abs(s[k] - radius_m)) k = m;
+  const int K = 2 * k;
+  if (K > rings)
+    throw std::invalid_argument("circle: the fade needs " + std::to_string(K) +
+                                " rings of nodes about the focus, the lattice has " +
+                                std::to_string(rings) + " (more cells, or a smaller circle)");
+  for (int n = 0; n < mesh->num_nodes(); ++n) {
+    auto p = mesh->rest_positions_m.col(n);
+    const Eigen::Vector2d d(p.x() - focus_m.x(), p.y() - focus_m.y());
+    const double rho_m = d.norm();
+    const double rho_inf_m = d.cwiseAbs().maxCoeff();
+    if (rho_inf_m >= s[K] - tolerance_m || !(rho_m > 0.0)) continue;
+    const double on_circle_m = radius_m * rho_inf_m / s[k];
+    const double t = std::clamp((rho_inf_m - s[k]) / (s[K] - s[k]), 0.0, 1.0);
+    const Eigen::Vector2d moved = d * (((1.0 - t) * on_circle_m + t * rho_m) / rho_m);
+    p.x() = focus_m.x() + moved.x();
+    p.y() = focus_m.y() + moved.y();
+  }
+  for (int t = 0; t < mesh->num_tets(); ++t)
+    if (!(CalcSignedVolume(mesh->rest_positions_m, mesh->tets.col(t)) > 0.0))
+      throw std::invalid_argument("circle: bending the lattice onto a circle of radius " +
+                                  std::to_string(radius_m) + " m folds tet " + std::to_string(t));
+}
+
 }  // namespace
 
 TetMesh MakeBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m,
@@ -160,13 +217,16 @@ Eigen::VectorXd MakeGradedAxis(double min_m, double max_m, int cells, double foc
 
 TetMesh MakeGradedBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m,
                              const Eigen::Vector3i& cells, const Eigen::Vector3d& focus_m,
-                             double ratio) {
+                             double ratio, double circle_radius_m) {
   if (!((max_m.array() > min_m.array()).all()))
     throw std::invalid_argument("box max must exceed min on every axis");
+  if (!(circle_radius_m >= 0.0)) throw std::invalid_argument("circle radius must be >= 0");
   LatticeAxes axes;
   for (int a = 0; a < 3; ++a)
     axes[a] = MakeGradedAxis(min_m[a], max_m[a], cells[a], focus_m[a], ratio);
-  return MakeLattice(axes);
+  TetMesh mesh = MakeLattice(axes);
+  if (circle_radius_m > 0.0) BendIntoCircle(axes, focus_m, circle_radius_m, &mesh);
+  return mesh;
 }
 
 TetMesh MakeImplicitTetMesh(const ImplicitFunction& phi, const Eigen::Vector3d& min_m,

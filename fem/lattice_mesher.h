@@ -26,9 +26,19 @@ TetMesh MakeBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_
 Eigen::VectorXd MakeGradedAxis(double min_m, double max_m, int cells, double focus_m, double ratio);
 
 // MakeBoxTetMesh with every axis graded by MakeGradedAxis towards the point focus_m.
+// circle_radius_m > 0: then the lattice is bent into an O-grid about the vertical line through the
+// focus, in every layer alike. Each square ring of nodes about that line moves radially onto a
+// circle, so that the ring nearest circle_radius_m lies on the circle of that radius and every
+// ring inside it on a smaller circle, and the move fades out over as many rings again outside it.
+// A flat punch or probe of that radius then has nodes all along its rim, and no face of the body
+// passes under the rim (up to the sagitta of a ring edge's chord). The rings are squares only if
+// x and y have the same nodes about the focus: throws std::invalid_argument unless the focus is a
+// node in x and y, the axes are the same there (x and y cells and extents about the focus alike),
+// and a ring lies beyond the fade; and if the bend would fold a tet (it does not for rings of
+// the circle's size give or take half).
 TetMesh MakeGradedBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m,
                              const Eigen::Vector3i& cells, const Eigen::Vector3d& focus_m,
-                             double ratio);
+                             double ratio, double circle_radius_m = 0.0);
 
 // Signed distance-like function: negative inside the body, positive outside, zero on its
 // surface, Lipschitz near the surface (a true signed distance is best).

@@ -36,13 +36,18 @@ layer formula predicts less stiffening. The punch's is not checked so: its error
 cell that the rim crosses, which no lattice of the deeper block reproduces (with a focus cell of
 the same 2.59 mm, the next node moves from 7.21 to 5.94 mm).
 
-The punch is also pressed with the tool's features off (`contact.tool_features: false`): only
-the body's nodes touch the punch, the FE convention for a rigid indenter (node-to-surface). With
-its features on, the punch's sharp rim presses each face it crosses at the rim point and holds
-the whole face at the punch's depth, so the contact's radius grows by up to one surface cell and
-the error is positive and of the rim's cell size over a; with nodes only, the contact ends at
-the outermost node under the punch and the error goes with where the mesh's nodes fall against
-the rim, either sign.
+The punch is pressed three ways (a run's `variant`):
+- "features", the scene as it is: the punch's sharp rim presses each face it crosses at the rim
+  point and holds the whole face at the punch's depth, so the contact's radius grows by up to one
+  surface cell: the error is positive, of the rim's cell size over a;
+- "nodes": the tool's features off (`contact.tool_features: false`), only the body's nodes touch
+  the punch, the FE convention for a rigid indenter (node-to-surface): the contact ends at the
+  outermost node under the punch, and the error goes with where the lattice's nodes fall against
+  the rim, either sign;
+- "rim": nodes only on the lattice bent into an O-grid with a ring of nodes on the rim
+  (`graded.circle_radius_m: a`, fem/lattice_mesher.h): no face passes under the rim, so the
+  contact's edge is the punch's, and the error is the element's (and the rim polygon's: a ring of
+  8k nodes inscribes 1 − sin(2π/8k)·8k/2π less area than the circle).
 """
 import math
 
@@ -75,26 +80,40 @@ def lattice(m):
     return (2 * m, 2 * m, m)
 
 
+# How the punch meets the body: the scene as it is, nodes only, nodes only on a rim-following
+# lattice (the module's docstring).
+VARIANTS = ("features", "nodes", "rim")
+# The rim-following lattices (P1 graded 10:1, P2 20:1, as the sweep's best), whose rings nearest
+# a = 3 mm are moved onto the rim from 2.59, 3.32, 2.59 and 3.10 mm (P1 m 8, 10, 12, 14: 16, 24,
+# 24 and 32 nodes on the rim) and from 2.71, 1.76, 3.65, 3.65 and 2.71 mm (P2 m 3, m 4,
+# 10 × 10 × 4, m 5, m 6: 8, 8, 16, 16 and 16, each with as many edge nodes on the chords).
+RIM_P1 = (8, 10, 12, 14)
+RIM_P2 = ((lattice(3), 20.0), (lattice(4), 20.0), ((10, 10, 4), 20.0), (lattice(5), 20.0),
+          (lattice(6), 20.0))
+
+
 def meshes(quick, name="hertz"):
-    """(element, cells per axis, grading ratio, tool features on) per run: mostly the 2m × 2m × m
-    lattices graded 10 times; quadratic tets also graded 20 times, where their larger cells
-    resolve the contact zone better (P2 on 2m × 2m × m at ratio 20 against 10: m 4 +5.0 % against
-    +9.1 % from the bonded layer at ν 0.45, hand runs of 2026-11-28), and on 10 × 10 × 4, between
-    m 4 and m 5. The punch again with the tool's features off (nodes only) on the meshes whose
-    frames are near 10 ms and below."""
+    """(element, cells per axis, grading ratio, variant) per run: mostly the 2m × 2m × m lattices
+    graded 10 times; quadratic tets also graded 20 times, where their larger cells resolve the
+    contact zone better (P2 on 2m × 2m × m at ratio 20 against 10: m 4 +5.0 % against +9.1 % from
+    the bonded layer at ν 0.45, hand runs of 2026-11-28), and on 10 × 10 × 4, between m 4 and m 5.
+    The punch again with nodes only, and on rim-following lattices, where frames are near 10 ms
+    and below."""
     if quick:
-        runs = [("p1", lattice(6), 10.0, True), ("p1", lattice(8), 10.0, True),
-                ("p2", lattice(3), 10.0, True)]
-        return runs + ([("p2", lattice(3), 20.0, False)] if name == "punch" else [])
-    runs = ([("p1", lattice(m), 10.0, True) for m in (6, 8, 10, 12, 14, 16)]
-            + [("p1", lattice(10), 5.0, True), ("p1", lattice(10), 20.0, True)]
-            + [("p2", lattice(m), 10.0, True) for m in (3, 4, 5, 6)]
-            + [("p2", lattice(m), 20.0, True) for m in (3, 4, 5)]
-            + [("p2", (10, 10, 4), 20.0, True)])
+        runs = [("p1", lattice(6), 10.0, "features"), ("p1", lattice(8), 10.0, "features"),
+                ("p2", lattice(3), 10.0, "features")]
+        return runs + ([("p2", lattice(4), 20.0, "rim")] if name == "punch" else [])
+    runs = ([("p1", lattice(m), 10.0, "features") for m in (6, 8, 10, 12, 14, 16)]
+            + [("p1", lattice(10), 5.0, "features"), ("p1", lattice(10), 20.0, "features")]
+            + [("p2", lattice(m), 10.0, "features") for m in (3, 4, 5, 6)]
+            + [("p2", lattice(m), 20.0, "features") for m in (3, 4, 5)]
+            + [("p2", (10, 10, 4), 20.0, "features")])
     if name == "punch":
-        runs += ([("p1", lattice(m), 10.0, False) for m in (6, 8, 10, 12)]
-                 + [("p2", lattice(m), 20.0, False) for m in (3, 4, 5)]
-                 + [("p2", (10, 10, 4), 20.0, False)])
+        runs += ([("p1", lattice(m), 10.0, "nodes") for m in (6, 8, 10, 12)]
+                 + [("p2", lattice(m), 20.0, "nodes") for m in (3, 4, 5)]
+                 + [("p2", (10, 10, 4), 20.0, "nodes")]
+                 + [("p1", lattice(m), 10.0, "rim") for m in RIM_P1]
+                 + [("p2", cells, ratio, "rim") for cells, ratio in RIM_P2])
     return runs
 
 
@@ -147,21 +166,24 @@ def mesh_name(cells):
     return f"m{cells[2]}" if tuple(cells) == lattice(cells[2]) else "x".join(map(str, cells))
 
 
-def press(bench, name, case, cells, ratio, nu=NU, element="p1", depth_scale=1, tool_features=True):
+def press(bench, name, case, cells, ratio, nu=NU, element="p1", depth_scale=1,
+          variant="features"):
     """One indentation run on a lattice of `cells` per axis graded towards the top centre; its
     fit. depth_scale 2: the block twice as deep and wide (the same cells), its top where it was;
-    tool_features False: only the body's nodes touch the tool."""
+    variant: one of VARIANTS."""
     label = (f"{name}_{element}_{mesh_name(cells)}_r{ratio:g}_nu{nu:g}"
              + ("" if depth_scale == 1 else f"_deep{depth_scale}")
-             + ("" if tool_features else "_nodes"))
+             + ("" if variant == "features" else f"_{variant}"))
     tets = 5 * cells[0] * cells[1] * cells[2]  # five tets per cell (fem/lattice_mesher.h)
     bench.progress(f"indentation: {label} ({tets} tets)")
     half_width_m, depth_m = 0.03 * depth_scale, BLOCK_DEPTH_M * depth_scale
     edits = {"body.mesh.box.cells": list(cells),
              "body.mesh.box.graded": {"focus_m": [0.0, 0.0, 0.03], "ratio": ratio},
              "body.material.poisson_ratio": nu, "body.element": element}
-    if not tool_features:
+    if variant in ("nodes", "rim"):
         edits["contact.tool_features"] = False
+    if variant == "rim":
+        edits["body.mesh.box.graded"]["circle_radius_m"] = PUNCH_A_M
     if depth_scale != 1:
         edits["body.mesh.box.min_m"] = [-half_width_m, -half_width_m, 0.03 - depth_m]
         edits["body.mesh.box.max_m"] = [half_width_m, half_width_m, 0.03]
@@ -170,7 +192,7 @@ def press(bench, name, case, cells, ratio, nu=NU, element="p1", depth_scale=1, t
     summary, frames, _ = bench.sim(bench.scene_variant(case["scene"], edits, label), label)
     coefficient, curve = fit(frames, case)
     analytic = case["coefficient_over_E_star"] * E_PA / (1.0 - nu * nu)
-    run = {"element": element, "cells": list(cells), "ratio": ratio, "tool_features": tool_features,
+    run = {"element": element, "cells": list(cells), "ratio": ratio, "variant": variant,
            "tets": tets,
            "poisson_ratio": nu, "block_depth_m": depth_m,
            "frame_ms": summary["frame_stage_median_ms"]["total"],
@@ -184,8 +206,8 @@ def press(bench, name, case, cells, ratio, nu=NU, element="p1", depth_scale=1, t
 
 def run_case(bench, name, case):
     nus = (NU,) if bench.quick else TISSUE_NUS
-    return [press(bench, name, case, cells, ratio, nu, element, tool_features=features)
-            for nu in nus for element, cells, ratio, features in meshes(bench.quick, name)]
+    return [press(bench, name, case, cells, ratio, nu, element, variant=variant)
+            for nu in nus for element, cells, ratio, variant in meshes(bench.quick, name)]
 
 
 def locking_markdown(name, at_nu, at_low_nu):
@@ -207,11 +229,11 @@ def locking_markdown(name, at_nu, at_low_nu):
     return said
 
 
-# (element, ν, tool features on): colour, marker.
-SERIES = {("p1", 0.45, True): ("k", "o"), ("p1", 0.49, True): ("0.55", "o"),
-          ("p2", 0.45, True): ("tab:blue", "s"), ("p2", 0.49, True): ("tab:cyan", "s"),
-          ("p1", 0.45, False): ("tab:red", "^"), ("p1", 0.49, False): ("lightcoral", "^"),
-          ("p2", 0.45, False): ("tab:green", "D"), ("p2", 0.49, False): ("yellowgreen", "D")}
+# (element, ν): colour, marker of a Pareto series; the variants "nodes" and "rim" share a panel
+# (the punch's right-hand one), told apart by the marker's fill.
+SERIES = {("p1", 0.45): ("k", "o"), ("p1", 0.49): ("0.55", "o"),
+          ("p2", 0.45): ("tab:blue", "s"), ("p2", 0.49): ("tab:cyan", "s")}
+VARIANT_TEXT = {"features": "", "nodes": ", nodes only", "rim": ", nodes only, rim-following"}
 
 
 def mesh_label(cells):
@@ -223,16 +245,41 @@ def mesh_label(cells):
 def label_of(r):
     return (f"{r['element'].upper()} {mesh_name(r['cells'])}"
             + ("" if r["ratio"] == 10.0 else f" r{r['ratio']:g}")
-            + ("" if r["tool_features"] else " nodes"))
+            + ("" if r["variant"] == "features" else f" {r['variant']}"))
+
+
+def pareto_panel(axis, results, variants, title):
+    labels = []
+    for variant in variants:
+        for (element, nu), (color, marker) in SERIES.items():
+            series = [r for r in results
+                      if (r["element"], r["poisson_ratio"], r["variant"]) == (element, nu, variant)]
+            if series:
+                labels += draw_pareto(
+                    axis, [(r["frame_ms"], 100 * r["layer_relative_error"]) for r in series],
+                    [label_of(r) for r in series], color=color,
+                    marker=marker if variant != "nodes" else "^",
+                    name=f"{element.upper()}, ν {nu:g}{VARIANT_TEXT[variant]}")
+    axis.axhline(0.0, color="k", lw=0.8)
+    axis.set(xscale="log", xlabel="median visual frame (ms)",
+             ylabel="error against the bonded layer (%)", title=title)
+    axis.title.set_fontsize(10)
+    axis.legend(fontsize=6)
+    axis.grid(True, alpha=0.3)
+    place_labels(axis, labels)
 
 
 def chart(bench, name, case, results):
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.6))
+    node_variants = [v for v in ("nodes", "rim") if any(r["variant"] == v for r in results)]
+    fig, axes = plt.subplots(1, 3 if node_variants else 2,
+                             figsize=(18 if node_variants else 12, 4.8))
+    left = axes[0]
     # Linear tets graded 10:1 (their best grading), quadratic 20:1 (theirs) and 10:1 where the
     # quick sweep has no 20:1 mesh.
     best_ratio = {"p1": 10.0, "p2": 20.0 if any(r["element"] == "p2" and r["ratio"] == 20.0
-                                                  and r["tool_features"] for r in results) else 10.0}
-    shown = [r for r in results if r["poisson_ratio"] == NU and r["tool_features"]
+                                                  and r["variant"] == "features" for r in results)
+                  else 10.0}
+    shown = [r for r in results if r["poisson_ratio"] == NU and r["variant"] == "features"
              and r["ratio"] == best_ratio[r["element"]]]
     top_d = max(d for r in shown for d, _ in r["curve"])
     ds = [top_d * i / 100 for i in range(101)]
@@ -249,33 +296,26 @@ def chart(bench, name, case, results):
     left.axvspan(1e3 * case["window_m"][0], 1e3 * case["window_m"][1], color="0.9", zorder=0)
     left.set(xlabel="depth below the undeformed top (mm)", ylabel="contact force (N)",
              title=f"{name}, ν {NU}: force against depth (grey: fit window)")
+    left.title.set_fontsize(10)
     left.legend(fontsize=6)
-    labels = []
-    for (element, nu, features), (color, marker) in SERIES.items():
-        series = [r for r in results if (r["element"], r["poisson_ratio"], r["tool_features"])
-                  == (element, nu, features)]
-        if series:
-            labels += draw_pareto(right,
-                                  [(r["frame_ms"], 100 * r["layer_relative_error"]) for r in series],
-                                  [label_of(r) for r in series], color=color, marker=marker,
-                                  name=f"{element.upper()}, ν {nu:g}"
-                                  + ("" if features else ", nodes only"))
-    right.axhline(0.0, color="k", lw=0.8)
-    right.set(xscale="log", xlabel="median visual frame (ms)",
-              ylabel="error of the fitted coefficient (%)",
-              title=f"{name}: error against the bonded layer, against cost\n(lines: Pareto fronts)")
-    right.legend(fontsize=7)
-    for axis in (left, right):
-        axis.grid(True, alpha=0.3)
-    place_labels(right, labels)
+    left.grid(True, alpha=0.3)
+    pareto_panel(axes[1], results, ["features"],
+                 f"{name}: error against cost" + (", the scene's contact" if node_variants else "")
+                 + "\n(lines: Pareto fronts)")
+    if node_variants:
+        pareto_panel(axes[2], results, node_variants,
+                     f"{name}: nodes only (triangles), and on lattices\nfollowing the rim "
+                     "(lines: Pareto fronts)")
     save_figure(fig, bench.path(f"{name}.png"))
     return {"file": f"{name}.png",
             "caption": f"{case['law']}: force against depth per mesh (ν {NU}; linear tets graded "
-                       "10:1 solid, quadratic 20:1 dashed; the half-space and the bonded 30 mm layer in black), "
-                       "and the fitted coefficient's error against the bonded layer over the "
-                       "median visual frame for both elements at ν 0.45 and 0.49"
-                       + ("" if name == "hertz" else ", with the tool's features on and off "
-                          "(nodes only)") + "."}
+                       "10:1 solid, quadratic 20:1 dashed; the half-space and the bonded 30 mm "
+                       "layer in black), and the fitted coefficient's error against the bonded "
+                       "layer over the median visual frame for both elements at ν 0.45 and 0.49"
+                       + ("" if not node_variants else
+                          "; the scene's contact (its rim's features press the faces under it), "
+                          "and only the body's nodes touching the punch, on the lattices and on "
+                          "lattices with a ring of nodes on the rim") + "."}
 
 
 def error_at_cost(front_runs, frame_ms, key):
@@ -300,8 +340,8 @@ def comparison_markdown(name, results):
     key = "layer_relative_error"
     for nu in sorted({r["poisson_ratio"] for r in results}):
         for r in (r for r in results if r["element"] == "p2" and r["poisson_ratio"] == nu):
-            p1 = [q for q in results if (q["element"], q["poisson_ratio"], q["tool_features"])
-                  == ("p1", nu, r["tool_features"])]
+            p1 = [q for q in results if (q["element"], q["poisson_ratio"], q["variant"])
+                  == ("p1", nu, r["variant"])]
             p1_error = error_at_cost(p1, r["frame_ms"], key)
             if p1_error is None or abs(p1_error) < 1e-3:
                 lines.append(f"- ν {nu:g}, {label_of(r)} ({r['frame_ms']:.1f} ms): "
@@ -320,15 +360,15 @@ def table_markdown(name, results):
           f"ν 0.49: frame, {head} |", "|---|---:|---:|---:|"]
     keys = []
     for r in results:
-        key = (r["element"], tuple(r["cells"]), r["ratio"], r["tool_features"])
+        key = (r["element"], tuple(r["cells"]), r["ratio"], r["variant"])
         if key not in keys:
             keys.append(key)
-    for element, cells, ratio, features in keys:
+    for element, cells, ratio, variant in keys:
         cells_md = []
         for nu in TISSUE_NUS:
             r = next((r for r in results if (r["element"], tuple(r["cells"]), r["ratio"],
-                                             r["tool_features"], r["poisson_ratio"])
-                      == (element, cells, ratio, features, nu)), None)
+                                             r["variant"], r["poisson_ratio"])
+                      == (element, cells, ratio, variant, nu)), None)
             if r is None:
                 cells_md.append("–")
                 continue
@@ -336,7 +376,7 @@ def table_markdown(name, results):
                             f"{100 * r['layer_relative_error']:+.1f} %")
         tets = 5 * cells[0] * cells[1] * cells[2]
         md.append(f"| {element.upper()}, {mesh_label(cells)}, ratio {ratio:g}"
-                  f"{'' if features else ', nodes only'} | {tets} | {cells_md[0]} | {cells_md[1]} |")
+                  f"{VARIANT_TEXT[variant]} | {tets} | {cells_md[0]} | {cells_md[1]} |")
     return md
 
 
@@ -390,7 +430,8 @@ def run(bench):
         md += table_markdown(name, results)
         md.append("")
         md.append("Quadratic against linear at the same frame cost (errors against the bonded "
-                  "layer" + ("; nodes only against nodes only):" if name == "punch" else "):"))
+                  "layer" + ("; each way of contact against the same way):" if name == "punch"
+                             else "):"))
         md.append("")
         md += comparison_markdown(name, results)
         md.append("")
@@ -398,7 +439,7 @@ def run(bench):
             md += [locking_markdown(name, at_nu, at_low_nu), ""]
         if name == "hertz" and not bench.quick:
             standard = next(r for r in results
-                            if (r["element"], tuple(r["cells"]), r["ratio"], r["tool_features"],
+                            if (r["element"], tuple(r["cells"]), r["ratio"], r["variant"],
                                 r["poisson_ratio"]) == ("p2", lattice(4), 10.0, True, NU))
             deep = press(bench, name, case, lattice(8), 10.0, NU, "p2", depth_scale=2)
             output[name]["deep_block_run"] = {k: v for k, v in deep.items() if k != "curve"}

@@ -238,6 +238,9 @@ const BadCase kBadCases[] = {
      "cells: [12, 12, 5], graded: {focus_m: [0, "
      "0, 0.05], ratio: 0.5}",
      9, "body.mesh.box.graded.ratio", ">= 1"},
+    {"GradingCircleZero", "cells: [12, 12, 5]",
+     "cells: [12, 12, 5], graded: {focus_m: [0, 0, 0.05], ratio: 4, circle_radius_m: 0}", 9,
+     "body.mesh.box.graded.circle_radius_m", "> 0"},
     {"ToleranceOne", "relative_tolerance: 1e-8", "relative_tolerance: 1", 18,
      "body.solver.relative_tolerance", "in (0, 1)"},
     {"ToleranceZero", "relative_tolerance: 1e-8", "relative_tolerance: 0", 18,

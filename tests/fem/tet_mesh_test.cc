@@ -100,6 +100,50 @@ TEST(LatticeMesher, GradedBoxIsAConformingBox) {
   EXPECT_NEAR(VolumeFromSurface(mesh, ExtractBoundarySurface(mesh)), box_volume_m3, 1e-15);
 }
 
+// The O-grid bend for a punch of radius R = 3 mm over the 16 × 16 × 8 lattice graded 10 times: the
+// ring of nodes whose axis coordinate is nearest R (ring k, found here from the axis) lies on the
+// circle, 8k nodes in each of the 9 layers; nodes from ring 2k outwards keep their places; the box
+// is whole (its sides were not moved) and no tet folds.
+TEST(LatticeMesher, CircleBendPutsARingOfNodesOnTheCircle) {
+  const Eigen::Vector3d min_m(-0.03, -0.03, 0.0), max_m(0.03, 0.03, 0.03), focus_m(0, 0, 0.03);
+  const Eigen::Vector3i cells(16, 16, 8);
+  constexpr double kRadius_m = 0.003;
+  const TetMesh straight = MakeGradedBoxTetMesh(min_m, max_m, cells, focus_m, 10.0);
+  const TetMesh bent = MakeGradedBoxTetMesh(min_m, max_m, cells, focus_m, 10.0, kRadius_m);
+  const Eigen::VectorXd axis = MakeGradedAxis(-0.03, 0.03, 16, 0.0, 10.0);
+  int k = 1;  // axis[8] is the focus
+  for (int m = 2; m <= 8; ++m)
+    if (std::abs(axis[8 + m] - kRadius_m) < std::abs(axis[8 + k] - kRadius_m)) k = m;
+  ASSERT_EQ(k, 2);  // the ring at 2.59 mm
+  int on_circle = 0;
+  for (int n = 0; n < bent.num_nodes(); ++n) {
+    const Eigen::Vector3d p = bent.rest_positions_m.col(n);
+    const Eigen::Vector3d q = straight.rest_positions_m.col(n);
+    EXPECT_EQ(p.z(), q.z());
+    const double chebyshev_m = std::max(std::abs(q.x()), std::abs(q.y()));
+    if (std::abs(chebyshev_m - axis[8 + k]) < 1e-12) {
+      EXPECT_NEAR(std::hypot(p.x(), p.y()), kRadius_m, 1e-15);
+      ++on_circle;
+    }
+    if (chebyshev_m >= axis[8 + 2 * k] - 1e-12) {
+      EXPECT_EQ(p, q);
+    }
+  }
+  EXPECT_EQ(on_circle, 8 * k * (cells.z() + 1));
+  EXPECT_FALSE(FindRestMeshProblem(bent).has_value());
+  EXPECT_NEAR(SumOfVolumes(bent), 0.06 * 0.06 * 0.03, 1e-15);
+  EXPECT_NEAR(VolumeFromSurface(bent, ExtractBoundarySurface(bent)), 0.06 * 0.06 * 0.03, 1e-15);
+  // Rings not alike in x and y, no node at the focus, or too few rings for the fade: refused.
+  EXPECT_THROW(MakeGradedBoxTetMesh(min_m, max_m, {16, 12, 8}, focus_m, 10.0, kRadius_m),
+               std::invalid_argument);
+  EXPECT_THROW(MakeGradedBoxTetMesh(min_m, max_m, {15, 15, 8}, focus_m, 10.0, kRadius_m),
+               std::invalid_argument);
+  EXPECT_THROW(MakeGradedBoxTetMesh(min_m, max_m, cells, {0.001, 0, 0.03}, 10.0, kRadius_m),
+               std::invalid_argument);
+  EXPECT_THROW(MakeGradedBoxTetMesh(min_m, max_m, cells, focus_m, 10.0, 0.02),
+               std::invalid_argument);
+}
+
 TEST(LatticeMesher, EllipsoidVolumeConvergesToAnalytic) {
   const Eigen::Vector3d radii_m(0.06, 0.04, 0.03);
   const double exact_m3 = 4.0 / 3.0 * M_PI * radii_m.prod();
