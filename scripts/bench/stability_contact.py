@@ -101,6 +101,15 @@ def release_points(bench, edits=None, tag=""):
     return points, reference, baseline, baseline_name
 
 
+def release_axis(axis, rates, low, ylabel, title):
+    """A release chart's axes: the visual rates on a log axis, the sticking force from `low`."""
+    axis.set(xscale="log", ylim=(low, 0.05), xlabel="visual rate (Hz)", ylabel=ylabel, title=title)
+    axis.set_xticks(rates)
+    axis.set_xticklabels([f"{r:g}" for r in rates])
+    axis.minorticks_off()
+    axis.grid(True, alpha=0.3)
+
+
 def release_map(bench):
     combos, rates = release_grid(bench.quick)
     points, reference, baseline, baseline_name = release_points(bench)
@@ -123,13 +132,8 @@ def release_map(bench):
         axis.plot([p["visual_hz"] for p in chosen], [p["sticking_N"] for p in chosen],
                   marker=marker, color=color, label=f"{law} law, --mode {mode}")
     axis.axhline(0, color="0.5", lw=0.8)
-    axis.set(xscale="log", ylim=(low, 0.05), xlabel="visual rate (Hz)",
-             ylabel="sticking force: min(F_z) + m_tool g while lifting (N)",
-             title="Release: pull on the device beyond the tool's weight (sharp-rim block_press)")
-    axis.set_xticks(rates)
-    axis.set_xticklabels([f"{r:g}" for r in rates])
-    axis.minorticks_off()
-    axis.grid(True, alpha=0.3)
+    release_axis(axis, rates, low, "sticking force: min(F_z) + m_tool g while lifting (N)",
+                 "Release: pull on the device beyond the tool's weight (sharp-rim block_press)")
     axis.legend(fontsize=7, loc="lower right")
     save_figure(fig, bench.path("stability_release.png"))
     figure = {"file": "stability_release.png",

@@ -18,8 +18,8 @@ from matplotlib.patches import Patch
 
 from common import plt, save_figure
 from stability_common import FAIL_COLOR, STABLE_COLOR, cell_map
-from stability_contact import (GRID_MODES, STICK_MARGIN_N, fast_grid, fast_run, release_points,
-                               release_table)
+from stability_contact import (GRID_MODES, STICK_MARGIN_N, fast_grid, fast_run, release_axis,
+                               release_points, release_table)
 from stability_explicit import explicit_grid, explicit_limit
 from stability_loops import coupling_grid, coupling_point, penalty_grid, penalty_point
 
@@ -109,15 +109,9 @@ def release_panel(axis, runs, linear_release, new_cells):
         if (p["law"], p["mode"], p["visual_hz"]) in new_cells and p["sticking_N"] is not None:
             axis.plot(p["visual_hz"], p["sticking_N"], "o", ms=13, mfc="none", mec="k")
     axis.plot([], [], "o", ms=10, mfc="none", mec="k", ls="", label="new: sticks on P2 only")
-    rates = sorted({p["visual_hz"] for p in runs["release"]})
-    axis.set(xscale="log", ylim=(low, 0.05), xlabel="visual rate (Hz)",
-             ylabel="sticking force while lifting (N)",
-             title="P2 body: release (sticking force; red: sticks)")
-    axis.set_xticks(rates)
-    axis.set_xticklabels([f"{r:g}" for r in rates])
-    axis.minorticks_off()
+    release_axis(axis, sorted({p["visual_hz"] for p in runs["release"]}), low,
+                 "sticking force while lifting (N)", "P2 body: release (sticking force; red: sticks)")
     axis.title.set_fontsize(9)
-    axis.grid(True, alpha=0.3)
     axis.legend(fontsize=6, loc="lower right")
 
 
