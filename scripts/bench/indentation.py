@@ -440,7 +440,7 @@ def run(bench):
         if name == "hertz" and not bench.quick:
             standard = next(r for r in results
                             if (r["element"], tuple(r["cells"]), r["ratio"], r["variant"],
-                                r["poisson_ratio"]) == ("p2", lattice(4), 10.0, True, NU))
+                                r["poisson_ratio"]) == ("p2", lattice(4), 10.0, "features", NU))
             deep = press(bench, name, case, lattice(8), 10.0, NU, "p2", depth_scale=2)
             output[name]["deep_block_run"] = {k: v for k, v in deep.items() if k != "curve"}
             md += [depth_check_markdown(standard, deep), ""]
