@@ -138,10 +138,11 @@
 //     restitution: 0.0                 # in [0, 1]
 //     margin_m: 0.001                  # ≥ 0: contacts are detected up to this gap
 //     tool_features: true              # false: only the body's nodes (or collision-surface
-//                                      # points) touch the tool: no contact where a tool corner,
-//                                      # rim point or sharp edge presses a face between nodes
-//                                      # (node-to-surface contact, the FE convention for a rigid
-//                                      # indenter; a tool narrower than a face then cuts in)
+//                                      # points) touch the tool, and a sphere's centre the faces:
+//                                      # no contact where a tool corner, rim point or sharp edge
+//                                      # presses a face between nodes (node-to-surface contact,
+//                                      # the FE convention for a rigid indenter; a tool narrower
+//                                      # than a face then cuts in)
 //     compliance: warped               # warped | exact: the body's contact compliance
 //                                      # (contact/visual_frame.h ComplianceMethod)
 //     model_compliance_step: auto      # visual | haptic | auto: the step the linear contact

@@ -127,9 +127,10 @@ void SnapBoundaryNodes(const ImplicitFunction& phi, double cell_size_m, TetMesh*
 //   r' = R s_m / s_k                                 m ≤ k   (square ring m → circle)
 //   r' = (1 − t) R s_m / s_k + t ρ,  t = (s_m − s_k) / (s_K − s_k)   k < m < K = 2k   (fade)
 //   r' = ρ                                           m ≥ K
-// where ring k is the one whose s_k is nearest R. Along a ray at ρ∞ = c ρ, dr'/dρ stays positive
-// while (R/s_k) c − 1 < (s_K − s_k)/s_K (at least ½ on a graded axis), so the rings keep their
-// order; past that a ring may overtake the next, which the check of every tet's volume refuses.
+// where ring k is the one whose s_k is nearest R. Along a ray at ρ∞ = c ρ the interpolation's
+// dr'/dρ stays positive while (R/s_k) c − 1 < (s_K − s_k)/s_K (at least ½ on a graded axis); that
+// bounds the continuous map, not the lattice, which may hold past it (P2 m 4 graded 20:1 has
+// R/s_k = 1.7 and no fold). What decides is the check of every tet's volume after the move.
 void BendIntoCircle(const LatticeAxes& axes, const Eigen::Vector3d& focus_m, double radius_m,
                     TetMesh* mesh) {
   const Eigen::VectorXd& x = axes[0];
@@ -147,8 +148,8 @@ void BendIntoCircle(const LatticeAxes& axes, const Eigen::Vector3d& focus_m, dou
   if (!same_axes)
     throw std::invalid_argument(
         "circle: the lattice needs a node at the focus in x and y and the same nodes in x and y "
-        "about it (the focus at the box's centre in x and y, as many cells in x as in y, an even "
-        "number)");
+        "about it (the box as wide in y as in x, the focus at its centre in x and y, as many "
+        "cells in x as in y, an even number)");
   std::vector<double> s(static_cast<size_t>(rings) + 1);
   for (int m = 0; m <= rings; ++m) s[m] = x[i0 + m] - x[i0];
   int k = 1;
@@ -159,17 +160,18 @@ void BendIntoCircle(const LatticeAxes& axes, const Eigen::Vector3d& focus_m, dou
     throw std::invalid_argument("circle: the fade needs " + std::to_string(K) +
                                 " rings of nodes about the focus, the lattice has " +
                                 std::to_string(rings) + " (more cells, or a smaller circle)");
+  const Eigen::Vector2d centre_m(x[i0], y[i0]);  // the focus's node, exactly
   for (int n = 0; n < mesh->num_nodes(); ++n) {
     auto p = mesh->rest_positions_m.col(n);
-    const Eigen::Vector2d d(p.x() - focus_m.x(), p.y() - focus_m.y());
+    const Eigen::Vector2d d = Eigen::Vector2d(p.x(), p.y()) - centre_m;
     const double rho_m = d.norm();
     const double rho_inf_m = d.cwiseAbs().maxCoeff();
     if (rho_inf_m >= s[K] - tolerance_m || !(rho_m > 0.0)) continue;
     const double on_circle_m = radius_m * rho_inf_m / s[k];
     const double t = std::clamp((rho_inf_m - s[k]) / (s[K] - s[k]), 0.0, 1.0);
     const Eigen::Vector2d moved = d * (((1.0 - t) * on_circle_m + t * rho_m) / rho_m);
-    p.x() = focus_m.x() + moved.x();
-    p.y() = focus_m.y() + moved.y();
+    p.x() = centre_m.x() + moved.x();
+    p.y() = centre_m.y() + moved.y();
   }
   for (int t = 0; t < mesh->num_tets(); ++t)
     if (!(CalcSignedVolume(mesh->rest_positions_m, mesh->tets.col(t)) > 0.0))

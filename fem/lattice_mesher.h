@@ -34,8 +34,10 @@ Eigen::VectorXd MakeGradedAxis(double min_m, double max_m, int cells, double foc
 // passes under the rim (up to the sagitta of a ring edge's chord). The rings are squares only if
 // x and y have the same nodes about the focus: throws std::invalid_argument unless the focus is a
 // node in x and y, the axes are the same there (x and y cells and extents about the focus alike),
-// and a ring lies beyond the fade; and if the bend would fold a tet (it does not for rings of
-// the circle's size give or take half).
+// and the fade's outer ring (2k, ring k the circle's) lies within the box; and if the bend folds
+// a tet (checked after the move, whatever the rings' sizes). The bend squeezes the cells along
+// the square rings' diagonals: on 16 × 16 × 8 cells graded 10:1 with a 3 mm circle the worst tet's
+// quality falls from 0.067 to 0.026, in the tall cells deep under the focus.
 TetMesh MakeGradedBoxTetMesh(const Eigen::Vector3d& min_m, const Eigen::Vector3d& max_m,
                              const Eigen::Vector3i& cells, const Eigen::Vector3d& focus_m,
                              double ratio, double circle_radius_m = 0.0);

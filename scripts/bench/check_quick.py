@@ -9,7 +9,8 @@ the bench did not produce:
   displacement FEM, and a block bonded at its base, are stiffer than the half-space: error > 0)
   and within the quick meshes' band (Hertz < 50 %, punch < 90 %), falling with refinement; the
   quadratic tets on 8x fewer tets than the coarsest linear lattice also stiffer than the closed
-  form, but less stiff than that lattice;
+  form, but less stiff than that lattice; the punch on the rim-following lattice (nodes only)
+  within 25 % of the bonded layer's coefficient;
 - cantilever: the small-load tip deflection of the finest quick mesh within 15 % of beam theory,
   and the linear element law missing the large-load axial shortening that the corotational one
   captures;
@@ -80,6 +81,14 @@ def check(results, results_dir):
         if not runs[-1]["relative_error"] < runs[0]["relative_error"]:
             problems.append(f"{name}: error does not fall with refinement: "
                             f"{[round(r['relative_error'], 3) for r in runs]}")
+
+    # The punch on the rim-following lattice, nodes only: its footprint is the punch's, so its
+    # coefficient is within a quarter of the bonded layer's (a conforming FEM's excess, either sign
+    # from the rim polygon's missing area).
+    for r in experiments["indentation"]["punch"]["runs"]:
+        if r["variant"] == "rim" and not abs(r["layer_relative_error"]) < 0.25:
+            problems.append(f"punch on the rim-following lattice: {r['layer_relative_error']:+.3f} "
+                            "against the bonded layer, not within 25 %")
 
     cantilever = experiments["cantilever"]["runs"]
     along_x = [r for r in cantilever if r["orientation"] == "x" and r["element"] == "p1"]

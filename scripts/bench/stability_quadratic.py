@@ -95,7 +95,8 @@ def release_panel(axis, runs, linear_release, new_cells):
     measured = [p for p in runs["release"] + linear_release if p["sticking_N"] is not None]
     low = min([p["sticking_N"] for p in measured] + [baseline]) - 0.1
     axis.axhspan(low, baseline - STICK_MARGIN_N, color=FAIL_COLOR, alpha=0.8, lw=0)
-    axis.axhline(baseline, color="k", ls="--", lw=1, label=f"P2 1 kHz reference {baseline:+.3f} N")
+    axis.axhline(baseline, color="k", ls="--", lw=1,
+                 label=f"P2: {runs['release_baseline'].split(' (')[0]} {baseline:+.3f} N")
     styles = {("equality", "linear"): "C3", ("unilateral", "linear"): "C0",
               ("unilateral", "lcp"): "C2"}
     for (law, mode), color in styles.items():
@@ -169,7 +170,8 @@ def quadratic_chart(bench, runs, comparison, linear_explicit, linear_release):
             "caption": "Maps 2–5 on a quadratic (P2) block_press, cell by cell as on the linear "
                        "body ('new': fails where the linear body held; 'tunnels': no contact in "
                        "the model while the tool is through; the release against the P1 body's "
-                       "forces, dashed), and the explicit limit of block_tiny with both elements "
+                       "forces, dashed, each body's cells judged against its own baseline), and "
+                       "the explicit limit of block_tiny with both elements "
                        "against each one's 2/ω_max."}
 
 

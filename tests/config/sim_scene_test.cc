@@ -349,7 +349,7 @@ TEST(SimSceneTest, HapticStepComplianceOnlyWithTheLinearModelsModes) {
 }
 
 // tool_features: false leaves the detector the body's nodes alone (node-to-surface contact): the
-// feature and edge stages are both off, and nothing else in the frame's options moves.
+// feature and edge stages are both off; the margin is the scene's still.
 TEST(SimSceneTest, ToolFeaturesOffTurnsOffTheFeatureAndEdgeStages) {
   const Scene scene = ParseScene(
       Replace(kSimScene, "margin_m: 0.002", "margin_m: 0.002\n  tool_features: false"), kLabel, "");

@@ -102,8 +102,10 @@ TEST(LatticeMesher, GradedBoxIsAConformingBox) {
 
 // The O-grid bend for a punch of radius R = 3 mm over the 16 × 16 × 8 lattice graded 10 times: the
 // ring of nodes whose axis coordinate is nearest R (ring k, found here from the axis) lies on the
-// circle, 8k nodes in each of the 9 layers; nodes from ring 2k outwards keep their places; the box
-// is whole (its sides were not moved) and no tet folds.
+// circle, 8k nodes in each of the 9 layers; ring 1 inside it on the circle R s₁/s_k; the fade's
+// ring between where the bend and the straight lattice would put it; every node keeps its height
+// and its direction from the focus; nodes from ring 2k outwards keep their places; no tet folds or
+// flattens.
 TEST(LatticeMesher, CircleBendPutsARingOfNodesOnTheCircle) {
   const Eigen::Vector3d min_m(-0.03, -0.03, 0.0), max_m(0.03, 0.03, 0.03), focus_m(0, 0, 0.03);
   const Eigen::Vector3i cells(16, 16, 8);
@@ -111,30 +113,53 @@ TEST(LatticeMesher, CircleBendPutsARingOfNodesOnTheCircle) {
   const TetMesh straight = MakeGradedBoxTetMesh(min_m, max_m, cells, focus_m, 10.0);
   const TetMesh bent = MakeGradedBoxTetMesh(min_m, max_m, cells, focus_m, 10.0, kRadius_m);
   const Eigen::VectorXd axis = MakeGradedAxis(-0.03, 0.03, 16, 0.0, 10.0);
-  int k = 1;  // axis[8] is the focus
+  const auto s = [&](int ring) { return axis[8 + ring]; };  // axis[8] is the focus
+  int k = 1;
   for (int m = 2; m <= 8; ++m)
-    if (std::abs(axis[8 + m] - kRadius_m) < std::abs(axis[8 + k] - kRadius_m)) k = m;
+    if (std::abs(s(m) - kRadius_m) < std::abs(s(k) - kRadius_m)) k = m;
   ASSERT_EQ(k, 2);  // the ring at 2.59 mm
-  int on_circle = 0;
+  int on_circle = 0, on_inner_circle = 0, in_fade = 0;
   for (int n = 0; n < bent.num_nodes(); ++n) {
     const Eigen::Vector3d p = bent.rest_positions_m.col(n);
     const Eigen::Vector3d q = straight.rest_positions_m.col(n);
     EXPECT_EQ(p.z(), q.z());
-    const double chebyshev_m = std::max(std::abs(q.x()), std::abs(q.y()));
-    if (std::abs(chebyshev_m - axis[8 + k]) < 1e-12) {
-      EXPECT_NEAR(std::hypot(p.x(), p.y()), kRadius_m, 1e-15);
-      ++on_circle;
+    const double radius_m = std::hypot(p.x(), p.y()), straight_radius_m = std::hypot(q.x(), q.y());
+    if (straight_radius_m > 0.0) {  // the same direction from the focus's vertical
+      EXPECT_NEAR(p.x() * q.y() - p.y() * q.x(), 0.0, 1e-18);
+      EXPECT_GT(p.x() * q.x() + p.y() * q.y(), 0.0);
     }
-    if (chebyshev_m >= axis[8 + 2 * k] - 1e-12) {
+    const double chebyshev_m = std::max(std::abs(q.x()), std::abs(q.y()));
+    if (std::abs(chebyshev_m - s(k)) < 1e-12) {
+      EXPECT_NEAR(radius_m, kRadius_m, 1e-15);
+      ++on_circle;
+    } else if (std::abs(chebyshev_m - s(1)) < 1e-12) {
+      EXPECT_NEAR(radius_m, kRadius_m * s(1) / s(k), 1e-15);
+      ++on_inner_circle;
+    } else if (std::abs(chebyshev_m - s(3)) < 1e-12) {
+      const double bent_limit_m = kRadius_m * s(3) / s(k);
+      EXPECT_GE(radius_m, std::min(bent_limit_m, straight_radius_m) - 1e-15);
+      EXPECT_LE(radius_m, std::max(bent_limit_m, straight_radius_m) + 1e-15);
+      ++in_fade;
+    } else if (chebyshev_m >= s(2 * k) - 1e-12 || chebyshev_m == 0.0) {
       EXPECT_EQ(p, q);
     }
   }
   EXPECT_EQ(on_circle, 8 * k * (cells.z() + 1));
+  EXPECT_EQ(on_inner_circle, 8 * (cells.z() + 1));
+  EXPECT_EQ(in_fade, 24 * (cells.z() + 1));
   EXPECT_FALSE(FindRestMeshProblem(bent).has_value());
-  EXPECT_NEAR(SumOfVolumes(bent), 0.06 * 0.06 * 0.03, 1e-15);
-  EXPECT_NEAR(VolumeFromSurface(bent, ExtractBoundarySurface(bent)), 0.06 * 0.06 * 0.03, 1e-15);
-  // Rings not alike in x and y, no node at the focus, or too few rings for the fade: refused.
+  double min_quality = 1.0;
+  for (int t = 0; t < bent.num_tets(); ++t)
+    min_quality = std::min(min_quality, CalcTetQuality(bent.rest_positions_m, bent.tets.col(t)));
+  // Not a sliver (near 0). The graded lattice's own worst tet is 0.067 (cells ten times longer
+  // than wide); the bend squeezes the tall cells deep under the focus to 0.026.
+  EXPECT_GT(min_quality, 0.02);
+  // Rings not alike in x and y (another cell count, or a box narrower in y), no node at the focus,
+  // or too few rings for the fade: refused.
   EXPECT_THROW(MakeGradedBoxTetMesh(min_m, max_m, {16, 12, 8}, focus_m, 10.0, kRadius_m),
+               std::invalid_argument);
+  EXPECT_THROW(MakeGradedBoxTetMesh(min_m, {0.03, 0.02, 0.03}, cells, {0, -0.005, 0.03}, 10.0,
+                                    kRadius_m),
                std::invalid_argument);
   EXPECT_THROW(MakeGradedBoxTetMesh(min_m, max_m, {15, 15, 8}, focus_m, 10.0, kRadius_m),
                std::invalid_argument);
