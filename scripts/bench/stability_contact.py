@@ -101,6 +101,12 @@ def release_points(bench, edits=None, tag=""):
     return points, reference, baseline, baseline_name
 
 
+# The release map's (law, mode) pairs: colour and marker, the same on the linear and quadratic
+# bodies' charts.
+RELEASE_STYLES = {("equality", "linear"): ("C3", "o"), ("unilateral", "linear"): ("C0", "s"),
+                  ("unilateral", "lcp"): ("C2", "^")}
+
+
 def release_axis(axis, rates, low, ylabel, title):
     """A release chart's axes: the visual rates on a log axis, the sticking force from `low`."""
     axis.set(xscale="log", ylim=(low, 0.05), xlabel="visual rate (Hz)", ylabel=ylabel, title=title)
@@ -124,11 +130,9 @@ def release_map(bench):
                  label=f"sticks: pulls > {STICK_MARGIN_N:g} N beyond "
                        f"{baseline_name.split(' (')[0]}")
     axis.axhline(baseline, color="k", ls="--", lw=1, label=f"{baseline_name}: {baseline:+.3f} N")
-    styles = {("equality", "linear"): ("C3", "o"), ("unilateral", "linear"): ("C0", "s"),
-              ("unilateral", "lcp"): ("C2", "^")}
     for law, mode in combos:
         chosen = [p for p in measured if p["law"] == law and p["mode"] == mode]
-        color, marker = styles[(law, mode)]
+        color, marker = RELEASE_STYLES[(law, mode)]
         axis.plot([p["visual_hz"] for p in chosen], [p["sticking_N"] for p in chosen],
                   marker=marker, color=color, label=f"{law} law, --mode {mode}")
     axis.axhline(0, color="0.5", lw=0.8)

@@ -18,8 +18,8 @@ from matplotlib.patches import Patch
 
 from common import plt, save_figure
 from stability_common import FAIL_COLOR, STABLE_COLOR, cell_map
-from stability_contact import (GRID_MODES, STICK_MARGIN_N, fast_grid, fast_run, release_axis,
-                               release_points, release_table)
+from stability_contact import (GRID_MODES, RELEASE_STYLES, STICK_MARGIN_N, fast_grid, fast_run,
+                               release_axis, release_points, release_table)
 from stability_explicit import explicit_grid, explicit_limit
 from stability_loops import coupling_grid, coupling_point, penalty_grid, penalty_point
 
@@ -97,9 +97,7 @@ def release_panel(axis, runs, linear_release, new_cells):
     axis.axhspan(low, baseline - STICK_MARGIN_N, color=FAIL_COLOR, alpha=0.8, lw=0)
     axis.axhline(baseline, color="k", ls="--", lw=1,
                  label=f"P2: {runs['release_baseline'].split(' (')[0]} {baseline:+.3f} N")
-    styles = {("equality", "linear"): "C3", ("unilateral", "linear"): "C0",
-              ("unilateral", "lcp"): "C2"}
-    for (law, mode), color in styles.items():
+    for (law, mode), (color, _) in RELEASE_STYLES.items():
         for points, line, body in ((runs["release"], "-", "P2"), (linear_release, "--", "P1")):
             chosen = sorted((p for p in points if (p["law"], p["mode"]) == (law, mode)
                              and p["sticking_N"] is not None), key=lambda p: p["visual_hz"])
