@@ -14,13 +14,18 @@ namespace hapsim::contact {
 namespace {
 
 ContactSolveReport SolveEquality(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
-                                 Eigen::VectorXd* lambda) {
+                                 double compliance, Eigen::VectorXd* lambda) {
   ContactSolveReport report;
-  // Rank-revealing, as redundant contacts (one body point twice, or many on a rigid part) make W
-  // singular; the minimum-norm λ then shares the load between them.
-  *lambda = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(dt_s * W).solve(rhs);
+  // Δt (W + ε w̄ I) λ = rhs, w̄ the mean of W's diagonal: a compliance ε w̄ in series with each row
+  // (constraint force mixing). Nearly redundant rows, to which the exact solve (ε = 0) gives large
+  // forces of both signs that nearly cancel, then share their load (contact_solver.h says why).
+  Eigen::MatrixXd A = dt_s * W;
+  if (A.rows() > 0) A.diagonal().array() += compliance * A.diagonal().mean();
+  // Rank-revealing, as at ε = 0 redundant contacts (one body point twice, or many on a rigid
+  // part) make W singular; the minimum-norm λ then shares the load between them.
+  *lambda = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(A).solve(rhs);
   const double rhs_norm = rhs.norm();
-  report.residual = rhs_norm > 0.0 ? (dt_s * W * *lambda - rhs).norm() / rhs_norm : 0.0;
+  report.residual = rhs_norm > 0.0 ? (A * *lambda - rhs).norm() / rhs_norm : 0.0;
   report.converged = lambda->allFinite();
   return report;
 }
@@ -389,13 +394,15 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
                                     [](std::uint8_t b) { return b != 0; });
   if (any_bilateral && options.law == ContactLaw::kFriction)
     throw std::invalid_argument("bilateral rows are not supported with the friction law");
+  if (!(options.equality_compliance >= 0.0))
+    throw std::invalid_argument("equality_compliance must be >= 0");
   if (friction_per_contact && friction_per_contact->size() * rows_per_contact != rhs.size())
     throw std::invalid_argument("friction_per_contact needs one μ per contact");
   if (lambda->size() != rhs.size()) lambda->setZero(rhs.size());
   if (rhs.size() == 0) return ContactSolveReport{0, 0.0, true};
   switch (options.law) {
     case ContactLaw::kEquality:
-      return SolveEquality(W, rhs, dt_s, lambda);
+      return SolveEquality(W, rhs, dt_s, options.equality_compliance, lambda);
     case ContactLaw::kUnilateral:
       if (rows_per_contact != 1)
         throw std::invalid_argument("unilateral contact uses normal rows only");

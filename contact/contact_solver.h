@@ -1,7 +1,7 @@
 #pragma once
 // Contact impulses from the Delassus matrix (DESIGN.md §4), three laws behind one function:
 //
-//   equality   (the paper)  Δt W λ = b − c_free                          dense, rank-revealing
+//   equality   (the paper)  Δt (W + ε w̄ I) λ = b − c_free                dense, rank-revealing
 //   unilateral (Signorini)  c = c_free − b + Δt W λ ≥ 0, λ ≥ 0, cᵀλ = 0  primal active set
 //   friction   (Coulomb)    normal rows as unilateral; per contact the tangential impulse in the
 //                           disc |λ_t| ≤ μ λ_n, opposite the slip on its rim: blocked projected
@@ -12,6 +12,19 @@
 // only when the coupling's torque Jacobian is (zero rotation error), and singular when contacts are
 // redundant, so the equality solve uses a complete orthogonal decomposition rather than LDLᵀ. `rhs`
 // = b − c_free, with b the position stabilisation −β φ/Δt plus any restitution target.
+//
+// Why the equality law has a compliance ε w̄ per row (w̄ the mean of W's diagonal, ε 1e-4 by
+// default): rows that are nearly, not exactly, redundant, such as the tool's rim points on faces
+// whose nodes are held by rows of their own. W's condition number on block_press's frames runs
+// 10⁸ to 10¹⁵. The exact solve (ε = 0) answers with large row forces of both signs that nearly
+// cancel: pressed 5 mm at 100 Hz, the largest row force of a frame had a median of 308 N on the
+// linear body and 1,190 N on the quadratic one, for a net force of 3.3 N. With ε = 1e-4 those
+// medians are 0.68 N and 0.47 N. On the quadratic body the cancelling was not exact enough: the
+// tool sank 0.24 mm further than under the unilateral law and left 0.8 mm penetrations, and the
+// release map's 50 to 200 Hz cells stuck (docs/RESULTS.md). A row's own force changes by a
+// fraction ~ε (0.01 %). A nearly redundant pair's difference of λ is bounded by their difference
+// of rhs over Δt ε w̄. On that map ε 1e-5 still left P2 at 20 Hz 40 mN stickier than at 1e-4; 1e-4
+// and 1e-3 agree within 6 mN. ε = 0 is the exact solve.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -39,11 +52,13 @@ struct ContactSolveOptions {
   FrictionMethod friction_method = FrictionMethod::kWorkingSet;
   int max_iterations = 500;  // Gauss–Seidel sweeps
   double tolerance = 1e-12;  // on the complementarity residual, relative (see below)
+  double equality_compliance = 1e-4;  // kEquality only: ε above, ≥ 0
 };
 
 struct ContactSolveReport {
   int iterations = 0;  // Gauss–Seidel sweeps (0 for the direct equality solve)
-  double residual = 0.0;  // max_i |min(λ_i, c_i)|·Δt‖W‖-scaled, or ‖ΔtWλ − rhs‖/‖rhs‖ for equality
+  // max_i |min(λ_i, c_i)|·Δt‖W‖-scaled, or ‖Δt(W + εw̄I)λ − rhs‖/‖rhs‖ for equality
+  double residual = 0.0;
   bool converged = false;
   int newton_steps = 0;  // kFriction, FrictionMethod::kWorkingSet: Newton steps tried (kept or not)
 };

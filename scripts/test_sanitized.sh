@@ -50,17 +50,27 @@ run_asan() {
   # the MultirateSimulator tests run here too. And bench_quick_test: a minute of `hapsim sim`
   # and `hapsim fem` runs sized for a Release build (several times that under ASan), whose code
   # paths the unit and command tests run here. (Its script skips itself under HAPSIM_SANITIZED,
-  # which tests/CMakeLists.txt sets for the script tests of a sanitized build.)
+  # which tests/CMakeLists.txt sets for the script tests of a sanitized build.) And four scene
+  # tests whose seconds of simulated time, much of it in the reference mode (every stage at
+  # 1 kHz), ran 20-25 times slower under ASan than in Release: 390 s of the suite's 732 s of test
+  # time, the first alone 182 s (CI on the AMD VM, 2026-11-29). Their code runs here in shorter
+  # tests: the reference, linear and lcp modes on block_press (MultirateSimulator.Equality...),
+  # the grasp and its release on retraction.yaml (Retraction.ReleaseLetsGo..., TissueGrasp.*),
+  # the exact compliance (contact_compliance_test), and organs.yaml and retraction.yaml across
+  # processes (two_process_test's check 11).
   # The window tests (view_test, train_test) run without LeakSanitizer: Mesa's software OpenGL
   # leaves 112 bytes allocated from its JIT-compiled code (a stack of calloc and an unknown
   # module, nothing to name in a suppression); every other ASan check stays on. Under ASan the
   # visual process is several times slower than the 50 Hz the trainer's scene needs, so
   # train_test checks that the session runs and ends cleanly and reports itself skipped (77).
+  local left_out=('^BlockPressAccuracy\.' '^bench_quick_test$' '^view_test$' '^train_test$'
+    '^Organs\.LiftedOrganWeighsOnTheDevice$' '^Retraction\.PullBetweenFramesFollowsTheReference$'
+    '^TwoOrgans\.LaggedExactComplianceFeelsWhatAFreshFactorFeels$'
+    '^MultirateSimulator\.LinearModelIsCloserToTheReferenceThanCoupling$')
   (cd build-asan &&
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1 \
       UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-      ctest --output-on-failure -j"$jobs" --timeout 900 \
-        -E '^BlockPressAccuracy\.|^bench_quick_test$|^view_test$|^train_test$') ||
+      ctest --output-on-failure -j"$jobs" --timeout 900 -E "$(IFS='|'; echo "${left_out[*]}")") ||
     status=1
   (cd build-asan &&
     ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:strict_string_checks=1 \

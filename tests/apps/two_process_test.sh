@@ -73,15 +73,25 @@ PY
 }
 
 # A disturbed run is repeated up to three times. Under a sanitizer once: its frames fall behind the
-# haptic clock, so the forces cannot agree, and each attempt costs a minute or more.
+# haptic clock, so the forces cannot agree, and each attempt costs a minute or more. For the same
+# reason the sanitized run compares no forces with a reference run (checks 1, 6, 10 and 11)
+# and makes no in-process reference run: it checks the runs, their logs and bit-exact replays,
+# under the sanitizer; the agreement is the unsanitized run's to check. (Under ASan the test took
+# 256 s with them and ended inconclusive, skipped; 153 s without, passed: AMD VM, 2026-11-29.)
 attempts=3
-[ -n "${HAPSIM_SANITIZED:-}" ] && attempts=1
+compare_forces=1
+if [ -n "${HAPSIM_SANITIZED:-}" ]; then
+  attempts=1
+  compare_forces=0
+  echo "sanitized build: one attempt a run, and no force agreement with the in-process simulator"
+fi
 
 # 1. A whole run, logged. A host that stalls the machine can still make the kernel drop a
 # datagram (the log then misses a step, which replay reports) or delay the models beyond what
 # the tolerance below allows: either way the run is repeated ($attempts times at most), and said
 # so. A replay that differs from a complete log fails at once.
-"$hapsim" sim "$scene" --out "$work/sim" > /dev/null  # the scene's mode, as `run` takes it
+[ "$compare_forces" -eq 0 ] ||  # the scene's mode, as `run` takes it
+  "$hapsim" sim "$scene" --out "$work/sim" > /dev/null
 good=0
 for attempt in $(seq "$attempts"); do
   "$hapsim" run "$scene" --lcm-url "$url" --log "$work/run.lcm" \
@@ -94,7 +104,7 @@ for attempt in $(seq "$attempts"); do
     continue
   fi
   grep -q "reproduced bit for bit" "$work/replay.out" || fail "replay: $(cat "$work/replay.out")"
-  if ! agrees_with_in_process "$work/haptic.json" "$work/logged.csv"; then
+  if [ "$compare_forces" -eq 1 ] && ! agrees_with_in_process "$work/haptic.json" "$work/logged.csv"; then
     echo "attempt $attempt: forces outside the tolerance (a run the host disturbed?); running again"
     continue
   fi
@@ -212,7 +222,8 @@ for attempt in $(seq "$attempts"); do
       replayed=0
     fi
   done
-  if [ "$replayed" -eq 1 ] && /usr/bin/python3 - "$work/external.csv" "$work/hand.csv" <<'PY'
+  if [ "$replayed" -eq 1 ] && { [ "$compare_forces" -eq 0 ] ||
+    /usr/bin/python3 - "$work/external.csv" "$work/hand.csv"; } <<'PY'
 import csv, math, sys
 external = list(csv.DictReader(open(sys.argv[1])))
 hand = list(csv.DictReader(open(sys.argv[2])))
@@ -446,8 +457,10 @@ assert s["messages_rejected"] >= 120, s["messages_rejected"]
 assert s["models_rejected"] >= 40, s["models_rejected"]
 assert s["foreign_messages"] >= 40, s["foreign_messages"]
 PY
-agrees_with_in_process "$work/hostile.json" "$work/hostile.csv" | sed "s/^/under a hostile publisher: /" ||
-  inconclusive="${inconclusive:+$inconclusive; }the run under a hostile publisher disagreed (host?)"
+if [ "$compare_forces" -eq 1 ]; then
+  agrees_with_in_process "$work/hostile.json" "$work/hostile.csv" | sed "s/^/under a hostile publisher: /" ||
+    inconclusive="${inconclusive:+$inconclusive; }the run under a hostile publisher disagreed (host?)"
+fi
 
 # 11. The papers' 1 kHz modes: the world travels with the models; and a grasp, organs that touch
 # and an instrument that falls (issue 28: scenes/retraction.yaml, organs.yaml, drop.yaml,
@@ -476,7 +489,8 @@ for entry in "probe:godobject" "peg_in_hole:penalty" "retraction:hybrid" "organs
   "drop:hybrid"; do
   name=${entry%%:*}
   mode=${entry#*:}
-  "$hapsim" sim "scenes/$name.yaml" --mode "$mode" --out "$work/sim_$name" > /dev/null
+  [ "$compare_forces" -eq 0 ] ||
+    "$hapsim" sim "scenes/$name.yaml" --mode "$mode" --out "$work/sim_$name" > /dev/null
   good=0
   for attempt in $(seq "$attempts"); do
     "$hapsim" run "scenes/$name.yaml" --mode "$mode" --lcm-url "$url" --log "$work/$name.lcm" \
@@ -491,8 +505,8 @@ for entry in "probe:godobject" "peg_in_hole:penalty" "retraction:hybrid" "organs
     fi
     grep -q "reproduced bit for bit" "$work/${name}_replay.out" ||
       fail "$name replay: $(cat "$work/${name}_replay.out")"
-    if ! papers_mode_agrees "$work/$name.json" "$work/$name.csv" "$work/sim_$name/haptic.csv" \
-      "$name $mode"; then
+    if [ "$compare_forces" -eq 1 ] && ! papers_mode_agrees "$work/$name.json" "$work/$name.csv" \
+      "$work/sim_$name/haptic.csv" "$name $mode"; then
       echo "$name attempt $attempt: forces outside the tolerance (host?); running again"
       continue
     fi

@@ -1,5 +1,6 @@
 // Contact response and the linear contact model against independent values:
-//  - the equality solve through W against the paper's full KKT system (eq. 10) solved densely;
+//  - the equality solve through W against the paper's full KKT system (eq. 10) solved densely,
+//    exact and with its default compliance; nearly redundant rows against the 2 × 2 closed form;
 //  - projected Gauss–Seidel against an exhaustive enumeration of LCP active sets;
 //  - Coulomb friction on a decoupled contact against its closed form (stick / slide);
 //  - the linear contact model against re-solving the constraints under perturbed F̂, T̂.
@@ -8,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -90,12 +92,19 @@ Assembled Assemble(const Problem& p, int rows_per_contact) {
   return a;
 }
 
-TEST(ContactResponse, EqualitySolveMatchesFullKktSystem) {
+// The exact law (ε = 0) and the default, whose compliance ε w̄ per row is the KKT system's
+// lower-right block Δt ε w̄ I (c_post + Δt ε w̄ λ = b).
+class EqualityCompliance : public ::testing::TestWithParam<double> {};
+
+TEST_P(EqualityCompliance, EqualitySolveMatchesFullKktSystem) {
+  const double epsilon = GetParam();
   const Problem p = MakeProblem(5, 1);
   const Assembled a = Assemble(p, 1);
+  ContactSolveOptions options{ContactLaw::kEquality};
+  options.equality_compliance = epsilon;
   Eigen::VectorXd lambda;
   const ContactSolveReport report =
-      SolveContactImpulses(a.W, p.b - a.c_free, kDt_s, 1, {ContactLaw::kEquality}, &lambda);
+      SolveContactImpulses(a.W, p.b - a.c_free, kDt_s, 1, options, &lambda);
   EXPECT_LT(report.residual, 1e-12);
 
   // The paper's eq. (10): unknowns (Δv, ΔL, Δu̇, λ), assembled and solved densely.
@@ -112,6 +121,8 @@ TEST(ContactResponse, EqualitySolveMatchesFullKktSystem) {
   K.block(6 + kNumDofs, 0, n, 3) = a.J.J_v;
   K.block(6 + kNumDofs, 3, n, 3) = a.J.J_w * p.tool.M_inv_W;
   K.block(6 + kNumDofs, 6, n, kNumDofs) = J_u;
+  K.block(6 + kNumDofs, 6 + kNumDofs, n, n).diagonal().setConstant(kDt_s * epsilon *
+                                                                   a.W.diagonal().mean());
   rhs.segment<3>(0) = kDt_s * p.tool.F_tilde_N;
   rhs.segment<3>(3) = kDt_s * p.tool.T_tilde_N_m;
   rhs.segment(6, kNumDofs) = p.body_force_dt;
@@ -120,6 +131,36 @@ TEST(ContactResponse, EqualitySolveMatchesFullKktSystem) {
   const Eigen::VectorXd solution = K.fullPivLu().solve(rhs);
   EXPECT_LT((solution.tail(n) - lambda).norm(), 1e-9 * lambda.norm());
 }
+
+INSTANTIATE_TEST_SUITE_P(ExactAndDefault, EqualityCompliance,
+                         ::testing::Values(0.0, ContactSolveOptions{}.equality_compliance));
+
+// Two rows that are nearly one (a point and its neighbour 10⁻⁶ of a cell away, as a rim point
+// beside a face's own node): W = w [[1, 1 − η], [1 − η, 1]], η = 10⁻¹². The exact solve splits
+// targets 10⁻⁶ apart into forces ~10⁶ times the load, of both signs; with the compliance ε w the
+// pair's sum and difference follow from the 2 × 2 system in closed form, and the difference is
+// bounded by that of the targets over Δt ε w.
+TEST(ContactResponse, NearlyRedundantEqualityRowsShareTheLoad) {
+  const double w = 2.0e-3, eta = 1e-12, r = 0.01, dr = 1e-6 * r;
+  Eigen::Matrix2d W;
+  W << w, (1.0 - eta) * w, (1.0 - eta) * w, w;
+  const Eigen::Vector2d rhs(r, r + dr);
+  ContactSolveOptions options{ContactLaw::kEquality};
+  Eigen::VectorXd lambda;
+  SolveContactImpulses(W, rhs, kDt_s, 1, options, &lambda);
+  const double epsilon = options.equality_compliance;
+  const double sum = 2.0 * r + dr, difference = -dr;
+  // Δt (W + ε w I) on (1, 1) and (1, −1): eigenvalues Δt w (2 − η + ε) and Δt w (η + ε).
+  EXPECT_NEAR(lambda[0] + lambda[1], sum / (kDt_s * w * (2.0 - eta + epsilon)), 1e-9 * sum / (kDt_s * w));
+  EXPECT_NEAR(lambda[0] - lambda[1], difference / (kDt_s * w * (eta + epsilon)),
+              1e-6 * std::abs(difference) / (kDt_s * w * epsilon));
+  EXPECT_GT(lambda.minCoeff(), 0.0);  // both push, as the one row they nearly are would
+
+  options.equality_compliance = 0.0;  // the exact solve: the same pair pulled apart
+  SolveContactImpulses(W, rhs, kDt_s, 1, options, &lambda);
+  EXPECT_LT(lambda.minCoeff(), -100.0 * (lambda[0] + lambda[1]));
+}
+
 
 // Exact LCP solution by trying every active set: λ_A = (ΔtW_AA)⁻¹ rhs_A, λ_rest = 0, and keep the
 // one with λ ≥ 0 and c = ΔtWλ − rhs ≥ 0.
@@ -381,8 +422,12 @@ TEST(LinearContactModel, ReproducesTheEqualitySolveAtAndAwayFromItsLinearisation
     const Eigen::Vector3d v_free = tool.A_v.inverse() * kDt_s * (F_hat + dF);
     const Eigen::Vector3d w_free = tool.M_inv_W * tool.A_L.inverse() * kDt_s * (T_hat + dT);
     const Eigen::VectorXd c_free = a.J.J_v * v_free + a.J.J_w * w_free + J_u * u_free;
+    // The model linearises the exact law: the frame's model is built from W without the
+    // equality solve's compliance (the frame's λ then differ from its model by a fraction ~ε).
+    ContactSolveOptions exact{ContactLaw::kEquality};
+    exact.equality_compliance = 0.0;
     Eigen::VectorXd lambda;
-    SolveContactImpulses(a.W, p.b - c_free, kDt_s, 1, {ContactLaw::kEquality}, &lambda);
+    SolveContactImpulses(a.W, p.b - c_free, kDt_s, 1, exact, &lambda);
     const Eigen::Vector3d F_solve = a.J.J_v.transpose() * lambda;
     const Eigen::Vector3d T_solve = a.J.J_w.transpose() * lambda;
     Eigen::Vector3d F_model, T_model;
