@@ -16,11 +16,11 @@ namespace {
 ContactSolveReport SolveEquality(const Eigen::MatrixXd& W, const Eigen::VectorXd& rhs, double dt_s,
                                  double compliance, Eigen::VectorXd* lambda) {
   ContactSolveReport report;
-  // Δt (W + ε w̄ I) λ = rhs, w̄ the mean of W's diagonal: a compliance ε w̄ in series with each row
-  // (constraint force mixing). Nearly redundant rows, to which the exact solve (ε = 0) gives large
-  // forces of both signs that nearly cancel, then share their load (contact_solver.h says why).
+  // Δt (W + ε diag W) λ = rhs: a compliance ε W_ii in series with each row (constraint force
+  // mixing). Nearly redundant rows, to which the exact solve (ε = 0) gives large forces of both
+  // signs that nearly cancel, then share their load (contact_solver.h says why).
   Eigen::MatrixXd A = dt_s * W;
-  if (A.rows() > 0) A.diagonal().array() += compliance * A.diagonal().mean();
+  A.diagonal() *= 1.0 + compliance;
   // Rank-revealing, as at ε = 0 redundant contacts (one body point twice, or many on a rigid
   // part) make W singular; the minimum-norm λ then shares the load between them.
   *lambda = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(A).solve(rhs);
@@ -394,8 +394,8 @@ ContactSolveReport SolveContactImpulses(const Eigen::MatrixXd& W, const Eigen::V
                                     [](std::uint8_t b) { return b != 0; });
   if (any_bilateral && options.law == ContactLaw::kFriction)
     throw std::invalid_argument("bilateral rows are not supported with the friction law");
-  if (!(options.equality_compliance >= 0.0))
-    throw std::invalid_argument("equality_compliance must be >= 0");
+  if (!(options.equality_compliance >= 0.0 && std::isfinite(options.equality_compliance)))
+    throw std::invalid_argument("equality_compliance must be finite and >= 0");
   if (friction_per_contact && friction_per_contact->size() * rows_per_contact != rhs.size())
     throw std::invalid_argument("friction_per_contact needs one μ per contact");
   if (lambda->size() != rhs.size()) lambda->setZero(rhs.size());

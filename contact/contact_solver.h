@@ -1,7 +1,7 @@
 #pragma once
 // Contact impulses from the Delassus matrix (DESIGN.md §4), three laws behind one function:
 //
-//   equality   (the paper)  Δt (W + ε w̄ I) λ = b − c_free                dense, rank-revealing
+//   equality   (the paper)  Δt (W + ε diag W) λ = b − c_free             dense, rank-revealing
 //   unilateral (Signorini)  c = c_free − b + Δt W λ ≥ 0, λ ≥ 0, cᵀλ = 0  primal active set
 //   friction   (Coulomb)    normal rows as unilateral; per contact the tangential impulse in the
 //                           disc |λ_t| ≤ μ λ_n, opposite the slip on its rim: blocked projected
@@ -13,18 +13,21 @@
 // redundant, so the equality solve uses a complete orthogonal decomposition rather than LDLᵀ. `rhs`
 // = b − c_free, with b the position stabilisation −β φ/Δt plus any restitution target.
 //
-// Why the equality law has a compliance ε w̄ per row (w̄ the mean of W's diagonal, ε 1e-4 by
-// default): rows that are nearly, not exactly, redundant, such as the tool's rim points on faces
-// whose nodes are held by rows of their own. W's condition number on block_press's frames runs
-// 10⁸ to 10¹⁵. The exact solve (ε = 0) answers with large row forces of both signs that nearly
-// cancel: pressed 5 mm at 100 Hz, the largest row force of a frame had a median of 308 N on the
-// linear body and 1,190 N on the quadratic one, for a net force of 3.3 N. With ε = 1e-4 those
-// medians are 0.68 N and 0.47 N. On the quadratic body the cancelling was not exact enough: the
-// tool sank 0.24 mm further than under the unilateral law and left 0.8 mm penetrations, and the
-// release map's 50 to 200 Hz cells stuck (docs/RESULTS.md). A row's own force changes by a
-// fraction ~ε (0.01 %). A nearly redundant pair's difference of λ is bounded by their difference
-// of rhs over Δt ε w̄. On that map ε 1e-5 still left P2 at 20 Hz 40 mN stickier than at 1e-4; 1e-4
-// and 1e-3 agree within 6 mN. ε = 0 is the exact solve.
+// Why the equality law has a compliance ε W_ii in series with each row (ε 1e-4 by default; the
+// linear contact model built for the haptic step holds the same law, contact/visual_frame_model.cc):
+// rows that are nearly, not exactly, redundant, such as the tool's rim points on faces whose nodes
+// are held by rows of their own. W's condition number on block_press's frames runs 10⁸ to 10¹⁵.
+// The exact solve (ε = 0) answers with large row forces of both signs that nearly cancel: pressed
+// 5 mm at 100 Hz, the largest row force of a frame had a median of 308 N on the linear body and
+// 1,190 N on the quadratic one, for a net force of 3.3 N; with the compliance, 0.68 N and 0.47 N.
+// On the quadratic body the cancelling was not exact enough: the tool sank 0.24 mm further than
+// under the unilateral law, left 0.8 mm penetrations, and the release map's equality cells stuck
+// at 50 to 200 Hz. A row
+// alone keeps its force up to the factor 1/(1 + ε); a pair of rows nearly one (W ≈ w[[1, 1 − η],
+// [1 − η, 1]], η ≪ ε) keeps their sum so and splits it by their difference of rhs over Δt ε w
+// instead of Δt η w. On the release map (ε then scaled by the mean diagonal, first tried) ε 1e-5
+// still left P2's equality cell at 20 Hz 40 mN stickier than at 1e-4; 1e-4 and 1e-3 agreed
+// within 6 mN. ε = 0 is the exact solve.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -52,12 +55,12 @@ struct ContactSolveOptions {
   FrictionMethod friction_method = FrictionMethod::kWorkingSet;
   int max_iterations = 500;  // Gauss–Seidel sweeps
   double tolerance = 1e-12;  // on the complementarity residual, relative (see below)
-  double equality_compliance = 1e-4;  // kEquality only: ε above, ≥ 0
+  double equality_compliance = 1e-4;  // kEquality only: ε above, finite, ≥ 0
 };
 
 struct ContactSolveReport {
   int iterations = 0;  // Gauss–Seidel sweeps (0 for the direct equality solve)
-  // max_i |min(λ_i, c_i)|·Δt‖W‖-scaled, or ‖Δt(W + εw̄I)λ − rhs‖/‖rhs‖ for equality
+  // max_i |min(λ_i, c_i)|·Δt‖W‖-scaled, or ‖Δt(W + ε diag W)λ − rhs‖/‖rhs‖ for equality
   double residual = 0.0;
   bool converged = false;
   int newton_steps = 0;  // kFriction, FrictionMethod::kWorkingSet: Newton steps tried (kept or not)

@@ -92,8 +92,8 @@ Assembled Assemble(const Problem& p, int rows_per_contact) {
   return a;
 }
 
-// The exact law (ε = 0) and the default, whose compliance ε w̄ per row is the KKT system's
-// lower-right block Δt ε w̄ I (c_post + Δt ε w̄ λ = b).
+// The exact law (ε = 0) and the default, whose compliance ε W_ii per row is the KKT system's
+// lower-right block Δt ε diag W (c_post + Δt ε W_ii λ_i = b_i).
 class EqualityCompliance : public ::testing::TestWithParam<double> {};
 
 TEST_P(EqualityCompliance, EqualitySolveMatchesFullKktSystem) {
@@ -121,8 +121,7 @@ TEST_P(EqualityCompliance, EqualitySolveMatchesFullKktSystem) {
   K.block(6 + kNumDofs, 0, n, 3) = a.J.J_v;
   K.block(6 + kNumDofs, 3, n, 3) = a.J.J_w * p.tool.M_inv_W;
   K.block(6 + kNumDofs, 6, n, kNumDofs) = J_u;
-  K.block(6 + kNumDofs, 6 + kNumDofs, n, n).diagonal().setConstant(kDt_s * epsilon *
-                                                                   a.W.diagonal().mean());
+  K.block(6 + kNumDofs, 6 + kNumDofs, n, n).diagonal() = kDt_s * epsilon * a.W.diagonal();
   rhs.segment<3>(0) = kDt_s * p.tool.F_tilde_N;
   rhs.segment<3>(3) = kDt_s * p.tool.T_tilde_N_m;
   rhs.segment(6, kNumDofs) = p.body_force_dt;
@@ -139,7 +138,7 @@ INSTANTIATE_TEST_SUITE_P(ExactAndDefault, EqualityCompliance,
 // beside a face's own node): W = w [[1, 1 − η], [1 − η, 1]], η = 10⁻¹². The exact solve splits
 // targets 10⁻⁶ apart into forces ~10⁶ times the load, of both signs; with the compliance ε w the
 // pair's sum and difference follow from the 2 × 2 system in closed form, and the difference is
-// bounded by that of the targets over Δt ε w.
+// bounded by that of the targets over Δt ε w. (W's diagonal is w: ε diag W = ε w I.)
 TEST(ContactResponse, NearlyRedundantEqualityRowsShareTheLoad) {
   const double w = 2.0e-3, eta = 1e-12, r = 0.01, dr = 1e-6 * r;
   Eigen::Matrix2d W;
@@ -408,7 +407,12 @@ TEST(LinearContactModel, ReproducesTheEqualitySolveAtAndAwayFromItsLinearisation
   const Assembled a = Assemble(p, 1);
   const Eigen::MatrixXd J_u = Eigen::MatrixXd(a.J.J_u);
   const Eigen::VectorXd u_free = p.u_dot_m_s + p.A_u.ldlt().solve(p.body_force_dt);
-  const LinearContactModel model = MakeLinearContactModel(a.J, a.W, p.tool, p.b - J_u * u_free);
+  // The law the frame solves and its model holds: the equality law with its compliance, W's
+  // diagonal times 1 + ε (contact/visual_frame_model.cc builds the model so).
+  const ContactSolveOptions law{ContactLaw::kEquality};
+  Eigen::MatrixXd W_law = a.W;
+  W_law.diagonal() *= 1.0 + law.equality_compliance;
+  const LinearContactModel model = MakeLinearContactModel(a.J, W_law, p.tool, p.b - J_u * u_free);
   Eigen::Vector3d F_hat, T_hat;
   CalcDiscreteTimeWrench(p.tool, p.tool_state, &F_hat, &T_hat);
   // Perturb F̂, T̂ as the user's motion would between visual frames.
@@ -422,12 +426,8 @@ TEST(LinearContactModel, ReproducesTheEqualitySolveAtAndAwayFromItsLinearisation
     const Eigen::Vector3d v_free = tool.A_v.inverse() * kDt_s * (F_hat + dF);
     const Eigen::Vector3d w_free = tool.M_inv_W * tool.A_L.inverse() * kDt_s * (T_hat + dT);
     const Eigen::VectorXd c_free = a.J.J_v * v_free + a.J.J_w * w_free + J_u * u_free;
-    // The model linearises the exact law: the frame's model is built from W without the
-    // equality solve's compliance (the frame's λ then differ from its model by a fraction ~ε).
-    ContactSolveOptions exact{ContactLaw::kEquality};
-    exact.equality_compliance = 0.0;
     Eigen::VectorXd lambda;
-    SolveContactImpulses(a.W, p.b - c_free, kDt_s, 1, exact, &lambda);
+    SolveContactImpulses(a.W, p.b - c_free, kDt_s, 1, law, &lambda);
     const Eigen::Vector3d F_solve = a.J.J_v.transpose() * lambda;
     const Eigen::Vector3d T_solve = a.J.J_w.transpose() * lambda;
     Eigen::Vector3d F_model, T_model;

@@ -26,17 +26,22 @@ Eigen::Vector3d MeanHoldForce_N(HapticMode mode) {
   return sum / count;
 }
 
-TEST(Organs, LiftedOrganWeighsOnTheDevice) {
+void ExpectTheOrgansWeight(HapticMode mode) {
   const double weight_N = 1050.0 * 0.04 * 0.03 * 0.015 * 9.81;
-  for (const HapticMode mode : {HapticMode::kHybrid, HapticMode::kReference}) {
-    const Eigen::Vector3d force_N = MeanHoldForce_N(mode);
-    std::printf(
-        "%s: contact force on the tool while holding %.5f %.5f %.5f N; the organ's "
-        "weight %.5f N\n",
-        ToString(mode), force_N.x(), force_N.y(), force_N.z(), weight_N);
-    EXPECT_NEAR(-force_N.z(), weight_N, 0.02 * weight_N) << ToString(mode);
-    EXPECT_LT(force_N.head<2>().norm(), 0.02 * weight_N) << ToString(mode);
-  }
+  const Eigen::Vector3d force_N = MeanHoldForce_N(mode);
+  std::printf(
+      "%s: contact force on the tool while holding %.5f %.5f %.5f N; the organ's weight %.5f N\n",
+      ToString(mode), force_N.x(), force_N.y(), force_N.z(), weight_N);
+  EXPECT_NEAR(-force_N.z(), weight_N, 0.02 * weight_N) << ToString(mode);
+  EXPECT_LT(force_N.head<2>().norm(), 0.02 * weight_N) << ToString(mode);
+}
+
+// Two tests, not one loop over the modes: the reference mode (every stage at 1 kHz) is most of the
+// time, and the sanitized suite leaves it out (scripts/test_sanitized.sh).
+TEST(Organs, LiftedOrganWeighsOnTheDevice) { ExpectTheOrgansWeight(HapticMode::kHybrid); }
+
+TEST(Organs, LiftedOrganWeighsOnTheDeviceInTheReferenceMode) {
+  ExpectTheOrgansWeight(HapticMode::kReference);
 }
 
 }  // namespace
