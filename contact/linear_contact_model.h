@@ -13,8 +13,8 @@
 // It follows from the equality solve Δt W λ = b − c_free with c_free = J_v A_v⁻¹ Δt F̂ +
 // J_ω M⁻¹ A_L⁻¹ Δt T̂ + J_u u̇ and F_c = J_vᵀλ, T_c = J_ωᵀλ, so it reproduces that solve exactly
 // for any F̂, T̂ as long as the contacts stay active. W is the caller's: under the equality law
-// with that law's compliance on its diagonal, as the frame's solve has it (contact_solver.h). Building it costs six solves with W (plus
-// one for the offset); evaluating it four 3×3 products.
+// with that law's compliance on its diagonal, as the frame's solve has it (contact_solver.h).
+// Building it costs six solves with W (plus one for the offset); evaluating it four 3×3 products.
 
 #include <Eigen/Core>
 #include <cstdint>
