@@ -3,9 +3,10 @@
 #
 #   scripts/test_sanitized.sh [asan|tsan|all]      # default: all
 #
-# asan: the ctest suite (all but the slowest tests, named in run_asan below) built by clang with AddressSanitizer +
-#       UndefinedBehaviorSanitizer (HAPSIM_SANITIZE=ON, build-asan/). Any report fails the test that made it: ASan aborts on
-#       its first error, and UBSAN_OPTIONS=halt_on_error=1 makes every UBSan check fatal too.
+# asan: the ctest suite (all but the slowest tests, named in run_asan below) built by clang with
+#       AddressSanitizer + UndefinedBehaviorSanitizer (HAPSIM_SANITIZE=ON, build-asan/). Any report
+#       fails the test that made it: ASan aborts on its first error, and
+#       UBSAN_OPTIONS=halt_on_error=1 makes every UBSan check fatal too.
 # tsan: the threaded parts with ThreadSanitizer (HAPSIM_TSAN=ON, build-tsan/): the TripleBuffer
 #       (the model mailbox) read and written from two threads, the in-process LCM test, and one
 #       real two-process run (receive threads, the log writer's thread, the haptic loop) followed
