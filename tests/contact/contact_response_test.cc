@@ -150,7 +150,8 @@ TEST(ContactResponse, NearlyRedundantEqualityRowsShareTheLoad) {
   const double epsilon = options.equality_compliance;
   const double sum = 2.0 * r + dr, difference = -dr;
   // Δt (W + ε w I) on (1, 1) and (1, −1): eigenvalues Δt w (2 − η + ε) and Δt w (η + ε).
-  EXPECT_NEAR(lambda[0] + lambda[1], sum / (kDt_s * w * (2.0 - eta + epsilon)), 1e-9 * sum / (kDt_s * w));
+  EXPECT_NEAR(lambda[0] + lambda[1], sum / (kDt_s * w * (2.0 - eta + epsilon)),
+              1e-9 * sum / (kDt_s * w));
   EXPECT_NEAR(lambda[0] - lambda[1], difference / (kDt_s * w * (eta + epsilon)),
               1e-6 * std::abs(difference) / (kDt_s * w * epsilon));
   EXPECT_GT(lambda.minCoeff(), 0.0);  // both push, as the one row they nearly are would
@@ -159,7 +160,6 @@ TEST(ContactResponse, NearlyRedundantEqualityRowsShareTheLoad) {
   SolveContactImpulses(W, rhs, kDt_s, 1, options, &lambda);
   EXPECT_LT(lambda.minCoeff(), -100.0 * (lambda[0] + lambda[1]));
 }
-
 
 // Exact LCP solution by trying every active set: λ_A = (ΔtW_AA)⁻¹ rhs_A, λ_rest = 0, and keep the
 // one with λ ≥ 0 and c = ΔtWλ − rhs ≥ 0.
