@@ -20,7 +20,7 @@ ContactSolveReport SolveEquality(const Eigen::MatrixXd& W, const Eigen::VectorXd
   // mixing). Nearly redundant rows, to which the exact solve (ε = 0) gives large forces of both
   // signs that nearly cancel, then share their load (contact_solver.h says why).
   Eigen::MatrixXd A = dt_s * W;
-  A.diagonal() *= 1.0 + compliance;
+  AddEqualityCompliance(compliance, &A);
   // Rank-revealing, as at ε = 0 redundant contacts (one body point twice, or many on a rigid
   // part) make W singular; the minimum-norm λ then shares the load between them.
   *lambda = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(A).solve(rhs);
@@ -367,6 +367,10 @@ ContactSolveReport SolveActiveSet(const Eigen::MatrixXd& W, const Eigen::VectorX
 }
 
 }  // namespace
+
+void AddEqualityCompliance(double equality_compliance, Eigen::MatrixXd* W) {
+  W->diagonal() *= 1.0 + equality_compliance;
+}
 
 const char* ToString(ContactLaw law) {
   switch (law) {

@@ -16,7 +16,8 @@
 // Why the equality law has a compliance ε W_ii in series with each row (ε 1e-4 by default; the
 // linear contact model built for the haptic step holds the same law, contact/visual_frame_model.cc):
 // rows that are nearly, not exactly, redundant, such as the tool's rim points on faces whose nodes
-// are held by rows of their own. W's condition number on block_press's frames runs 10⁸ to 10¹⁵.
+// are held by rows of their own. W's condition number on block_press's frames runs 10⁸ to 10¹⁵
+// (these figures: hand runs with a temporary print, 2026-11-29; the release map is the bench's).
 // The exact solve (ε = 0) answers with large row forces of both signs that nearly cancel: pressed
 // 5 mm at 100 Hz, the largest row force of a frame had a median of 308 N on the linear body and
 // 1,190 N on the quadratic one, for a net force of 3.3 N; with the compliance, 0.68 N and 0.47 N.
@@ -26,7 +27,9 @@
 // one (W ≈ w[[1, 1 − η], [1 − η, 1]], η ≪ ε) keeps their sum so and splits it by their difference
 // of rhs over Δt ε w instead of Δt η w. On the release map (ε then scaled by the mean diagonal,
 // first tried) ε 1e-5 still left P2's equality cell at 20 Hz 40 mN stickier than at 1e-4; 1e-4 and
-// 1e-3 agreed within 6 mN. ε = 0 is the exact solve.
+// 1e-3 agreed within 6 mN. ε = 0 is the exact solve. (The unilateral solve's diagonal shift,
+// DelassusColumns in contact_solver.cc, is another thing: 1e-10 of the largest entry, only to keep
+// its free-set systems nonsingular; it does not damp a nearly singular W's near-null direction.)
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -64,6 +67,10 @@ struct ContactSolveReport {
   bool converged = false;
   int newton_steps = 0;  // kFriction, FrictionMethod::kWorkingSet: Newton steps tried (kept or not)
 };
+
+// The equality law's compliance on W (above): W_ii ← (1 + ε) W_ii, ε = equality_compliance. The
+// frame's solve and the linear contact model built for the haptic step both hold the law so.
+void AddEqualityCompliance(double equality_compliance, Eigen::MatrixXd* W);
 
 // Solves for the impulses λ (rows). On entry *lambda is a start (resized and zeroed if its size
 // is wrong): Gauss–Seidel's initial guess for kFriction; for kUnilateral the rows with λ > 0

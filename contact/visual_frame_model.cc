@@ -92,9 +92,9 @@ void VisualFrame::BuildLinearModel(const DeviceState& device, const Eigen::Isome
     for (size_t r = 0; r < active_rows.size(); ++r)
       W(r, c) += W_body(active_rows[r], active_rows[c]);
   }
-  // The equality law's compliance, ε W_ii per row, as the frame's solve holds it (contact_solver.h).
+  // The equality law's compliance, as the frame's solve holds it.
   if (options_.response.solve.law == ContactLaw::kEquality)
-    W.diagonal() *= 1.0 + options_.response.solve.equality_compliance;
+    AddEqualityCompliance(options_.response.solve.equality_compliance, &W);
   // The body's velocity without contact over a haptic step: its post-frame velocity less what the
   // frame's contact force λ_vis holds back, u̇ − Δt_h A_u⁻¹ J_uᵀ λ_vis, so that J_u u̇_free =
   // J_u u̇ − Δt_h W_body λ_vis. A body resting under the tool (u̇ = 0) then yields only to a

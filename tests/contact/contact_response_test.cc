@@ -407,11 +407,11 @@ TEST(LinearContactModel, ReproducesTheEqualitySolveAtAndAwayFromItsLinearisation
   const Assembled a = Assemble(p, 1);
   const Eigen::MatrixXd J_u = Eigen::MatrixXd(a.J.J_u);
   const Eigen::VectorXd u_free = p.u_dot_m_s + p.A_u.ldlt().solve(p.body_force_dt);
-  // The law the frame solves and its model holds: the equality law with its compliance, W's
-  // diagonal times 1 + ε (contact/visual_frame_model.cc builds the model so).
+  // The law the frame solves and its model holds: the equality law with its compliance
+  // (contact/visual_frame_model.cc builds the model so).
   const ContactSolveOptions law{ContactLaw::kEquality};
   Eigen::MatrixXd W_law = a.W;
-  W_law.diagonal() *= 1.0 + law.equality_compliance;
+  AddEqualityCompliance(law.equality_compliance, &W_law);
   const LinearContactModel model = MakeLinearContactModel(a.J, W_law, p.tool, p.b - J_u * u_free);
   Eigen::Vector3d F_hat, T_hat;
   CalcDiscreteTimeWrench(p.tool, p.tool_state, &F_hat, &T_hat);
