@@ -47,7 +47,12 @@ class Bench:
 
     def hapsim_run(self, *args):
         """Runs `hapsim ARGS...`; a failure raises with the command and its stderr's tail."""
-        command = [self.hapsim] + [str(a) for a in args]
+        return self.run_program(self.hapsim, *args)
+
+    def run_program(self, program, *args):
+        """Runs `PROGRAM ARGS...` from the repository root; its stdout, or BenchError with the
+        command and its stderr's tail."""
+        command = [program] + [str(a) for a in args]
         done = subprocess.run(command, cwd=REPO, capture_output=True, text=True)
         if done.returncode != 0:
             tail = "\n".join(done.stderr.strip().splitlines()[-5:])

@@ -25,10 +25,12 @@ import common  # noqa: E402
 import economy  # noqa: E402
 import indentation  # noqa: E402
 import modes  # noqa: E402
+import punch_rim  # noqa: E402
 import stability  # noqa: E402
 
 EXPERIMENTS = {
     "indentation": ("Indentation against Hertz and Boussinesq", indentation),
+    "punch_rim": ("The flat punch on meshes graded towards its rim", punch_rim),
     "modes": ("Haptic modes against the reference over visual rates", modes),
     "cantilever": ("Cantilever: mesh, lattice orientation, linear against corotational",
                    cantilever),

@@ -1,0 +1,155 @@
+"""The flat punch on meshes graded towards its rim: linear against quadratic tets (issue 27).
+
+Under a rigid flat punch the pressure is singular at the rim, p ~ (a² − r²)^(−1/2) (Johnson,
+Contact Mechanics, §3.7). On the lattices of the indentation experiment the cells are finest at the
+punch's centre, not along its rim, and the error of either element is then that of the rim's cells.
+Here the block of scenes/flat_punch.yaml is meshed by Gmsh (tests/bench/punch_block_mesh.cc) with
+the rim circle in its top face, 0.1 % inside the punch's rim as the rim-following lattices have it
+(indentation.py says why), and tets whose edge grows linearly from h_rim on the rim to h_far at
+20 mm from it: the mesh a finite-element analyst would draw for this problem, unstructured. Nodes
+only touch the punch (`contact.tool_features: false`), so the contact ends at the rim. The P2 runs
+take the same meshes' kind, coarser; each element gets the sizes that put it near the frame costs
+of the other's. The coefficient is fitted as the indentation experiment fits it and compared with
+the same bonded-layer reference; a fine quadratic mesh (16k tets) tests that reference: what it
+still misses bounds the reference's own error.
+"""
+import os
+
+import indentation
+from common import BenchError, draw_pareto, place_labels, plt, save_figure
+
+GRADING_DISTANCE_M = 0.02
+# (h_rim, h_far) per element: the full sweep, the quick one, and the fine mesh that checks the
+# reference (full run, ν 0.45 only: a 160 ms frame).
+MESHES = {"p1": [(0.6e-3, 10e-3), (0.4e-3, 6.5e-3), (0.3e-3, 5e-3), (0.25e-3, 4e-3)],
+          "p2": [(2e-3, 15e-3), (1.5e-3, 15e-3), (1e-3, 12e-3), (0.75e-3, 10e-3)]}
+QUICK_MESHES = {"p1": [(0.6e-3, 10e-3)], "p2": [(2e-3, 15e-3)]}
+CONVERGED = ("p2", 0.5e-3, 4e-3)
+SERIES = {("p1", 0.45): ("k", "o"), ("p1", 0.49): ("0.55", "o"),
+          ("p2", 0.45): ("tab:blue", "s"), ("p2", 0.49): ("tab:cyan", "s")}
+
+
+def make_mesh(bench, rim_m, far_m):
+    """The block's mesh file (OUT/meshes/) and its tet count, from punch_block_mesh."""
+    program = os.path.join(os.path.dirname(os.path.dirname(bench.hapsim)), "tests",
+                           "punch_block_mesh")
+    if not os.access(program, os.X_OK):
+        raise BenchError(f"{program} is missing: a build with HAPSIM_BUILD_BENCHMARKS=ON makes it")
+    path = bench.path("meshes", f"punch_rim_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm.msh")
+    radius_m = indentation.PUNCH_A_M * (1.0 - indentation.RIM_INSIDE)
+    out = bench.run_program(program, "--rim-radius-m", radius_m, "--rim-cell-size-m", rim_m,
+                                   "--cell-size-m", far_m, "--grading-distance-m",
+                                   GRADING_DISTANCE_M, "--out", path)
+    return path, int(out.split()[-1])
+
+
+def press(bench, element, rim_m, far_m, nu):
+    case = indentation.CASES["punch"]
+    label = f"punch_rim_{element}_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm_nu{nu:g}"
+    bench.progress(f"punch_rim: {label}")
+    mesh_path, tets = make_mesh(bench, rim_m, far_m)
+    edits = {"body.mesh": {"file": mesh_path}, "body.material.poisson_ratio": nu,
+             "body.element": element, "contact.tool_features": False}
+    summary, frames, _ = bench.sim(bench.scene_variant(case["scene"], edits, label), label)
+    coefficient, curve = indentation.fit(frames, case)
+    analytic = case["coefficient_over_E_star"] * indentation.E_PA / (1.0 - nu * nu)
+    layer = indentation.layer_coefficient(curve, "punch", case, nu)
+    return {"element": element, "rim_cell_m": rim_m, "far_cell_m": far_m, "tets": tets,
+            "poisson_ratio": nu, "frame_ms": summary["frame_stage_median_ms"]["total"],
+            "max_contacts": summary["max_contacts"], "fitted_coefficient": coefficient,
+            "relative_error": coefficient / analytic - 1.0, "layer_coefficient": layer,
+            "layer_relative_error": coefficient / layer - 1.0}
+
+
+def label_of(r):
+    return f"{r['element'].upper()} {1e3 * r['rim_cell_m']:g}/{1e3 * r['far_cell_m']:g}"
+
+
+def table_markdown(runs, nus):
+    md = ["| element, edge on the rim / far (mm) | tets | "
+          + " | ".join(f"ν {nu:g}: frame, error (half-space / bonded layer)" for nu in nus) + " |",
+          "|---|---:|" + "---:|" * len(nus)]
+    keys = []
+    for r in runs:
+        key = (r["element"], r["rim_cell_m"], r["far_cell_m"])
+        if key not in keys:
+            keys.append(key)
+    for element, rim_m, far_m in keys:
+        cells, tets = [], None
+        for nu in nus:
+            r = next((r for r in runs if (r["element"], r["rim_cell_m"], r["far_cell_m"],
+                                          r["poisson_ratio"]) == (element, rim_m, far_m, nu)),
+                     None)
+            if r is None:
+                cells.append("–")
+                continue
+            tets = r["tets"]
+            cells.append(f"{r['frame_ms']:.1f} ms, {100 * r['relative_error']:+.1f} % / "
+                         f"{100 * r['layer_relative_error']:+.1f} %")
+        md.append(f"| {element.upper()}, {1e3 * rim_m:g} / {1e3 * far_m:g} | {tets} | "
+                  + " | ".join(cells) + " |")
+    return md
+
+
+def comparison_markdown(runs):
+    """Per quadratic run, the linear element's error at the same frame cost along its front."""
+    key = "layer_relative_error"
+    lines = []
+    for r in (r for r in runs if r["element"] == "p2"):
+        p1 = [q for q in runs if q["element"] == "p1" and q["poisson_ratio"] == r["poisson_ratio"]]
+        p1_error = indentation.error_at_cost(p1, r["frame_ms"], key)
+        head = f"- ν {r['poisson_ratio']:g}, {label_of(r)} ({r['frame_ms']:.1f} ms): {100 * r[key]:+.1f} %"
+        lines.append(head + ("; no P1 run this cheap or this dear" if p1_error is None else
+                             f" against P1's {100 * p1_error:+.1f} % at the same cost "
+                             f"(ratio {abs(r[key] / p1_error):.2f})"))
+    return lines
+
+
+def chart(bench, runs):
+    fig, axis = plt.subplots(figsize=(7, 4.8))
+    labels = []
+    for (element, nu), (color, marker) in SERIES.items():
+        series = [r for r in runs if (r["element"], r["poisson_ratio"]) == (element, nu)]
+        if series:
+            labels += draw_pareto(axis, [(r["frame_ms"], 100 * r["layer_relative_error"])
+                                         for r in series], [label_of(r) for r in series],
+                                  color=color, marker=marker, name=f"{element.upper()}, ν {nu:g}")
+    axis.axhline(0.0, color="k", lw=0.8)
+    axis.set(xscale="log", xlabel="median visual frame (ms)",
+             ylabel="error against the bonded layer (%)",
+             title="punch on meshes graded to the rim (Gmsh), nodes only\n"
+                   "(labels: edge on the rim / far, mm; lines: Pareto fronts)")
+    axis.title.set_fontsize(10)
+    axis.legend(fontsize=7)
+    axis.grid(True, alpha=0.3)
+    place_labels(axis, labels)
+    save_figure(fig, bench.path("punch_rim.png"))
+    return {"file": "punch_rim.png",
+            "caption": "Boussinesq F = 2 a E* d on unstructured meshes graded towards the punch's "
+                       "rim (edge on the rim / far from it, mm): the fitted coefficient's error "
+                       "against the bonded layer over the median visual frame, linear and "
+                       "quadratic tets at ν 0.45 and 0.49."}
+
+
+def run(bench):
+    meshes = QUICK_MESHES if bench.quick else MESHES
+    nus = (indentation.NU,) if bench.quick else indentation.TISSUE_NUS
+    runs = [press(bench, element, rim_m, far_m, nu) for nu in nus
+            for element, sizes in meshes.items() for rim_m, far_m in sizes]
+    output = {"runs": runs, "grading_distance_m": GRADING_DISTANCE_M, "figures": [chart(bench, runs)]}
+    md = [f"The punch of the indentation experiment on Gmsh meshes graded towards its rim (edge "
+          f"growing linearly from the rim's to the far one over {1e3 * GRADING_DISTANCE_M:g} mm; "
+          "nodes only; errors against the half-space and the bonded layer):", ""]
+    md += table_markdown(runs, nus) + ["", "Quadratic against linear at the same frame cost:", ""]
+    md += comparison_markdown(runs) + [""]
+    if not bench.quick:
+        element, rim_m, far_m = CONVERGED
+        fine = press(bench, element, rim_m, far_m, indentation.NU)
+        output["converged_run"] = fine
+        md += [f"The reference, tested by a fine mesh: {label_of(fine)} ({fine['tets']} tets, "
+               f"{fine['frame_ms']:.0f} ms a frame) is {100 * fine['layer_relative_error']:+.1f} % "
+               f"from the bonded layer at ν {indentation.NU:g} ({100 * fine['relative_error']:+.1f} % "
+               "from the half-space): the layer formula holds to about that, and the errors above "
+               "are the meshes'.", ""]
+    output["markdown"] = md
+    return output

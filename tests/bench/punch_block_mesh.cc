@@ -1,0 +1,154 @@
+// A block for the flat-punch experiment (scripts/bench/punch_rim.py), meshed by Gmsh so that
+// its tets are finest along the punch's rim: the rim is a circle embedded in the block's top face
+// (nodes on it, no face crossing it), and the cell size grows linearly with the distance from that
+// circle, from --rim-cell-size-m on it to --cell-size-m at --grading-distance-m and beyond (Gmsh's
+// Distance and Threshold fields). The pressure under a rigid flat punch is singular at the rim,
+// p ~ (a² − r²)^(−1/2) (Johnson, Contact Mechanics, §3.7), and a mesh graded towards the rim is
+// the textbook remedy; the lattices of scenes/flat_punch.yaml can only be fine around a point.
+// Not a test: a bench program. Writes linear tets (MSH 4.1; the scene's `element: p2` adds the
+// mid-edge nodes on straight edges), through a temporary file renamed at the end, and prints
+// "tets N". Usage: punch_block_mesh --help.
+#include <CLI/CLI.hpp>
+#include <gmsh.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace {
+
+struct Options {
+  std::array<double, 3> min_m{-0.03, -0.03, 0.0};
+  std::array<double, 3> max_m{0.03, 0.03, 0.03};
+  double rim_radius_m = 0.003;
+  double rim_cell_size_m = 0.0;
+  double cell_size_m = 0.0;
+  double grading_distance_m = 0.02;
+  std::string out;
+};
+
+// The block with the rim circle (centred over the top face, at its height) fragmented into its
+// top face; the tags of the curves that make the circle.
+std::vector<double> MakeBlockWithRim(const Options& o) {
+  const int block = gmsh::model::occ::addBox(o.min_m[0], o.min_m[1], o.min_m[2],
+                                             o.max_m[0] - o.min_m[0], o.max_m[1] - o.min_m[1],
+                                             o.max_m[2] - o.min_m[2]);
+  const double centre_x_m = 0.5 * (o.min_m[0] + o.max_m[0]);
+  const double centre_y_m = 0.5 * (o.min_m[1] + o.max_m[1]);
+  const int circle = gmsh::model::occ::addCircle(centre_x_m, centre_y_m, o.max_m[2], o.rim_radius_m);
+  const int disk = gmsh::model::occ::addPlaneSurface({gmsh::model::occ::addCurveLoop({circle})});
+  gmsh::vectorpair fragments;
+  std::vector<gmsh::vectorpair> origin;
+  gmsh::model::occ::fragment({{3, block}}, {{2, disk}}, fragments, origin);
+  gmsh::model::occ::synchronize();
+  // The rim's curves: on the top face, inside the circle's bounding square (the fragment may
+  // renumber and split the circle).
+  std::vector<double> rim;
+  gmsh::vectorpair curves;
+  gmsh::model::getEntities(curves, 1);
+  const double slack_m = 1e-6 + 1e-3 * o.rim_radius_m;
+  for (const auto& [dim, tag] : curves) {
+    double x0, y0, z0, x1, y1, z1;
+    gmsh::model::getBoundingBox(dim, tag, x0, y0, z0, x1, y1, z1);
+    if (z0 > o.max_m[2] - slack_m && x0 > centre_x_m - o.rim_radius_m - slack_m &&
+        x1 < centre_x_m + o.rim_radius_m + slack_m && y0 > centre_y_m - o.rim_radius_m - slack_m &&
+        y1 < centre_y_m + o.rim_radius_m + slack_m)
+      rim.push_back(tag);
+  }
+  return rim;
+}
+
+// h(d) = rim + (cell − rim) min(d / D, 1), d the distance from the rim.
+void GradeTowardsRim(const Options& o, const std::vector<double>& rim_curves) {
+  namespace field = gmsh::model::mesh::field;
+  field::add("Distance", 1);
+  field::setNumbers(1, "CurvesList", rim_curves);
+  field::setNumber(1, "NumPointsPerCurve", 400);
+  field::add("Threshold", 2);
+  field::setNumber(2, "InField", 1);
+  field::setNumber(2, "SizeMin", o.rim_cell_size_m);
+  field::setNumber(2, "SizeMax", o.cell_size_m);
+  field::setNumber(2, "DistMin", 0.0);
+  field::setNumber(2, "DistMax", o.grading_distance_m);
+  field::setAsBackgroundMesh(2);
+  // The field alone sets the size (not the corners' defaults, nor the curvature of the circle).
+  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+  gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+  gmsh::option::setNumber("Mesh.Optimize", 1);
+}
+
+int Run(const Options& o) {
+  gmsh::initialize();
+  gmsh::option::setNumber("General.Terminal", 0);
+  gmsh::model::add("punch_block");
+  const std::vector<double> rim = MakeBlockWithRim(o);
+  if (rim.empty()) {
+    std::fprintf(stderr, "punch_block_mesh: Gmsh kept no curve of the rim in the top face\n");
+    return 1;
+  }
+  GradeTowardsRim(o, rim);
+  gmsh::model::mesh::generate(3);
+  std::vector<std::size_t> tets, nodes;
+  gmsh::model::mesh::getElementsByType(4, tets, nodes);
+  const std::string temporary = o.out + ".tmp.msh";  // Gmsh picks the format by the extension
+  gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
+  gmsh::write(temporary);
+  gmsh::finalize();
+  std::filesystem::rename(temporary, o.out);
+  std::printf("tets %zu\n", tets.size());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "A block whose top face holds a flat punch's rim circle, meshed by Gmsh with linear tets "
+      "finest along the rim (the flat-punch experiment, scripts/bench/punch_rim.py)."};
+  Options o;
+  app.add_option("--min-m", o.min_m, "Block's lower corner, m")->capture_default_str();
+  app.add_option("--max-m", o.max_m, "Block's upper corner, m (the rim at its top)")
+      ->capture_default_str();
+  app.add_option("--rim-radius-m", o.rim_radius_m, "Rim circle's radius, m, centred over the top")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--rim-cell-size-m", o.rim_cell_size_m, "Tet edge length on the rim, m")
+      ->required()->check(CLI::PositiveNumber);
+  app.add_option("--cell-size-m", o.cell_size_m, "Tet edge length far from the rim, m")
+      ->required()->check(CLI::PositiveNumber);
+  app.add_option("--grading-distance-m", o.grading_distance_m,
+                 "Distance from the rim over which the edge length grows to --cell-size-m, m")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--out", o.out, "Output mesh, FILE.msh")->required();
+  CLI11_PARSE(app, argc, argv);
+  for (int a = 0; a < 3; ++a)
+    if (!(o.max_m[a] > o.min_m[a])) {
+      std::fprintf(stderr, "punch_block_mesh: --max-m must exceed --min-m on every axis\n");
+      return 2;
+    }
+  const double half_width_m = 0.5 * std::min(o.max_m[0] - o.min_m[0], o.max_m[1] - o.min_m[1]);
+  if (o.rim_radius_m >= half_width_m) {
+    std::fprintf(stderr, "punch_block_mesh: the rim (radius %g m) must fit in the top face\n",
+                 o.rim_radius_m);
+    return 2;
+  }
+  if (o.rim_cell_size_m > o.cell_size_m) {
+    std::fprintf(stderr, "punch_block_mesh: --rim-cell-size-m must not exceed --cell-size-m\n");
+    return 2;
+  }
+  if (std::filesystem::path(o.out).extension() != ".msh") {
+    std::fprintf(stderr, "punch_block_mesh: --out must end in .msh\n");
+    return 2;
+  }
+  try {
+    return Run(o);
+  } catch (const std::string& gmsh_error) {  // the Gmsh API throws its message as a string
+    std::fprintf(stderr, "punch_block_mesh: Gmsh: %s\n", gmsh_error.c_str());
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "punch_block_mesh: %s\n", error.what());
+  }
+  return 1;
+}
