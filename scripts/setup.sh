@@ -29,7 +29,8 @@ fi
 # (`hapsim view` and `hapsim train`: the 3D window, PNG screenshots, AVI videos), xvfb, xdotool
 # and x11-utils (headless windows in the tests, driven as a person would; xwininfo), the Gmsh API
 # (libgmsh-dev: organ surfaces filled with tets at load, fem/surface_mesher.h), CGAL (libcgal-dev, header-only: tests/bench/mesher_comparison.cc measures
-# its Mesh_3 against Gmsh; benchmarks only).
+# its Mesh_3 against Gmsh; benchmarks only), lld (links the tests in a quarter of GNU ld's time;
+# CMakeLists.txt uses it when present).
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libsuitesparse-dev libopenblas0-serial liblapack-dev
@@ -41,7 +42,7 @@ packages=(
 # The tests, fuzzers, benchmarks and charts only.
 if [ "$demo" -eq 0 ]; then
   packages+=(libgtest-dev libbenchmark-dev python3 python3-matplotlib python3-yaml
-    clang libclang-rt-14-dev xvfb xdotool x11-utils libcgal-dev)
+    clang libclang-rt-14-dev xvfb xdotool x11-utils libcgal-dev lld)
 fi
 
 missing=()
