@@ -34,7 +34,8 @@ its expansion 1 − (2α₀/π) χ + (4α₀²/π²) χ² − … has the form o
 −(8/3π) β₀ χ³, under 0.1 % here. The punch's layer adds +11.6 % at ν 0.45 (a/h 0.1).
 The full run checks the sphere's correction against the model itself: P2 m4 pressed again into a
 block twice as deep and wide, on m 7 whose cell at the focus is the same (2.60 against 2.59 mm),
-where the layer formula predicts less stiffening. The punch's is not checked so.
+where the layer formula predicts less stiffening. The punch's is checked from one side by
+punch_rim.py's fine mesh.
 
 The punch is pressed three ways (a run's `variant`):
 - "features", the scene as it is: the punch's sharp rim presses each face it crosses at the rim
@@ -50,6 +51,8 @@ The punch is pressed three ways (a run's `variant`):
   whose normal is horizontal, and the node holds no load. No face passes under the rim, so the
   contact's edge is the punch's and the error is the element's (and the rim polygon's: a ring of
   8k nodes inscribes 1 − sin(2π/8k)·8k/2π less area than the circle).
+A lattice cannot be fine across the rim without being fine along it at the corners: punch_rim.py
+presses the punch on unstructured meshes graded towards the rim instead.
 """
 import math
 
@@ -96,9 +99,10 @@ RIM_P2 = ((lattice(3), 20.0), (lattice(4), 20.0), ((10, 10, 4), 20.0), (lattice(
 
 
 # Lattices with fewer cells in z than the 2m × 2m × m family, each element's (cells graded as its
-# best): the field under a contact is finer across than deep, and these cost less at nearly the
-# same error (hand runs, Hertz ν 0.45, 2026-11-29: P1 16 × 16 × 6 +24.9 % at 2.1 ms against m 8's
-# +22.1 % at 3.0 ms; P2 8 × 8 × 3 +8.1 % at 2.6 ms against m 4's +4.9 % at 3.8 ms).
+# best): the field under a contact is finer across than deep. They fill the fronts between the
+# family's meshes (hand runs, Hertz ν 0.45, 2026-11-29: P1 16 × 16 × 6 +24.9 % at 2.1 ms, near m 8's
+# +22.1 % at 3.0 ms; P2 8 × 8 × 3 +8.1 % at 2.6 ms, between m 3's +20.9 % at 1.1 ms and m 4's
+# +4.9 % at 3.8 ms).
 THIN_P1 = ((16, 16, 6), (20, 20, 8))
 THIN_P2 = (8, 8, 3)
 
@@ -107,8 +111,8 @@ def meshes(quick, name="hertz"):
     """(element, cells per axis, grading ratio, variant) per run: mostly the 2m × 2m × m lattices
     graded 10 times; quadratic tets also graded 20 times, where their larger cells resolve the
     contact zone better (P2 on 2m × 2m × m at ratio 20 against 10: m 4 +5.0 % against +9.1 % from
-    the bonded layer at ν 0.45, hand runs of 2026-11-28), and on 10 × 10 × 4, between m 4 and m 5.
-    The punch again with nodes only, and on rim-following lattices, where frames are near 10 ms
+    the bonded layer at ν 0.45, hand runs of 2026-11-28), and on 10 × 10 × 4, between m 4 and m 5;
+    and the lattices thinner in z (THIN_P1, THIN_P2). The punch again with nodes only, and on rim-following lattices, where frames are near 10 ms
     and below."""
     if quick:
         runs = [("p1", lattice(6), 10.0, "features"), ("p1", lattice(8), 10.0, "features"),

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # `scripts/bench.sh --quick` as ctest runs it: every experiment of scripts/bench/ on its smallest
-# sweep (a few minutes), then scripts/bench/check_quick.py on its JSON (each check against a value
+# sweep (about a minute), then scripts/bench/check_quick.py on its JSON (each check against a value
 # the bench did not make: closed forms, 2/omega_max, the reference). Also: the page and every
 # chart it names exist, and a bad --only exits non-zero naming the experiment.
 # Under a sanitizer (HAPSIM_SANITIZED) it is skipped (77): minutes of FEM become an hour, and
@@ -21,7 +21,8 @@ while read -r png; do
   [ "$(head -c 4 "$work/bench/$png" | od -An -c | tr -d ' ')" = "211PNG" ] ||
     fail "RESULTS.md names $png, which is not a PNG"
 done < "$work/figures"
-ls "$work/bench"/*.tmp* 2>/dev/null && fail "a temporary file was left behind"
+leftover=$(find "$work/bench" -name '*.tmp*')
+[ -z "$leftover" ] || fail "temporary files were left behind: $leftover"
 
 if /usr/bin/python3 scripts/bench/run.py --hapsim "$hapsim" --out "$work/bad" --quick \
     --only no_such_experiment 2> "$work/bad.err"; then

@@ -13,9 +13,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
 
 namespace {
@@ -30,42 +34,46 @@ struct Options {
   std::string out;
 };
 
+// Gmsh's one global model for one meshing: without the user's configuration files and on one
+// thread (the same mesh every time, as fem/gmsh_plugin.cc has it), finalised however the meshing ends.
+struct GmshSession {
+  GmshSession() {
+    gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
+    gmsh::option::setNumber("General.Terminal", 0);
+    gmsh::option::setNumber("General.NumThreads", 1);
+  }
+  ~GmshSession() { gmsh::finalize(); }
+  GmshSession(const GmshSession&) = delete;
+  GmshSession& operator=(const GmshSession&) = delete;
+};
+
 // The block with the rim circle (centred over the top face, at its height) fragmented into its
-// top face; the tags of the curves that make the circle.
-std::vector<double> MakeBlockWithRim(const Options& o) {
+// top face; the curves that bound the disk inside the rim after the fragment (the rim, whether
+// one curve or split).
+gmsh::vectorpair MakeBlockWithRim(const Options& o) {
   const int block = gmsh::model::occ::addBox(o.min_m[0], o.min_m[1], o.min_m[2],
                                              o.max_m[0] - o.min_m[0], o.max_m[1] - o.min_m[1],
                                              o.max_m[2] - o.min_m[2]);
-  const double centre_x_m = 0.5 * (o.min_m[0] + o.max_m[0]);
-  const double centre_y_m = 0.5 * (o.min_m[1] + o.max_m[1]);
-  const int circle = gmsh::model::occ::addCircle(centre_x_m, centre_y_m, o.max_m[2], o.rim_radius_m);
+  const int circle = gmsh::model::occ::addCircle(0.5 * (o.min_m[0] + o.max_m[0]),
+                                                 0.5 * (o.min_m[1] + o.max_m[1]), o.max_m[2],
+                                                 o.rim_radius_m);
   const int disk = gmsh::model::occ::addPlaneSurface({gmsh::model::occ::addCurveLoop({circle})});
   gmsh::vectorpair fragments;
-  std::vector<gmsh::vectorpair> origin;
+  std::vector<gmsh::vectorpair> origin;  // per input entity, what it became
   gmsh::model::occ::fragment({{3, block}}, {{2, disk}}, fragments, origin);
   gmsh::model::occ::synchronize();
-  // The rim's curves: on the top face, inside the circle's bounding square (the fragment may
-  // renumber and split the circle).
-  std::vector<double> rim;
-  gmsh::vectorpair curves;
-  gmsh::model::getEntities(curves, 1);
-  const double slack_m = 1e-6 + 1e-3 * o.rim_radius_m;
-  for (const auto& [dim, tag] : curves) {
-    double x0, y0, z0, x1, y1, z1;
-    gmsh::model::getBoundingBox(dim, tag, x0, y0, z0, x1, y1, z1);
-    if (z0 > o.max_m[2] - slack_m && x0 > centre_x_m - o.rim_radius_m - slack_m &&
-        x1 < centre_x_m + o.rim_radius_m + slack_m && y0 > centre_y_m - o.rim_radius_m - slack_m &&
-        y1 < centre_y_m + o.rim_radius_m + slack_m)
-      rim.push_back(tag);
-  }
+  gmsh::vectorpair rim;
+  gmsh::model::getBoundary(origin.at(1), rim, /*combined=*/false, /*oriented=*/false);
   return rim;
 }
 
 // h(d) = rim + (cell − rim) min(d / D, 1), d the distance from the rim.
-void GradeTowardsRim(const Options& o, const std::vector<double>& rim_curves) {
+void GradeTowardsRim(const Options& o, const gmsh::vectorpair& rim) {
   namespace field = gmsh::model::mesh::field;
+  std::vector<double> curves;
+  for (const auto& [dim, tag] : rim) curves.push_back(tag);
   field::add("Distance", 1);
-  field::setNumbers(1, "CurvesList", rim_curves);
+  field::setNumbers(1, "CurvesList", curves);
   field::setNumber(1, "NumPointsPerCurve", 400);
   field::add("Threshold", 2);
   field::setNumber(2, "InField", 1);
@@ -81,26 +89,19 @@ void GradeTowardsRim(const Options& o, const std::vector<double>& rim_curves) {
   gmsh::option::setNumber("Mesh.Optimize", 1);
 }
 
-int Run(const Options& o) {
-  gmsh::initialize();
-  gmsh::option::setNumber("General.Terminal", 0);
+// Meshes and writes `temporary`; the number of tets.
+std::size_t MeshInto(const Options& o, const std::string& temporary) {
+  GmshSession session;
   gmsh::model::add("punch_block");
-  const std::vector<double> rim = MakeBlockWithRim(o);
-  if (rim.empty()) {
-    std::fprintf(stderr, "punch_block_mesh: Gmsh kept no curve of the rim in the top face\n");
-    return 1;
-  }
+  const gmsh::vectorpair rim = MakeBlockWithRim(o);
+  if (rim.empty()) throw std::runtime_error("Gmsh kept no curve of the rim in the top face");
   GradeTowardsRim(o, rim);
   gmsh::model::mesh::generate(3);
   std::vector<std::size_t> tets, nodes;
   gmsh::model::mesh::getElementsByType(4, tets, nodes);
-  const std::string temporary = o.out + ".tmp.msh";  // Gmsh picks the format by the extension
   gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
-  gmsh::write(temporary);
-  gmsh::finalize();
-  std::filesystem::rename(temporary, o.out);
-  std::printf("tets %zu\n", tets.size());
-  return 0;
+  gmsh::write(temporary);  // Gmsh picks the format by the extension
+  return tets.size();
 }
 
 }  // namespace
@@ -143,12 +144,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "punch_block_mesh: --out must end in .msh\n");
     return 2;
   }
+  const std::string temporary = o.out + ".tmp.msh";
   try {
-    return Run(o);
-  } catch (const std::string& gmsh_error) {  // the Gmsh API throws its message as a string
+    const std::size_t num_tets = MeshInto(o, temporary);
+    std::filesystem::rename(temporary, o.out);
+    std::printf("tets %zu\n", num_tets);
+    return 0;
+  } catch (const std::string& gmsh_error) {  // Gmsh 4.8's API throws its message as a string
     std::fprintf(stderr, "punch_block_mesh: Gmsh: %s\n", gmsh_error.c_str());
   } catch (const std::exception& error) {
     std::fprintf(stderr, "punch_block_mesh: %s\n", error.what());
   }
+  std::error_code ignored;  // nothing half-written
+  std::filesystem::remove(temporary, ignored);
   return 1;
 }
