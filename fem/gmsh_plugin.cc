@@ -5,34 +5,13 @@
 #include <gmsh.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <numeric>
 
 #include "fem/gmsh_library.h"
+#include "fem/gmsh_session.h"
 
 namespace hapsim::fem::internal {
 namespace {
-
-// Gmsh is a library with one global model: each meshing initialises it, builds, reads the result
-// and finalises it again, also when something throws. Its messages go nowhere (General.Terminal
-// 0); its errors are exceptions (the API's AbortOnError = 2) whose text we take from its logger.
-class GmshSession {
- public:
-  GmshSession() {
-    gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
-    gmsh::option::setNumber("General.Terminal", std::getenv("HAPSIM_GMSH_VERBOSE") ? 1 : 0);
-    gmsh::option::setNumber("General.NumThreads", 1);  // one core, and the same mesh every time
-  }
-  ~GmshSession() { gmsh::finalize(); }
-  GmshSession(const GmshSession&) = delete;
-  GmshSession& operator=(const GmshSession&) = delete;
-
-  static std::string LastError() {
-    std::string error;
-    gmsh::logger::getLastError(error);
-    return error.empty() ? "Gmsh gave no reason" : error;
-  }
-};
 
 // The surface as one discrete Gmsh surface: nodes 1..N, triangles 1..T.
 void AddDiscreteSurface(const TriangleMesh& surface) {

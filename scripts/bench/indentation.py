@@ -209,18 +209,22 @@ def press(bench, name, case, cells, ratio, nu=NU, element="p1", depth_scale=1,
         edits["body.fixed"] = {"min_m": [-2 * half_width_m, -2 * half_width_m, 0.03 - depth_m - 1e-4],
                                "max_m": [2 * half_width_m, 2 * half_width_m, 0.03 - depth_m + 1e-4]}
     summary, frames, _ = bench.sim(bench.scene_variant(case["scene"], edits, label), label)
+    return {"element": element, "cells": list(cells), "ratio": ratio, "variant": variant,
+            "tets": tets, "poisson_ratio": nu, "block_depth_m": depth_m,
+            **score(summary, frames, name, case, nu, depth_m)}
+
+
+def score(summary, frames, name, case, nu, depth_m=BLOCK_DEPTH_M):
+    """A press's figures: its frame cost, the fitted coefficient and its error against the
+    half-space and against the bonded layer of depth_m, and the force–depth curve."""
     coefficient, curve = fit(frames, case)
     analytic = case["coefficient_over_E_star"] * E_PA / (1.0 - nu * nu)
-    run = {"element": element, "cells": list(cells), "ratio": ratio, "variant": variant,
-           "tets": tets,
-           "poisson_ratio": nu, "block_depth_m": depth_m,
-           "frame_ms": summary["frame_stage_median_ms"]["total"],
-           "max_contacts": summary["max_contacts"], "fitted_coefficient": coefficient,
-           "analytic_coefficient": analytic, "relative_error": coefficient / analytic - 1.0,
-           "curve": curve}
-    run["layer_coefficient"] = layer_coefficient(curve, name, case, nu, depth_m)
-    run["layer_relative_error"] = coefficient / run["layer_coefficient"] - 1.0
-    return run
+    layer = layer_coefficient(curve, name, case, nu, depth_m)
+    return {"frame_ms": summary["frame_stage_median_ms"]["total"],
+            "max_contacts": summary["max_contacts"], "fitted_coefficient": coefficient,
+            "analytic_coefficient": analytic, "relative_error": coefficient / analytic - 1.0,
+            "layer_coefficient": layer, "layer_relative_error": coefficient / layer - 1.0,
+            "curve": curve}
 
 
 def run_case(bench, name, case):
@@ -252,7 +256,8 @@ def locking_markdown(name, at_nu, at_low_nu):
 # (the punch's right-hand one), the nodes-only runs drawn as triangles.
 SERIES = {("p1", 0.45): ("k", "o"), ("p1", 0.49): ("0.55", "o"),
           ("p2", 0.45): ("tab:blue", "s"), ("p2", 0.49): ("tab:cyan", "s")}
-VARIANT_TEXT = {"features": "", "nodes": ", nodes only", "rim": ", nodes only, rim-following"}
+VARIANT_TEXT = {"features": "", "nodes": ", nodes only", "rim": ", nodes only, rim-following",
+                "graded": ", nodes only, graded to the rim (Gmsh)"}
 
 
 def mesh_label(cells):
@@ -267,7 +272,10 @@ def label_of(r):
             + ("" if r["variant"] == "features" else f" {r['variant']}"))
 
 
-def pareto_panel(axis, results, variants, title):
+def pareto_panel(axis, results, variants, title, label=None):
+    """Per element, ν and variant, the runs' error against the bonded layer over the frame cost
+    and their front; the labels to place. label(run): a point's name (label_of)."""
+    label = label or label_of
     labels = []
     for variant in variants:
         for (element, nu), (color, marker) in SERIES.items():
@@ -276,7 +284,7 @@ def pareto_panel(axis, results, variants, title):
             if series:
                 labels += draw_pareto(
                     axis, [(r["frame_ms"], 100 * r["layer_relative_error"]) for r in series],
-                    [label_of(r) for r in series], color=color,
+                    [label(r) for r in series], color=color,
                     marker=marker if variant != "nodes" else "^",
                     name=f"{element.upper()}, ν {nu:g}{VARIANT_TEXT[variant]}")
     axis.axhline(0.0, color="k", lw=0.8)
@@ -357,9 +365,10 @@ def error_at_cost(front_runs, frame_ms, key):
     return None
 
 
-def comparison_markdown(results):
-    """Per quadratic run: the linear element's error at the same frame cost (the same contact), and
-    the ratio; errors against the bonded layer."""
+def comparison_markdown(results, label=None):
+    """Per quadratic run: the linear element's error at the same frame cost (the same contact, its
+    `variant`), and the ratio; errors against the bonded layer. label(run): its name (label_of)."""
+    label = label or label_of
     lines = []
     key = "layer_relative_error"
     for nu in sorted({r["poisson_ratio"] for r in results}):
@@ -368,11 +377,11 @@ def comparison_markdown(results):
                   == ("p1", nu, r["variant"])]
             p1_error = error_at_cost(p1, r["frame_ms"], key)
             if p1_error is None or abs(p1_error) < 1e-3:
-                lines.append(f"- ν {nu:g}, {label_of(r)} ({r['frame_ms']:.1f} ms): "
+                lines.append(f"- ν {nu:g}, {label(r)} ({r['frame_ms']:.1f} ms): "
                              f"{100 * r[key]:+.1f} %; no P1 error to compare at that cost "
                              "(none charted there, or P1 crosses zero)")
             else:
-                lines.append(f"- ν {nu:g}, {label_of(r)} ({r['frame_ms']:.1f} ms): "
+                lines.append(f"- ν {nu:g}, {label(r)} ({r['frame_ms']:.1f} ms): "
                              f"{100 * r[key]:+.1f} % against P1's {100 * p1_error:+.1f} % at the "
                              f"same cost (ratio {abs(r[key] / p1_error):.2f})")
     return lines

@@ -19,7 +19,7 @@ import os
 import yaml
 
 import indentation
-from common import REPO, BenchError, draw_pareto, place_labels, plt, save_figure
+from common import REPO, BenchError, place_labels, plt, save_figure
 
 GRADING_DISTANCE_M = 0.02
 # (h_rim, h_far) per element: the full sweep, the quick one, and the fine mesh that checks the
@@ -64,14 +64,10 @@ def press(bench, element, rim_m, far_m, nu):
     edits = {"body.mesh": {"file": mesh_path}, "body.material.poisson_ratio": nu,
              "body.element": element, "contact.tool_features": False}
     summary, frames, _ = bench.sim(bench.scene_variant(case["scene"], edits, label), label)
-    coefficient, curve = indentation.fit(frames, case)
-    analytic = case["coefficient_over_E_star"] * indentation.E_PA / (1.0 - nu * nu)
-    layer = indentation.layer_coefficient(curve, "punch", case, nu)
-    return {"element": element, "rim_cell_m": rim_m, "far_cell_m": far_m, "tets": tets,
-            "poisson_ratio": nu, "frame_ms": summary["frame_stage_median_ms"]["total"],
-            "max_contacts": summary["max_contacts"], "fitted_coefficient": coefficient,
-            "relative_error": coefficient / analytic - 1.0, "layer_coefficient": layer,
-            "layer_relative_error": coefficient / layer - 1.0}
+    figures = indentation.score(summary, frames, "punch", case, nu)
+    figures.pop("curve")
+    return {"element": element, "variant": "graded", "rim_cell_m": rim_m, "far_cell_m": far_m,
+            "tets": tets, "poisson_ratio": nu, **figures}
 
 
 def label_of(r):
@@ -104,41 +100,11 @@ def table_markdown(runs, nus):
     return md
 
 
-def comparison_markdown(runs):
-    """Per quadratic run, the linear element's error at the same frame cost along its front."""
-    key = "layer_relative_error"
-    lines = []
-    for r in (r for r in runs if r["element"] == "p2"):
-        nu = r["poisson_ratio"]
-        p1 = [q for q in runs if q["element"] == "p1" and q["poisson_ratio"] == nu]
-        p1_error = indentation.error_at_cost(p1, r["frame_ms"], key)
-        head = f"- ν {nu:g}, {label_of(r)} ({r['frame_ms']:.1f} ms): {100 * r[key]:+.1f} %"
-        if p1_error is None or abs(p1_error) < 1e-3:  # as indentation.comparison_markdown
-            lines.append(head + "; no P1 error to compare at that cost (none charted there, or "
-                         "P1 crosses zero)")
-        else:
-            lines.append(head + f" against P1's {100 * p1_error:+.1f} % at the same cost "
-                         f"(ratio {abs(r[key] / p1_error):.2f})")
-    return lines
-
-
 def chart(bench, runs):
     fig, axis = plt.subplots(figsize=(7, 4.8))
-    labels = []
-    for (element, nu), (color, marker) in indentation.SERIES.items():
-        series = [r for r in runs if (r["element"], r["poisson_ratio"]) == (element, nu)]
-        if series:
-            labels += draw_pareto(axis, [(r["frame_ms"], 100 * r["layer_relative_error"])
-                                         for r in series], [label_of(r) for r in series],
-                                  color=color, marker=marker, name=f"{element.upper()}, ν {nu:g}")
-    axis.axhline(0.0, color="k", lw=0.8)
-    axis.set(xscale="log", xlabel="median visual frame (ms)",
-             ylabel="error against the bonded layer (%)",
-             title="punch on meshes graded to the rim (Gmsh), nodes only\n"
-                   "(labels: edge on the rim / far, mm; lines: Pareto fronts)")
-    axis.title.set_fontsize(10)
-    axis.legend(fontsize=7)
-    axis.grid(True, alpha=0.3)
+    labels = indentation.pareto_panel(
+        axis, runs, ["graded"], "punch on meshes graded to the rim (Gmsh), nodes only\n"
+        "(labels: edge on the rim / far, mm; lines: Pareto fronts)", label=label_of)
     place_labels(axis, labels)
     save_figure(fig, bench.path("punch_rim.png"))
     return {"file": "punch_rim.png",
@@ -160,7 +126,7 @@ def run(bench):
           "nodes only; errors against the half-space and the bonded layer):", ""]
     md += table_markdown(runs, nus) + ["", "Quadratic against linear at the same frame cost "
                                        "(errors against the bonded layer):", ""]
-    md += comparison_markdown(runs) + [""]
+    md += indentation.comparison_markdown(runs, label=label_of) + [""]
     if not bench.quick:
         element, rim_m, far_m = CONVERGED
         fine = press(bench, element, rim_m, far_m, indentation.NU)

@@ -22,6 +22,8 @@
 #include <system_error>
 #include <vector>
 
+#include "fem/gmsh_session.h"
+
 namespace {
 
 struct Options {
@@ -32,19 +34,6 @@ struct Options {
   double cell_size_m = 0.0;
   double grading_distance_m = 0.02;
   std::string out;
-};
-
-// Gmsh's one global model for one meshing: without the user's configuration files and on one
-// thread (the same mesh every time, as fem/gmsh_plugin.cc has it), finalised however the meshing ends.
-struct GmshSession {
-  GmshSession() {
-    gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
-    gmsh::option::setNumber("General.Terminal", 0);
-    gmsh::option::setNumber("General.NumThreads", 1);
-  }
-  ~GmshSession() { gmsh::finalize(); }
-  GmshSession(const GmshSession&) = delete;
-  GmshSession& operator=(const GmshSession&) = delete;
 };
 
 // The block with the rim circle (centred over the top face, at its height) fragmented into its
@@ -91,7 +80,7 @@ void GradeTowardsRim(const Options& o, const gmsh::vectorpair& rim) {
 
 // Meshes and writes `temporary`; the number of tets.
 std::size_t MeshInto(const Options& o, const std::string& temporary) {
-  GmshSession session;
+  hapsim::fem::internal::GmshSession session;
   gmsh::model::add("punch_block");
   const gmsh::vectorpair rim = MakeBlockWithRim(o);
   if (rim.empty()) throw std::runtime_error("Gmsh kept no curve of the rim in the top face");
