@@ -60,8 +60,8 @@ void AddQuadraticElasticForce(const Model& model, const Eigen::VectorXd& x_m,
     GatherQuadratic(model, x_m, t, &x_local_m, &X_local_m);
     const Eigen::Matrix3d& R = rotations[t];
     const P2Nodes u_local_m = R.transpose() * x_local_m - X_local_m;
-    const P2Vector f_local_N =
-        model.quadratic_stiffness[t] * Eigen::Map<const P2Vector>(u_local_m.data());
+    const P2Vector f_local_N = MultiplyPackedStiffness(
+        model.quadratic_stiffness[t], Eigen::Map<const P2Vector>(u_local_m.data()));
     for (int a = 0; a < kP2Nodes; ++a)
       force_N->segment<3>(3 * model.mesh.node(a, t)) -= R * f_local_N.segment<3>(3 * a);
   }
@@ -98,7 +98,7 @@ double CalcElasticEnergy(const Model& model, const Eigen::VectorXd& x_m,
       GatherQuadratic(model, x_m, t, &x_local_m, &X_local_m);
       const P2Nodes u_local_m = rotations[t].transpose() * x_local_m - X_local_m;
       const Eigen::Map<const P2Vector> u(u_local_m.data());
-      energy_J += 0.5 * u.dot(model.quadratic_stiffness[t] * u);
+      energy_J += 0.5 * u.dot(MultiplyPackedStiffness(model.quadratic_stiffness[t], u));
     }
     return energy_J;
   }

@@ -43,7 +43,7 @@ Model MakeModel(TetMesh mesh, const Material& material, const std::vector<int>& 
         X_m.col(a) = model.mesh.rest_positions_m.col(model.mesh.node(a, t));
       const QuadraticTetRest quadratic =
           MakeQuadraticTetRest(X_m, rest.lame_mu_Pa, rest.lame_lambda_Pa, material.density_kg_m3);
-      model.quadratic_stiffness.push_back(quadratic.stiffness);
+      model.quadratic_stiffness.push_back(PackP2Stiffness(quadratic.stiffness));
       for (int a = 0; a < kP2Nodes; ++a)
         model.node_mass_kg[model.mesh.node(a, t)] += quadratic.lumped_mass_kg[a];
     } else {

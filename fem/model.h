@@ -40,9 +40,10 @@ struct Model {
   Material material;
   // One per tet; for quadratic tets, its corner tet's (whose rotation is the element's).
   std::vector<TetRestData> tet_rest;
-  // Quadratic tets only: each tet's stiffness K_e at rest (fem/quadratic_tet.h), node-major over
-  // mesh.node(0..9, t); 7.2 kB a tet. Empty for linear tets.
-  std::vector<P2Matrix> quadratic_stiffness;
+  // Quadratic tets only: each tet's stiffness K_e at rest (fem/quadratic_tet.h), over
+  // mesh.node(0..9, t), its upper node-pair blocks packed (P2PackedStiffness, 3.96 kB a tet).
+  // Empty for linear tets.
+  std::vector<P2PackedStiffness> quadratic_stiffness;
   // (N) lumped mass: ρV/4 from each incident linear tet; a quadratic tet's HRZ masses (1/36 of
   // its ρV at a corner, 4/27 at an edge node for a straight one).
   Eigen::VectorXd node_mass_kg;

@@ -179,6 +179,29 @@ double CalcQuadraticTetEnergy(const QuadraticTetRest& rest, const P2Nodes& X_m, 
   return 0.5 * u.dot(rest.stiffness * u);
 }
 
+P2PackedStiffness PackP2Stiffness(const P2Matrix& stiffness) {
+  P2PackedStiffness packed;
+  int pair = 0;
+  for (int a = 0; a < kP2Nodes; ++a)
+    for (int b = a; b < kP2Nodes; ++b, ++pair)
+      packed.blocks[pair] = stiffness.block<3, 3>(3 * a, 3 * b);
+  return packed;
+}
+
+P2Vector MultiplyPackedStiffness(const P2PackedStiffness& stiffness, const P2Vector& u) {
+  P2Vector product = P2Vector::Zero();
+  int pair = 0;
+  for (int a = 0; a < kP2Nodes; ++a) {
+    product.segment<3>(3 * a) += stiffness.blocks[pair++] * u.segment<3>(3 * a);
+    for (int b = a + 1; b < kP2Nodes; ++b, ++pair) {
+      const Eigen::Matrix3d& block = stiffness.blocks[pair];  // K_ab; K_ba is its transpose
+      product.segment<3>(3 * a) += block * u.segment<3>(3 * b);
+      product.segment<3>(3 * b) += block.transpose() * u.segment<3>(3 * a);
+    }
+  }
+  return product;
+}
+
 P2Nodes MakeStraightP2Nodes(const Eigen::Matrix<double, 3, 4>& corners_m) {
   P2Nodes X;
   X.leftCols<4>() = corners_m;

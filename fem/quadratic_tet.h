@@ -52,6 +52,19 @@ using P2Nodes = Eigen::Matrix<double, 3, kP2Nodes>;       // node positions, col
 using P2Vector = Eigen::Matrix<double, 3 * kP2Nodes, 1>;  // node-major, as the body's dofs
 using P2Matrix = Eigen::Matrix<double, 3 * kP2Nodes, 3 * kP2Nodes>;
 
+// K_e held as its node-pair blocks K_ab with a ≤ b, in the order (0,0) (0,1) … (0,9) (1,1) … (9,9):
+// 55 blocks, 3.96 kB against the full matrix's 7.2 kB (K_ba = K_abᵀ). A body stores its tets' K_e
+// so: the two passes that read every K_e each step, assembly and the elastic force, were bound by
+// reading them (at 1.7k tets the 12 MB of full matrices is more than the caches hold), and the
+// pair order is the order assembly writes the blocks in (fem/stiffness_assembly.h).
+inline constexpr int kP2NodePairs = kP2Nodes * (kP2Nodes + 1) / 2;
+struct P2PackedStiffness {
+  std::array<Eigen::Matrix3d, kP2NodePairs> blocks;
+};
+P2PackedStiffness PackP2Stiffness(const P2Matrix& stiffness);
+// K_e u with K_e packed: each off-diagonal block serves both its pair's products.
+P2Vector MultiplyPackedStiffness(const P2PackedStiffness& stiffness, const P2Vector& u);
+
 // A point of the reference tet with its weight (the weights sum to the reference volume 1/6).
 struct QuadraturePoint {
   Eigen::Vector3d xi;

@@ -116,18 +116,19 @@ void StiffnessAssembler::Assemble(const Model& model, const std::vector<Eigen::M
   }
 }
 
-// R K_e Rᵀ block by block, R K_ab Rᵀ for each of the 55 node pairs, from the stored K_e.
+// R K_e Rᵀ block by block, R K_ab Rᵀ for each of the 55 node pairs, from the stored K_e (packed
+// in this pair order, so it is read once, front to back).
 void StiffnessAssembler::AssembleQuadratic(const Model& model,
                                            const std::vector<Eigen::Matrix3d>& rotations,
                                            double scale, double* values) const {
   for (int t = 0; t < model.num_tets(); ++t) {
     const Eigen::Matrix3d R = rotations[t];
-    const P2Matrix& K_e = model.quadratic_stiffness[t];
+    const P2PackedStiffness& K_e = model.quadratic_stiffness[t];
     const int* index = block_value_index_.data() + static_cast<size_t>(t) * stride_;
     int pair = 0;
     for (int a = 0; a < kP2Nodes; ++a)
       for (int b = a; b < kP2Nodes; ++b, ++pair) {
-        const Eigen::Matrix3d block = scale * (R * K_e.block<3, 3>(3 * a, 3 * b) * R.transpose());
+        const Eigen::Matrix3d block = scale * (R * K_e.blocks[pair] * R.transpose());
         AddBlock(block, b == a, model.mesh.node(a, t) > model.mesh.node(b, t), index + 3 * pair,
                  values);
       }

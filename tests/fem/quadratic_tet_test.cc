@@ -160,6 +160,22 @@ TEST(QuadraticTetRest, StiffnessHasSixRigidModesAndIsPositiveOtherwise) {
   EXPECT_GT(values[6], 1e-4 * largest);
 }
 
+
+// The packed K_e (what a body stores) multiplies as the full matrix does, and holds its blocks.
+TEST(P2PackedStiffness, MultipliesAsTheFullMatrix) {
+  std::mt19937 rng(10);
+  const P2Nodes X = MakeStraightP2Nodes(RandomCorners(&rng));
+  const QuadraticTetRest rest = MakeQuadraticTetRest(X, kMu, kLambda, kRho);
+  const P2PackedStiffness packed = PackP2Stiffness(rest.stiffness);
+  EXPECT_TRUE((packed.blocks[1] == rest.stiffness.block<3, 3>(0, 3)));     // pair (0, 1)
+  EXPECT_TRUE((packed.blocks[10] == rest.stiffness.block<3, 3>(3, 3)));    // pair (1, 1)
+  EXPECT_TRUE((packed.blocks[54] == rest.stiffness.block<3, 3>(27, 27)));  // pair (9, 9)
+  for (int trial = 0; trial < 3; ++trial) {
+    const P2Vector u = P2Vector::Random();
+    const P2Vector full = rest.stiffness * u;
+    EXPECT_LT((MultiplyPackedStiffness(packed, u) - full).norm(), 1e-13 * full.norm());
+  }
+}
 // f = −∂E/∂x with R held fixed, by central differences of the energy at a deformed state.
 TEST(QuadraticTetForce, IsMinusTheGradientOfTheEnergy) {
   std::mt19937 rng(11);
