@@ -257,7 +257,8 @@ def locking_markdown(name, at_nu, at_low_nu):
 SERIES = {("p1", 0.45): ("k", "o"), ("p1", 0.49): ("0.55", "o"),
           ("p2", 0.45): ("tab:blue", "s"), ("p2", 0.49): ("tab:cyan", "s")}
 VARIANT_TEXT = {"features": "", "nodes": ", nodes only", "rim": ", nodes only, rim-following",
-                "graded": ", nodes only, graded to the rim (Gmsh)"}
+                "graded": ", nodes only, graded to the rim (Gmsh)",
+                "disk": ", graded from the contact zone (Gmsh)"}
 
 
 def mesh_label(cells):

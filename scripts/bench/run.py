@@ -23,6 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cantilever  # noqa: E402
 import common  # noqa: E402
 import economy  # noqa: E402
+import hertz_disk  # noqa: E402
 import indentation  # noqa: E402
 import modes  # noqa: E402
 import punch_rim  # noqa: E402
@@ -31,6 +32,7 @@ import stability  # noqa: E402
 EXPERIMENTS = {
     "indentation": ("Indentation against Hertz and Boussinesq", indentation),
     "punch_rim": ("The flat punch on meshes graded towards its rim", punch_rim),
+    "hertz_disk": ("The sphere on meshes graded from its contact zone", hertz_disk),
     "modes": ("Haptic modes against the reference over visual rates", modes),
     "cantilever": ("Cantilever: mesh, lattice orientation, linear against corotational",
                    cantilever),

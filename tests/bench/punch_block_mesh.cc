@@ -5,6 +5,8 @@
 // Distance and Threshold fields). The pressure under a rigid flat punch is singular at the rim,
 // p ~ (a² − r²)^(−1/2) (Johnson, Contact Mechanics, §3.7), and a mesh graded towards the rim is
 // the textbook remedy; the lattices of scenes/flat_punch.yaml can only be fine around a point.
+// With --from-disk the size grows from the whole disk inside the circle instead: the sphere's
+// contact zone (scripts/bench/hertz_disk.py), fine all across it.
 // Not a test: a bench program. Writes linear tets (MSH 4.1; the scene's `element: p2` adds the
 // mid-edge nodes on straight edges), through a temporary file renamed at the end, and prints
 // "tets N". Usage: punch_block_mesh --help.
@@ -33,12 +35,13 @@ struct Options {
   double rim_cell_size_m = 0.0;
   double cell_size_m = 0.0;
   double grading_distance_m = 0.02;
+  bool from_disk = false;  // grade from the whole disk inside the rim, not from the rim alone
   std::string out;
 };
 
 // The block with the rim circle (centred over the top face, at its height) fragmented into its
-// top face; the curves that bound the disk inside the rim after the fragment (the rim, whether
-// one curve or split).
+// top face; the disk inside the rim after the fragment (its faces), or with --from-disk off the
+// curves that bound it (the rim, whether one curve or split).
 gmsh::vectorpair MakeBlockWithRim(const Options& o) {
   const int block = gmsh::model::occ::addBox(o.min_m[0], o.min_m[1], o.min_m[2],
                                              o.max_m[0] - o.min_m[0], o.max_m[1] - o.min_m[1],
@@ -51,18 +54,19 @@ gmsh::vectorpair MakeBlockWithRim(const Options& o) {
   std::vector<gmsh::vectorpair> origin;  // per input entity, what it became
   gmsh::model::occ::fragment({{3, block}}, {{2, disk}}, fragments, origin);
   gmsh::model::occ::synchronize();
+  if (o.from_disk) return origin.at(1);
   gmsh::vectorpair rim;
   gmsh::model::getBoundary(origin.at(1), rim, /*combined=*/false, /*oriented=*/false);
   return rim;
 }
 
-// h(d) = rim + (cell − rim) min(d / D, 1), d the distance from the rim.
+// h(d) = rim + (cell − rim) min(d / D, 1), d the distance from the rim (or the disk).
 void GradeTowardsRim(const Options& o, const gmsh::vectorpair& rim) {
   namespace field = gmsh::model::mesh::field;
-  std::vector<double> curves;
-  for (const auto& [dim, tag] : rim) curves.push_back(tag);
+  std::vector<double> tags;
+  for (const auto& [dim, tag] : rim) tags.push_back(tag);
   field::add("Distance", 1);
-  field::setNumbers(1, "CurvesList", curves);
+  field::setNumbers(1, o.from_disk ? "SurfacesList" : "CurvesList", tags);
   field::setNumber(1, "NumPointsPerCurve", 400);
   field::add("Threshold", 2);
   field::setNumber(2, "InField", 1);
@@ -112,6 +116,8 @@ int main(int argc, char** argv) {
   app.add_option("--grading-distance-m", o.grading_distance_m,
                  "Distance from the rim over which the edge length grows to --cell-size-m, m")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_flag("--from-disk", o.from_disk,
+               "Grade from the whole disk inside the rim (a sphere's contact zone), not the rim");
   app.add_option("--out", o.out, "Output mesh, FILE.msh")->required();
   CLI11_PARSE(app, argc, argv);
   for (int a = 0; a < 3; ++a)
