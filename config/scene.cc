@@ -23,8 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-SourceLocation LocationOf(const YamlMap& map) { return {map.file(), map.line(), map.path()}; }
-
 // Reads min_m and max_m. Requires max > min on every axis, or max ≥ min when `allow_flat` (a box
 // of zero thickness still selects the nodes on a plane).
 AxisAlignedBox ReadBox(const YamlMap& map, bool allow_flat) {
@@ -161,7 +159,7 @@ MeshSource ReadMesh(const YamlMap& map, const std::string& base_dir) {
   return mesh;
 }
 
-fem::Material ReadMaterial(const YamlMap& map) {
+fem::Material ReadElasticMaterial(const YamlMap& map) {
   map.CheckKeys({"youngs_modulus_Pa", "poisson_ratio", "density_kg_m3", "rayleigh_alpha_1_s",
                  "rayleigh_beta_s"});
   fem::Material material;
@@ -260,7 +258,7 @@ BodyScene ReadBody(const YamlMap& map, const std::string& base_dir) {
   body.quadratic = map.GetEnumOr<bool>("element", {{"p1", false}, {"p2", true}}, false);
   body.collision_surface = ReadEmbeddedSurface(map, "collision", base_dir);
   body.visual_surface = ReadEmbeddedSurface(map, "visual", base_dir);
-  body.material = ReadMaterial(map.GetMap("material"));
+  body.material = ReadElasticMaterial(map.GetMap("material"));
   body.options = ReadFemOptions(map);
   if (const std::optional<YamlMap> fixed = map.FindMap("fixed")) {
     fixed->CheckKeys({"min_m", "max_m"});

@@ -56,9 +56,9 @@ std::optional<Enum> Parse(const Enum (&values)[N], const std::string& name) {
   return std::nullopt;
 }
 
-SourceLocation LocationOf(const YamlMap& map) { return {map.file(), map.line(), map.path()}; }
-
 }  // namespace
+
+SourceLocation LocationOf(const YamlMap& map) { return {map.file(), map.line(), map.path()}; }
 
 MeshTransform ReadMeshTransform(const YamlMap& mesh) {
   MeshTransform transform;
@@ -190,7 +190,7 @@ ToolScene ReadTool(const YamlMap& map, const std::string& base_dir) {
 
 }  // namespace
 
-contact::Material ReadMaterial(const YamlMap& map) {
+contact::Material ReadContactMaterial(const YamlMap& map) {
   map.CheckKeys({"stiffness", "viscosity", "stickiness_N", "friction_N_m"});
   contact::Material material;
   material.stiffness = map.GetDoubleOr("stiffness", material.stiffness, ClosedInterval(0.0, 1.0));
@@ -264,7 +264,7 @@ RigidObjectScene ReadRigidObject(const YamlMap& map, const std::string& name,
                                map.KeyPath("friction_coefficient")};
   }
   if (const std::optional<YamlMap> material = map.FindMap("material"))
-    rigid.material = ReadMaterial(*material);
+    rigid.material = ReadContactMaterial(*material);
   if (map.Has("trajectory")) {
     for (const char* key : {"position_m", "rotation_vector_rad"})
       if (map.Has(key))
@@ -368,8 +368,8 @@ void ReadMaterialSection(const YamlMap& map, contact::MaterialParams* params) {
       map.GetDoubleOr("max_stiffness_N_m", params->max_stiffness_N_m, Above(0.0));
   params->max_damping_N_s_m =
       map.GetDoubleOr("max_damping_N_s_m", params->max_damping_N_s_m, AtLeast(0.0));
-  if (const std::optional<YamlMap> tool = map.FindMap("tool")) params->tool = ReadMaterial(*tool);
-  if (const std::optional<YamlMap> body = map.FindMap("body")) params->body = ReadMaterial(*body);
+  if (const std::optional<YamlMap> tool = map.FindMap("tool")) params->tool = ReadContactMaterial(*tool);
+  if (const std::optional<YamlMap> body = map.FindMap("body")) params->body = ReadContactMaterial(*body);
 }
 
 contact::GodObjectParams ReadGodObject(const YamlMap& map) {

@@ -12,6 +12,9 @@
 
 namespace hapsim::config {
 
+// Where `map` is in its file (file, line, key path), for the scene's errors and records.
+SourceLocation LocationOf(const YamlMap& map);
+
 // Reads tool, coupling, contact, haptic and device from the document root into *scene, with the
 // checks between sections: everything but `tool` needs a tool; a tool needs coupling and device;
 // haptic.rate_hz · time.dt_s must be a whole number ≥ 1 (`time` is the checked time section).

@@ -14,7 +14,6 @@ using Eigen::Vector3d;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Active normals count as dependent when the Gram determinant det(NᵀN) is below this (for two
 // planes 1 − cos²φ = sin²φ: φ < 1e-5 rad); the Lagrange system is then (nearly) singular.
 constexpr double kDependentGram = 1e-10;
@@ -234,7 +233,7 @@ void GodObject::ApplyTextureAndShading() {
     const double s_m =
         params_.texture_direction_O.dot(mesh.X_WO.inverse(Eigen::Isometry) * proxy_W_m_);
     const double h_m =
-        params_.texture_amplitude_m * std::sin(2.0 * kPi * s_m / params_.texture_wavelength_m);
+        params_.texture_amplitude_m * std::sin(2.0 * M_PI * s_m / params_.texture_wavelength_m);
     force_W_N_ += params_.stiffness_N_m * h_m * c.normal_W;
     normal_force_N_ += params_.stiffness_N_m * h_m;
   }

@@ -7,8 +7,6 @@
 namespace hapsim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // A surface of revolution about z through the profile points (ρ, z), from the bottom pole
 // (ρ = 0) to the top pole (ρ = 0), `around` facets around. Outward for a profile that goes up
 // with the interior on its left (ρ decreasing to the left).
@@ -29,7 +27,7 @@ TriangleMesh MakeRevolutionMesh(std::vector<Eigen::Vector2d> profile, int around
   for (int ring = 0; ring < rings; ++ring) {
     const Eigen::Vector2d& p = profile[ring + 1];
     for (int k = 0; k < around; ++k) {
-      const double phi = 2.0 * kPi * k / around;
+      const double phi = 2.0 * M_PI * k / around;
       mesh.vertices_m.col(vertex(ring, k)) =
           Eigen::Vector3d(p.x() * std::cos(phi), p.x() * std::sin(phi), p.y());
     }
@@ -93,8 +91,8 @@ TriangleMesh MakeShapeMesh(const ToolShape& shape, int segments) {
     case ToolShape::Kind::kCapsule:
       if (!(r > 0.0) || !(half >= 0.0))
         throw std::invalid_argument("MakeShapeMesh: sphere or capsule radius must be > 0");
-      AddArc(0.0, -half, r, -0.5 * kPi, 0.0, segments / 4, &profile);  // bottom cap
-      AddArc(0.0, half, r, 0.0, 0.5 * kPi, segments / 4, &profile);    // top cap
+      AddArc(0.0, -half, r, -0.5 * M_PI, 0.0, segments / 4, &profile);  // bottom cap
+      AddArc(0.0, half, r, 0.0, 0.5 * M_PI, segments / 4, &profile);    // top cap
       return MakeRevolutionMesh(profile, segments);
     case ToolShape::Kind::kCylinder: {
       const double e = shape.edge_radius_m;
@@ -102,8 +100,8 @@ TriangleMesh MakeShapeMesh(const ToolShape& shape, int segments) {
         throw std::invalid_argument("MakeShapeMesh: cylinder radius and length must be > 0");
       profile.emplace_back(0.0, -half);
       if (e > 0.0) {
-        AddArc(r - e, -half + e, e, -0.5 * kPi, 0.0, segments / 4, &profile);
-        AddArc(r - e, half - e, e, 0.0, 0.5 * kPi, segments / 4, &profile);
+        AddArc(r - e, -half + e, e, -0.5 * M_PI, 0.0, segments / 4, &profile);
+        AddArc(r - e, half - e, e, 0.0, 0.5 * M_PI, segments / 4, &profile);
       } else {
         profile.emplace_back(r, -half);
         profile.emplace_back(r, half);

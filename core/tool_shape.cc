@@ -12,8 +12,6 @@
 namespace hapsim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 void Require(bool condition, const std::string& message) {
   if (!condition) throw std::invalid_argument("CalcMassProperties: " + message);
 }
@@ -21,7 +19,7 @@ void Require(bool condition, const std::string& message) {
 // Uniform solid sphere: m = ρ (4/3) π r³, I = (2/5) m r² on every axis.
 MassProperties CalcSphere(double r, double density) {
   MassProperties props;
-  props.mass_kg = density * 4.0 / 3.0 * kPi * r * r * r;
+  props.mass_kg = density * 4.0 / 3.0 * M_PI * r * r * r;
   props.inertia_com_kg_m2 = Eigen::Matrix3d::Identity() * (0.4 * props.mass_kg * r * r);
   return props;
 }
@@ -30,7 +28,7 @@ MassProperties CalcSphere(double r, double density) {
 // I_zz = m r²/2, I_xx = I_yy = m (3 r² + h²)/12.
 MassProperties CalcCylinder(double r, double h, double density) {
   MassProperties props;
-  const double m = density * kPi * r * r * h;
+  const double m = density * M_PI * r * r * h;
   props.mass_kg = m;
   const double lateral = m * (3.0 * r * r + h * h) / 12.0;
   props.inertia_com_kg_m2.diagonal() << lateral, lateral, 0.5 * m * r * r;
@@ -47,14 +45,14 @@ MassProperties CalcRoundedCylinder(double r, double h, double e, double density)
   const double h_straight = h - 2.0 * e;
   MassProperties props = CalcCylinder(r, h_straight, density);
   constexpr int kIntervals = 4096;
-  const double step = 0.5 * kPi / kIntervals;
+  const double step = 0.5 * M_PI / kIntervals;
   double mass = 0.0, i_zz = 0.0, i_xx = 0.0;
   for (int k = 0; k <= kIntervals; ++k) {
     const double weight = (k == 0 || k == kIntervals) ? 1.0 : (k % 2 == 1 ? 4.0 : 2.0);
     const double phi = k * step;
     const double S = r - e + e * std::cos(phi);
     const double z = 0.5 * h_straight + e * std::sin(phi);
-    const double dm = density * kPi * S * S * e * std::cos(phi);  // per dφ
+    const double dm = density * M_PI * S * S * e * std::cos(phi);  // per dφ
     mass += weight * dm;
     i_zz += weight * dm * 0.5 * S * S;
     i_xx += weight * dm * (0.25 * S * S + z * z);
@@ -71,7 +69,7 @@ MassProperties CalcRoundedCylinder(double r, double h, double e, double density)
 // I_xx,h = m_h (2r²/5 + h²/4 + 3hr/8), I_zz,h = (2/5) m_h r².
 MassProperties CalcCapsule(double r, double h, double density) {
   MassProperties props = CalcCylinder(r, h, density);
-  const double m_caps = density * 4.0 / 3.0 * kPi * r * r * r;  // both hemispheres
+  const double m_caps = density * 4.0 / 3.0 * M_PI * r * r * r;  // both hemispheres
   props.mass_kg += m_caps;
   const double lateral = m_caps * (0.4 * r * r + 0.25 * h * h + 0.375 * h * r);
   props.inertia_com_kg_m2.diagonal() += Eigen::Vector3d(lateral, lateral, 0.4 * m_caps * r * r);

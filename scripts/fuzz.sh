@@ -13,7 +13,8 @@
 # beyond -malloc_limit_mb or -rss_limit_mb); where the input was saved and how to keep it as a
 # regression are printed. 2: usage, or the build or a fuzzer could not run.
 #
-# Environment: HAPSIM_FUZZ_BUILD_DIR (default build-fuzz), HAPSIM_FUZZ_JOBS (build, default 2),
+# Environment: HAPSIM_FUZZ_BUILD_DIR (default build-fuzz; .ci/run gives build-asan, where
+# HAPSIM_ASAN_FUZZ=1 scripts/test_sanitized.sh asan has built the targets already), HAPSIM_FUZZ_JOBS (build, default 2),
 # HAPSIM_FUZZ_STRICT=1 (a reader's std::exception other than InputError is a finding too),
 # HAPSIM_FUZZ_KEEP_GOING=1 (long sessions: libFuzzer's fork mode goes on past a finding, so that
 # one known bug does not hide the next; each distinct finding is then listed once).
@@ -51,6 +52,7 @@ if ! command -v clang++ > /dev/null; then
 fi
 configure=(-S . -B "$build" -DHAPSIM_FUZZ=ON -DHAPSIM_BUILD_TESTS=ON -DHAPSIM_BUILD_BENCHMARKS=OFF)
 if [[ ! -f $build/CMakeCache.txt ]]; then
+  configure+=(-DHAPSIM_UNITY_LIBRARIES=ON)  # the libraries four files to a unit (CMakeLists.txt)
   # -O1 (ASan's usual level) builds in half the time of -O2; no NDEBUG: Eigen's and hapsim's
   # assertions are findings too. Line tables only, as the ASan build: a finding's stack still
   # names file and line, and the build is shorter than with full debug information.

@@ -37,7 +37,13 @@ run_asan() {
   # clang (as the fuzz build): GCC 12's vptr check breaks LCM's callbacks (see CMakeLists.txt).
   # -O1 with line tables: half the build time of -O2 -g, stack traces still name file and line;
   # assertions (Eigen's and hapsim's) stay on. A Debug build makes the accuracy tests far slower.
-  local configure=(-S . -B build-asan -DHAPSIM_SANITIZE=ON -DHAPSIM_BUILD_BENCHMARKS=OFF)
+  # HAPSIM_ASAN_FUZZ=1 (.ci/run): the fuzz targets are built here too, as libFuzzer programs, and
+  # the libraries with libFuzzer's coverage, so that scripts/fuzz.sh can run them from this tree
+  # instead of building the libraries a second time (184 s). The coverage makes the suite slower:
+  # 391 against about 310 s (a hand run, 2026-11-29), and the fuzz_*_inputs tests are not in it
+  # (fuzz.sh runs every committed input). Unity batches for the libraries either way.
+  local configure=(-S . -B build-asan -DHAPSIM_SANITIZE=ON -DHAPSIM_BUILD_BENCHMARKS=OFF
+    -DHAPSIM_UNITY_LIBRARIES=ON "-DHAPSIM_FUZZ=$([ "${HAPSIM_ASAN_FUZZ:-0}" = 1 ] && echo ON || echo OFF)")
   if [ ! -f build-asan/CMakeCache.txt ]; then
     configure+=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
       -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only")
@@ -100,7 +106,8 @@ run_tsan() {
     echo "test_sanitized: build-tsan/ was configured with another compiler; rebuilt with clang"
     rm -rf build-tsan
   fi
-  local configure=(-S . -B build-tsan -DHAPSIM_TSAN=ON -DHAPSIM_BUILD_BENCHMARKS=OFF)
+  local configure=(-S . -B build-tsan -DHAPSIM_TSAN=ON -DHAPSIM_BUILD_BENCHMARKS=OFF
+    -DHAPSIM_UNITY_LIBRARIES=ON)
   if [ ! -f build-tsan/CMakeCache.txt ]; then
     configure+=(-DCMAKE_CXX_COMPILER=clang++
       -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only")
