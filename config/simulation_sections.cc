@@ -368,8 +368,10 @@ void ReadMaterialSection(const YamlMap& map, contact::MaterialParams* params) {
       map.GetDoubleOr("max_stiffness_N_m", params->max_stiffness_N_m, Above(0.0));
   params->max_damping_N_s_m =
       map.GetDoubleOr("max_damping_N_s_m", params->max_damping_N_s_m, AtLeast(0.0));
-  if (const std::optional<YamlMap> tool = map.FindMap("tool")) params->tool = ReadContactMaterial(*tool);
-  if (const std::optional<YamlMap> body = map.FindMap("body")) params->body = ReadContactMaterial(*body);
+  if (const std::optional<YamlMap> tool = map.FindMap("tool"))
+    params->tool = ReadContactMaterial(*tool);
+  if (const std::optional<YamlMap> body = map.FindMap("body"))
+    params->body = ReadContactMaterial(*body);
 }
 
 contact::GodObjectParams ReadGodObject(const YamlMap& map) {

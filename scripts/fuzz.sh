@@ -14,7 +14,8 @@
 # regression are printed. 2: usage, or the build or a fuzzer could not run.
 #
 # Environment: HAPSIM_FUZZ_BUILD_DIR (default build-fuzz; .ci/run gives build-asan, where
-# HAPSIM_ASAN_FUZZ=1 scripts/test_sanitized.sh asan has built the targets already), HAPSIM_FUZZ_JOBS (build, default 2),
+# HAPSIM_ASAN_FUZZ=1 scripts/test_sanitized.sh asan has built the targets already),
+# HAPSIM_FUZZ_JOBS (build, default 2),
 # HAPSIM_FUZZ_STRICT=1 (a reader's std::exception other than InputError is a finding too),
 # HAPSIM_FUZZ_KEEP_GOING=1 (long sessions: libFuzzer's fork mode goes on past a finding, so that
 # one known bug does not hide the next; each distinct finding is then listed once).

@@ -20,7 +20,8 @@
 #       _dl_relocate_object); a five-line target_clones program built with -fsanitize=thread
 #       crashes the same way with either compiler. Not CHOLMOD, OpenBLAS or the ASLR bits. Under
 #       TSan that function is now built without clones (the baseline loop alone).
-# Builds with -j2 (HAPSIM_JOBS to change). Calls scripts/setup.sh first for the packages.
+# Builds with -j2 (HAPSIM_JOBS to change); HAPSIM_ASAN_FUZZ=1 builds the fuzz targets into
+# build-asan/ too (run_asan says why). The packages it needs: scripts/setup.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 which=${1:-all}
@@ -41,9 +42,12 @@ run_asan() {
   # the libraries with libFuzzer's coverage, so that scripts/fuzz.sh can run them from this tree
   # instead of building the libraries a second time (184 s). The coverage makes the suite slower:
   # 391 against about 310 s (a hand run, 2026-11-29), and the fuzz_*_inputs tests are not in it
-  # (fuzz.sh runs every committed input). Unity batches for the libraries either way.
+  # (fuzz.sh runs every committed input). Once on, it stays on in build-asan/'s cache (turning it
+  # off recompiles every library): remove the folder for a build without it. Unity batches for
+  # the libraries either way.
   local configure=(-S . -B build-asan -DHAPSIM_SANITIZE=ON -DHAPSIM_BUILD_BENCHMARKS=OFF
-    -DHAPSIM_UNITY_LIBRARIES=ON "-DHAPSIM_FUZZ=$([ "${HAPSIM_ASAN_FUZZ:-0}" = 1 ] && echo ON || echo OFF)")
+    -DHAPSIM_UNITY_LIBRARIES=ON)
+  if [ "${HAPSIM_ASAN_FUZZ:-0}" = 1 ]; then configure+=(-DHAPSIM_FUZZ=ON); fi
   if [ ! -f build-asan/CMakeCache.txt ]; then
     configure+=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
       -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only")

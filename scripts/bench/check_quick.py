@@ -49,8 +49,8 @@ def finite_everywhere(value, path, problems):
 def check_graded(experiment, what, band):
     """A press on Gmsh meshes graded towards its contact (punch_rim, hertz_disk): a conforming FEM
     whose contact ends where the tool's does is stiffer than the bonded layer, within the quick
-    meshes' band; the quadratic mesh, on a fifth of the tets or fewer, nearer to it than the linear
-    one."""
+    meshes' band; the quadratic mesh, on a fifth to a quarter of the tets, nearer to it than the
+    linear one."""
     problems = []
     errors = {r["element"]: r["layer_relative_error"] for r in experiment["runs"]}
     for element, error in errors.items():

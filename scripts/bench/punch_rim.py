@@ -1,4 +1,5 @@
 """The flat punch on meshes graded towards its rim: linear against quadratic tets (issue 27).
+Its meshing and press serve hertz_disk.py too (the sphere on meshes graded from its contact zone).
 
 Under a rigid flat punch the pressure is singular at the rim, p ~ (a² − r²)^(−1/2) (Johnson,
 Contact Mechanics, §3.7). On the lattices of the indentation experiment the cells are finest at the
@@ -35,6 +36,14 @@ CONVERGED = ("p2", 0.5e-3, 4e-3)
 # What each case's mesh is graded from (punch_block_mesh): the punch's rim, nodes only, as above;
 # the sphere's contact zone (hertz_disk.py), a disk of HERTZ_DISK_M, the tool's features on.
 HERTZ_DISK_M = 3e-3
+# Per case: its runs' and meshes' prefix, punch_block_mesh's grading arguments, and the edits
+# beside mesh, ν and element. An unknown case is a KeyError.
+GRADED_CASES = {
+    "punch": ("punch_rim",
+              ["--rim-radius-m", indentation.PUNCH_A_M * (1.0 - indentation.RIM_INSIDE)],
+              {"contact.tool_features": False}),
+    "hertz": ("hertz_disk", ["--rim-radius-m", HERTZ_DISK_M, "--from-disk"], {}),
+}
 _MADE = {}  # (bench's folder, case, h_rim, h_far): (mesh file, tets); each mesh made once
 
 
@@ -42,6 +51,7 @@ def make_mesh(bench, rim_m, far_m, name="punch"):
     """The block's mesh file (OUT/meshes/) and its tet count, from punch_block_mesh, which the
     build puts beside `hapsim` (BUILD/apps/hapsim, BUILD/tests/punch_block_mesh). The block's
     corners are the case's scene's; name "punch" grades from the rim, "hertz" from the disk."""
+    prefix, grading, _ = GRADED_CASES[name]
     key = (bench.out_dir, name, rim_m, far_m)
     if key in _MADE:
         return _MADE[key]
@@ -51,11 +61,6 @@ def make_mesh(bench, rim_m, far_m, name="punch"):
         raise BenchError(f"{program} is missing: the build makes it with the tests")
     with open(os.path.join(REPO, indentation.CASES[name]["scene"])) as f:
         box = yaml.safe_load(f)["body"]["mesh"]["box"]
-    if name == "punch":
-        prefix, grading = "punch_rim", ["--rim-radius-m",
-                                        indentation.PUNCH_A_M * (1.0 - indentation.RIM_INSIDE)]
-    else:
-        prefix, grading = "hertz_disk", ["--rim-radius-m", HERTZ_DISK_M, "--from-disk"]
     path = bench.path("meshes", f"{prefix}_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm.msh")
     out = bench.run_program(program, "--min-m", *box["min_m"], "--max-m", *box["max_m"],
                             *grading, "--rim-cell-size-m", rim_m, "--cell-size-m", far_m,
@@ -68,14 +73,12 @@ def press(bench, element, rim_m, far_m, nu, name="punch"):
     """One press on the graded mesh (h_rim, h_far) in `element` at ν: the punch nodes only, the
     sphere as its scene has it; its fit and errors as indentation.press gives them."""
     case = indentation.CASES[name]
-    prefix = "punch_rim" if name == "punch" else "hertz_disk"
+    prefix, _, contact_edits = GRADED_CASES[name]
     label = f"{prefix}_{element}_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm_nu{nu:g}"
     bench.progress(f"{prefix}: {label}")
     mesh_path, tets = make_mesh(bench, rim_m, far_m, name)
     edits = {"body.mesh": {"file": mesh_path}, "body.material.poisson_ratio": nu,
-             "body.element": element}
-    if name == "punch":
-        edits["contact.tool_features"] = False
+             "body.element": element, **contact_edits}
     summary, frames, _ = bench.sim(bench.scene_variant(case["scene"], edits, label), label)
     figures = indentation.score(summary, frames, name, case, nu)
     figures.pop("curve")
@@ -121,8 +124,8 @@ def chart(bench, runs, file="punch_rim.png",
                   "rim (edge on the rim / far from it, mm)"):
     fig, axis = plt.subplots(figsize=(7, 4.8))
     labels = indentation.pareto_panel(
-        axis, runs, sorted({r["variant"] for r in runs}), title + "\n(labels: edge near / far, mm; lines: Pareto fronts)",
-        label=label_of)
+        axis, runs, sorted({r["variant"] for r in runs}),
+        title + "\n(labels: edge near / far, mm; lines: Pareto fronts)", label=label_of)
     place_labels(axis, labels)
     save_figure(fig, bench.path(file))
     return {"file": file,

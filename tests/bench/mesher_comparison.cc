@@ -1,6 +1,7 @@
 // Gmsh (fem/surface_mesher.h, what hapsim uses) against CGAL's Mesh_3 on the same closed
 // surfaces, at the same target cell size (issue 26 item 1): meshing time (median of 3), tets,
 // the extreme dihedral angles, and the volume against the one the surface encloses. Not a test:
+// configure with -DHAPSIM_BUILD_MESHER_COMPARISON=ON (and the benchmarks on, as by default), then
 // run `build/tests/mesher_comparison` from the repository root (it reads scenes/meshes/liver.obj);
 // it prints a Markdown table (docs/SCENES.md).
 //

@@ -40,8 +40,8 @@ struct Options {
 };
 
 // The block with the rim circle (centred over the top face, at its height) fragmented into its
-// top face; the disk inside the rim after the fragment (its faces), or with --from-disk off the
-// curves that bound it (the rim, whether one curve or split).
+// top face; what the size grows from: with --from-disk the disk inside the rim after the fragment
+// (its faces), without it the curves that bound the disk (the rim, whether one curve or split).
 gmsh::vectorpair MakeBlockWithRim(const Options& o) {
   const int block = gmsh::model::occ::addBox(o.min_m[0], o.min_m[1], o.min_m[2],
                                              o.max_m[0] - o.min_m[0], o.max_m[1] - o.min_m[1],
@@ -87,7 +87,9 @@ std::size_t MeshInto(const Options& o, const std::string& temporary) {
   hapsim::fem::internal::GmshSession session;
   gmsh::model::add("punch_block");
   const gmsh::vectorpair rim = MakeBlockWithRim(o);
-  if (rim.empty()) throw std::runtime_error("Gmsh kept no curve of the rim in the top face");
+  if (rim.empty())
+    throw std::runtime_error(std::string("Gmsh kept no ") + (o.from_disk ? "face" : "curve") +
+                             " of the rim's disk in the top face");
   GradeTowardsRim(o, rim);
   gmsh::model::mesh::generate(3);
   std::vector<std::size_t> tets, nodes;
@@ -102,19 +104,22 @@ std::size_t MeshInto(const Options& o, const std::string& temporary) {
 int main(int argc, char** argv) {
   CLI::App app{
       "A block whose top face holds a flat punch's rim circle, meshed by Gmsh with linear tets "
-      "finest along the rim (the flat-punch experiment, scripts/bench/punch_rim.py)."};
+      "finest along the rim (the flat-punch experiment, scripts/bench/punch_rim.py), or with "
+      "--from-disk finest across the disk inside it (a sphere's contact, hertz_disk.py)."};
   Options o;
   app.add_option("--min-m", o.min_m, "Block's lower corner, m")->capture_default_str();
   app.add_option("--max-m", o.max_m, "Block's upper corner, m (the rim at its top)")
       ->capture_default_str();
   app.add_option("--rim-radius-m", o.rim_radius_m, "Rim circle's radius, m, centred over the top")
       ->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--rim-cell-size-m", o.rim_cell_size_m, "Tet edge length on the rim, m")
+  app.add_option("--rim-cell-size-m", o.rim_cell_size_m,
+                 "Tet edge length on the rim (on the disk with --from-disk), m")
       ->required()->check(CLI::PositiveNumber);
   app.add_option("--cell-size-m", o.cell_size_m, "Tet edge length far from the rim, m")
       ->required()->check(CLI::PositiveNumber);
   app.add_option("--grading-distance-m", o.grading_distance_m,
-                 "Distance from the rim over which the edge length grows to --cell-size-m, m")
+                 "Distance from the rim (or disk) over which the edge length grows to "
+                 "--cell-size-m, m")
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_flag("--from-disk", o.from_disk,
                "Grade from the whole disk inside the rim (a sphere's contact zone), not the rim");

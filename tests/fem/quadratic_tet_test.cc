@@ -160,7 +160,6 @@ TEST(QuadraticTetRest, StiffnessHasSixRigidModesAndIsPositiveOtherwise) {
   EXPECT_GT(values[6], 1e-4 * largest);
 }
 
-
 // The packed K_e (what a body stores) multiplies as the full matrix does, and holds its blocks.
 TEST(P2PackedStiffness, MultipliesAsTheFullMatrix) {
   std::mt19937 rng(10);
@@ -176,6 +175,7 @@ TEST(P2PackedStiffness, MultipliesAsTheFullMatrix) {
     EXPECT_LT((MultiplyPackedStiffness(packed, u) - full).norm(), 1e-13 * full.norm());
   }
 }
+
 // f = −∂E/∂x with R held fixed, by central differences of the energy at a deformed state.
 TEST(QuadraticTetForce, IsMinusTheGradientOfTheEnergy) {
   std::mt19937 rng(11);
