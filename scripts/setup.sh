@@ -28,8 +28,9 @@ fi
 # sanitizer runtimes for scripts/fuzz.sh), OpenCV's viz (VTK), imgcodecs and videoio with libx11
 # (`hapsim view` and `hapsim train`: the 3D window, PNG screenshots, AVI videos), xvfb, xdotool
 # and x11-utils (headless windows in the tests, driven as a person would; xwininfo), the Gmsh API
-# (libgmsh-dev: organ surfaces filled with tets at load, fem/surface_mesher.h), CGAL (libcgal-dev, header-only: tests/bench/mesher_comparison.cc measures
-# its Mesh_3 against Gmsh; built with -DHAPSIM_BUILD_MESHER_COMPARISON=ON), lld (links the tests in a quarter of GNU ld's time;
+# (libgmsh-dev: organ surfaces filled with tets at load, fem/surface_mesher.h), CGAL (libcgal-dev,
+# header-only: tests/bench/mesher_comparison.cc measures its Mesh_3 against Gmsh; built with
+# -DHAPSIM_BUILD_MESHER_COMPARISON=ON), lld (links the tests in a quarter of GNU ld's time;
 # CMakeLists.txt uses it when present).
 packages=(
   build-essential cmake pkg-config

@@ -24,7 +24,7 @@ from common import REPO, BenchError, place_labels, plt, save_figure
 
 GRADING_DISTANCE_M = 0.02
 # (h_rim, h_far) per element: the full sweep, the quick one, and the fine mesh that checks the
-# reference (full run, ν 0.45 only: a 160 ms frame).
+# reference (full run, ν 0.45 only: a 150 ms frame).
 # The dearest of each (P1 0.2/3.5: 38k tets, 30 ms a frame; P2 0.6/8) reach past the 10 ms budget:
 # where P2's ratio to P1 crosses ⅓ at ν 0.45.
 MESHES = {"p1": [(0.6e-3, 10e-3), (0.4e-3, 6.5e-3), (0.3e-3, 5e-3), (0.25e-3, 4e-3),
@@ -36,13 +36,14 @@ CONVERGED = ("p2", 0.5e-3, 4e-3)
 # What each case's mesh is graded from (punch_block_mesh): the punch's rim, nodes only, as above;
 # the sphere's contact zone (hertz_disk.py), a disk of HERTZ_DISK_M, the tool's features on.
 HERTZ_DISK_M = 3e-3
-# Per case: its runs' and meshes' prefix, punch_block_mesh's grading arguments, and the edits
-# beside mesh, ν and element. An unknown case is a KeyError.
+# Per case: its runs' and meshes' prefix, its runs' `variant` (indentation.VARIANT_TEXT),
+# punch_block_mesh's grading arguments, and the edits beside mesh, ν and element. An unknown case
+# is a KeyError.
 GRADED_CASES = {
-    "punch": ("punch_rim",
+    "punch": ("punch_rim", "graded",
               ["--rim-radius-m", indentation.PUNCH_A_M * (1.0 - indentation.RIM_INSIDE)],
               {"contact.tool_features": False}),
-    "hertz": ("hertz_disk", ["--rim-radius-m", HERTZ_DISK_M, "--from-disk"], {}),
+    "hertz": ("hertz_disk", "disk", ["--rim-radius-m", HERTZ_DISK_M, "--from-disk"], {}),
 }
 _MADE = {}  # (bench's folder, case, h_rim, h_far): (mesh file, tets); each mesh made once
 
@@ -51,7 +52,7 @@ def make_mesh(bench, rim_m, far_m, name="punch"):
     """The block's mesh file (OUT/meshes/) and its tet count, from punch_block_mesh, which the
     build puts beside `hapsim` (BUILD/apps/hapsim, BUILD/tests/punch_block_mesh). The block's
     corners are the case's scene's; name "punch" grades from the rim, "hertz" from the disk."""
-    prefix, grading, _ = GRADED_CASES[name]
+    prefix, _, grading, _ = GRADED_CASES[name]
     key = (bench.out_dir, name, rim_m, far_m)
     if key in _MADE:
         return _MADE[key]
@@ -73,7 +74,7 @@ def press(bench, element, rim_m, far_m, nu, name="punch"):
     """One press on the graded mesh (h_rim, h_far) in `element` at ν: the punch nodes only, the
     sphere as its scene has it; its fit and errors as indentation.press gives them."""
     case = indentation.CASES[name]
-    prefix, _, contact_edits = GRADED_CASES[name]
+    prefix, variant, _, contact_edits = GRADED_CASES[name]
     label = f"{prefix}_{element}_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm_nu{nu:g}"
     bench.progress(f"{prefix}: {label}")
     mesh_path, tets = make_mesh(bench, rim_m, far_m, name)
@@ -83,8 +84,7 @@ def press(bench, element, rim_m, far_m, nu, name="punch"):
     figures = indentation.score(summary, frames, name, case, nu)
     figures.pop("curve")
     # near_cell_m: the edge on the rim (punch) or the disk (sphere).
-    return {"element": element, "variant": "graded" if name == "punch" else "disk",
-            "near_cell_m": rim_m, "far_cell_m": far_m, "tets": tets, "poisson_ratio": nu,
+    return {"element": element, "variant": variant, "near_cell_m": rim_m, "far_cell_m": far_m, "tets": tets, "poisson_ratio": nu,
             **figures}
 
 
