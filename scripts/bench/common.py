@@ -129,17 +129,22 @@ def pareto_front(points):
 LABEL_OFFSETS = [(4, 3, "left", "bottom"), (4, -3, "left", "top"), (-4, 3, "right", "bottom"),
                  (-4, -3, "right", "top"), (4, 11, "left", "bottom"), (4, -11, "left", "top"),
                  (-4, 11, "right", "bottom"), (-4, -11, "right", "top"),
-                 (10, 0, "left", "center"), (-10, 0, "right", "center")]
+                 (10, 0, "left", "center"), (-10, 0, "right", "center"),
+                 (4, 19, "left", "bottom"), (4, -19, "left", "top"),
+                 (-4, 19, "right", "bottom"), (-4, -19, "right", "top")]
 
 
 def place_labels(axis, labels, fontsize=7, avoid=()):
-    """Annotates each (x, y, text, color) beside its point, at the first of LABEL_OFFSETS where it
+    """Annotates each (x, y, text, color[, optional]) beside its point, at the first of
+    LABEL_OFFSETS where it
     stays inside the axes and overlaps nothing placed before it: no label (in any panel of the
     figure), no text on the axis ("finest", a line's name), not its legend, no marker of the
     points labelled (a 5-point square around each) and no (x, y, radius in points) of `avoid` (a
-    ring drawn around a point). Where none is free, at the first offset. Call once every panel of
-    the figure is set up: placement is measured in the figure's pixels, and the first call fixes
-    the layout. Labels are placed in the order given, so put the ones that matter most first."""
+    ring drawn around a point). Where none is free, at the first offset, or not at all if the
+    label is optional (draw_pareto's off the front: the tables name every point). Call once every
+    panel of the figure is set up: placement is measured in the figure's pixels, and the first
+    call fixes the layout. The required labels are placed first, then the optional ones, each in
+    the order given, so put the ones that matter most first."""
     fig = axis.figure
     if not hasattr(fig, "_hapsim_label_boxes"):
         # The final layout, once per figure: the labels are kept out of it (set_in_layout), so
@@ -160,12 +165,16 @@ def place_labels(axis, labels, fontsize=7, avoid=()):
         r = radius_pt * points_to_pixels
         return (px - r, py - r, px + r, py + r)
 
-    markers = [square(x, y, 5) for x, y, _, _ in labels] + [square(*a) for a in avoid]
+    markers = [square(label[0], label[1], 5) for label in labels] + [square(*a) for a in avoid]
 
     def overlaps(a, b):
         return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
-    for i, (x, y, text, color) in enumerate(labels):
+    def optional(i):
+        return len(labels[i]) > 4 and labels[i][4]
+
+    for i in sorted(range(len(labels)), key=optional):
+        x, y, text, color = labels[i][:4]
         if not text:
             continue
         chosen = None
@@ -178,7 +187,7 @@ def place_labels(axis, labels, fontsize=7, avoid=()):
                     and box[3] <= inside[3]
                     and not any(overlaps(box, other) for other in taken)
                     and not any(overlaps(box, m) for j, m in enumerate(markers) if j != i))
-            if chosen is None or free:
+            if free or (chosen is None and not optional(i)):
                 if chosen is not None:
                     chosen[0].remove()
                 chosen = (note, box)
@@ -186,20 +195,24 @@ def place_labels(axis, labels, fontsize=7, avoid=()):
                     break
             else:
                 note.remove()
-        taken.append(chosen[1])
+        if chosen is not None:
+            taken.append(chosen[1])
 
 
 def draw_pareto(axis, points, labels, color="k", marker="o", name=None):
-    """Each point labelled (place_labels, once the caller has set the scales), the front drawn
-    as a step line through the undominated points. Returns the labels to place."""
+    """Each point labelled (place_labels, once the caller has set the scales; the labels of the
+    points off the front only where there is room), the front drawn as a step line through the
+    undominated points, by the error's size (a signed error below zero is no better for it).
+    Returns the labels to place."""
     xs = [p[0] for p in points]
     ys = [p[1] for p in points]
     axis.scatter(xs, ys, color=color, marker=marker, zorder=3, label=name)
-    front = pareto_front(points)
+    front = pareto_front([(x, abs(y)) for x, y in points])
     if len(front) > 1:
         axis.step([xs[i] for i in front], [ys[i] for i in front], where="post", color=color,
                   alpha=0.4, lw=1)
-    return [(x, y, label, color) for x, y, label in zip(xs, ys, labels)]
+    return [(x, y, label, color, i not in front)
+            for i, (x, y, label) in enumerate(zip(xs, ys, labels))]
 
 
 def save_figure(fig, path):
