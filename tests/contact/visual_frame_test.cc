@@ -10,6 +10,8 @@
 #include <memory>
 #include <vector>
 
+#include "contact/linear_contact_model.h"
+#include "core/tool_integrator.h"
 #include "fem/lattice_mesher.h"
 #include "fem/time_stepper.h"
 
@@ -129,6 +131,60 @@ TEST(VisualFrame, HapticStepComplianceYieldsMoreAndAgreesAtEqualSteps) {
               1e-9 * visual_equal.dFc_dF.norm());
   EXPECT_NEAR((haptic_equal.F_c0_N - visual_equal.F_c0_N).norm(), 0.0,
               1e-9 * visual_equal.F_c0_N.norm());
+}
+
+// The equality law's compliance reaches the linear model (contact_solver.h: the frame's solve
+// holds W_ii (1 + ε), and the model must hold the same law or it answers a different problem
+// between frames). The model is rebuilt here from the rows the frame exports (every contact
+// coupled: lcp_reach_m_s 0), by the formula of linear_contact_model.h on the rows the frame found
+// active, with the tool's step system at the haptic Δt; ε = 0.5, so that a model built without it
+// differs by far more than the tolerance.
+TEST(VisualFrame, EqualityLawModelHoldsTheLawsCompliance) {
+  const fem::Model body = MakeSlab(0.02, 5e4, false);
+  VisualFrameOptions options = MakeOptions(1.0 / 30.0, ContactLaw::kEquality, 0.0);
+  options.response.solve.equality_compliance = 0.5;
+  options.haptic_dt_s = 1e-3;
+  options.model_compliance_step = ModelComplianceStep::kVisual;
+  options.export_contact_rows = true;
+  VisualFrame frame(body, fem::FemOptions{}, fem::CalcGravityForce(body, {0, 0, -9.81}),
+                    MakeBoxTool(0.2), options);
+  fem::State body_state = fem::MakeRestState(body);
+  ToolState tool;
+  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.01);
+  for (int k = 0; k < 6; ++k) frame.Step(DeviceState{}, &body_state, &tool);
+
+  const ContactRows& rows = frame.contact_rows();
+  std::vector<Eigen::Index> active;
+  for (Eigen::Index i = 0; i < rows.num_rows(); ++i)
+    if (rows.lambda_frame_N[i] > 0.0) active.push_back(i);
+  const Eigen::Index n = static_cast<Eigen::Index>(active.size());
+  ASSERT_GT(n, 3) << "precondition: the box rests on several contacts";
+  ContactJacobian J;
+  J.J_v.resize(n, 3);
+  J.J_w.resize(n, 3);
+  Eigen::MatrixXd W_body(n, n);
+  Eigen::VectorXd body_rhs(n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    J.J_v.row(r) = rows.J_v.row(active[r]);
+    J.J_w.row(r) = rows.J_w.row(active[r]);
+    body_rhs[r] = rows.body_rhs[active[r]];
+    for (Eigen::Index c = 0; c < n; ++c) W_body(r, c) = rows.W_body(active[r], active[c]);
+  }
+  const CouplingWrench no_coupling;  // the options' coupling: k = b = 0
+  const ToolStepSystem haptic = CalcToolStepSystem(frame.tool_model(), tool, no_coupling,
+                                                   options.gravity_m_s2, options.haptic_dt_s);
+  const Eigen::MatrixXd W_plain = CalcToolDelassus(J, haptic) + W_body;
+  Eigen::MatrixXd W_law = W_plain;
+  W_law.diagonal() *= 1.5;
+  const LinearContactModel expected = MakeLinearContactModel(J, W_law, haptic, body_rhs);
+  const LinearContactModel without = MakeLinearContactModel(J, W_plain, haptic, body_rhs);
+  const LinearContactModel& model = frame.linear_model();
+  EXPECT_EQ(model.num_contacts, n);
+  EXPECT_LT((model.dFc_dF - expected.dFc_dF).norm(), 1e-9 * expected.dFc_dF.norm());
+  EXPECT_LT((model.dTc_dT - expected.dTc_dT).norm(), 1e-9 * expected.dTc_dT.norm());
+  EXPECT_LT((model.F_c0_N - expected.F_c0_N).norm(), 1e-9 * expected.F_c0_N.norm());
+  EXPECT_GT((without.dFc_dF - expected.dFc_dF).norm(), 1e-2 * expected.dFc_dF.norm())
+      << "precondition: the compliance changes the model";
 }
 
 // The lcp rows that travel (issue 13 item 5): with lcp_reach_m_s the frame exports every contact
