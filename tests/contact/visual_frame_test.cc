@@ -102,18 +102,26 @@ TEST(VisualFrame, SanityPassMovesTheNodesLeftInsideOutEveryFrame) {
 // J A⁻¹ Jᵀ at the haptic step is at least the visual one: the body yields more, and less of a
 // push on the tool (∂F_c/∂F̂) reaches the contact. When the two steps agree the two models are
 // the same.
+// A 0.2 kg box set on `slab`'s top face and left there for `frames` frames under gravity.
+std::unique_ptr<VisualFrame> SettleBoxOnSlab(const fem::Model& slab,
+                                             const VisualFrameOptions& options, int frames,
+                                             ToolState* tool) {
+  auto frame = std::make_unique<VisualFrame>(
+      slab, fem::FemOptions{}, fem::CalcGravityForce(slab, {0, 0, -9.81}), MakeBoxTool(0.2),
+      options);
+  fem::State slab_state = fem::MakeRestState(slab);
+  tool->x_W_m = Eigen::Vector3d(0.0, 0.0, 0.01);
+  for (int k = 0; k < frames; ++k) frame->Step(DeviceState{}, &slab_state, tool);
+  return frame;
+}
+
 LinearContactModel ModelOfToolOnSoftSlab(ModelComplianceStep step, double haptic_dt_s) {
   const fem::Model body = MakeSlab(0.02, 5e4, false);
   VisualFrameOptions options = MakeOptions(1.0 / 30.0, ContactLaw::kUnilateral, 0.0);
   options.haptic_dt_s = haptic_dt_s;
   options.model_compliance_step = step;
-  VisualFrame frame(body, fem::FemOptions{}, fem::CalcGravityForce(body, {0, 0, -9.81}),
-                    MakeBoxTool(0.2), options);
-  fem::State body_state = fem::MakeRestState(body);
   ToolState tool;
-  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.01);
-  for (int k = 0; k < 10; ++k) frame.Step(DeviceState{}, &body_state, &tool);
-  return frame.linear_model();
+  return SettleBoxOnSlab(body, options, 10, &tool)->linear_model();
 }
 
 TEST(VisualFrame, HapticStepComplianceYieldsMoreAndAgreesAtEqualSteps) {
@@ -146,14 +154,10 @@ TEST(VisualFrame, EqualityLawModelHoldsTheLawsCompliance) {
   options.haptic_dt_s = 1e-3;
   options.model_compliance_step = ModelComplianceStep::kVisual;
   options.export_contact_rows = true;
-  VisualFrame frame(body, fem::FemOptions{}, fem::CalcGravityForce(body, {0, 0, -9.81}),
-                    MakeBoxTool(0.2), options);
-  fem::State body_state = fem::MakeRestState(body);
   ToolState tool;
-  tool.x_W_m = Eigen::Vector3d(0.0, 0.0, 0.01);
-  for (int k = 0; k < 6; ++k) frame.Step(DeviceState{}, &body_state, &tool);
+  const std::unique_ptr<VisualFrame> frame = SettleBoxOnSlab(body, options, 6, &tool);
 
-  const ContactRows& rows = frame.contact_rows();
+  const ContactRows& rows = frame->contact_rows();
   std::vector<Eigen::Index> active;
   for (Eigen::Index i = 0; i < rows.num_rows(); ++i)
     if (rows.lambda_frame_N[i] > 0.0) active.push_back(i);
@@ -171,14 +175,14 @@ TEST(VisualFrame, EqualityLawModelHoldsTheLawsCompliance) {
     for (Eigen::Index c = 0; c < n; ++c) W_body(r, c) = rows.W_body(active[r], active[c]);
   }
   const CouplingWrench no_coupling;  // the options' coupling: k = b = 0
-  const ToolStepSystem haptic = CalcToolStepSystem(frame.tool_model(), tool, no_coupling,
+  const ToolStepSystem haptic = CalcToolStepSystem(frame->tool_model(), tool, no_coupling,
                                                    options.gravity_m_s2, options.haptic_dt_s);
   const Eigen::MatrixXd W_plain = CalcToolDelassus(J, haptic) + W_body;
   Eigen::MatrixXd W_law = W_plain;
   W_law.diagonal() *= 1.5;
   const LinearContactModel expected = MakeLinearContactModel(J, W_law, haptic, body_rhs);
   const LinearContactModel without = MakeLinearContactModel(J, W_plain, haptic, body_rhs);
-  const LinearContactModel& model = frame.linear_model();
+  const LinearContactModel& model = frame->linear_model();
   EXPECT_EQ(model.num_contacts, n);
   EXPECT_LT((model.dFc_dF - expected.dFc_dF).norm(), 1e-9 * expected.dFc_dF.norm());
   EXPECT_LT((model.dTc_dT - expected.dTc_dT).norm(), 1e-9 * expected.dTc_dT.norm());
