@@ -15,7 +15,7 @@ Hand runs chose the sizes (ν 0.45, 2026-11-29): grading over 10 mm instead of 2
 at h_near 0.75 mm (1,389 tets, 11 ms a frame) is +0.2 % from the bonded layer, so the reference
 holds to about that here. Hand runs for the cheap end (ν 0.45, 2026-11-29), h_near/h_far in mm:
 no P2 mesh tried beats the front below 1.2 ms. Finer far cells alone halve 3/20's error (+25.0 %
-at 0.55 ms) but nearly triple its frame (3/12: +13.2 % at 1.7 ms; 3/10 +12.4 % at 2.1 ms); with
+at 0.55 ms) but about triple its frame (3/12: +13.2 % at 1.7 ms; 3/10 +12.4 % at 2.1 ms); with
 h_near 3 mm or more the error levels off whatever the far cells (4/10 +13.2 % at 2.0 ms, 3/8 and
 4/8 +11 % at 3.9 ms, a uniform 5 mm +10.5 % at 25 ms); 2.5/10 is +6.6 % at 2.7 ms, behind 1.5/15.
 """

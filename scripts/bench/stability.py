@@ -12,9 +12,9 @@ map's module states its runs, its criterion and why:
    Both closed loops with the simulated hand are unstable where the device force oscillates by
    more than 0.1 N about its 50 ms mean (stability_loops.py).
 4. equality against unilateral release: the straight press and lift of block_press with a sharp
-   rim, scripted device, each cell at eight phases of the lift against the frame clock; it sticks
-   if, at its worst phase, the device is pulled more than 0.05 N beyond the reference's pull while
-   the tool lifts off;
+   rim, scripted device, each cell at eight phases of the lift against the frame clock (quick:
+   two); it sticks if, at its worst phase, the device is pulled more than 0.05 N beyond the
+   reference's pull while the tool lifts off;
 5. a stiff body under a fast tool: block_press with E 5e4–5e7 Pa, the device pressed 5 mm in
    0.8–0.01 s; it fails where the haptic tool penetrates more than 1 mm beyond the body's own give
    (both: stability_contact.py).

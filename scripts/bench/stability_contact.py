@@ -46,7 +46,8 @@ def release_scene(bench, law, rounded=False, edits=None, tag="", shift_s=0.0):
               (2.1, z0 + 0.004)]
     script = [{"t_s": 0.0, "position_m": [0.0, 0.0, z0]}] + [
         {"t_s": t + shift_s, "position_m": [0.0, 0.0, z]} for t, z in points]
-    steps = 70 + math.ceil(shift_s / base["time"]["dt_s"] - 1e-9)  # the scene's frames to 2.1 s
+    # The scene's frames to 2.1 s + shift (at its own dt_s; `edits` leave the time step alone).
+    steps = 70 + math.ceil(shift_s / base["time"]["dt_s"] - 1e-9)
     changes = {"contact.law": law, "device.trajectory": script, "time.num_steps": steps}
     if not rounded:
         cylinder = dict(base["tool"]["shape"]["cylinder"])
@@ -81,7 +82,8 @@ def release_run(bench, law, mode, hz, rounded=False, edits=None, tag="", shift_s
 def release_cell(bench, law, mode, hz, phases, edits=None, tag=""):
     """One cell of map 4: `phases` runs, the script shifted by k/phases of a visual frame. The
     cell is its worst run (a run without a finite force is the worst), with every phase's
-    sticking force beside it."""
+    sticking force beside it. (At 200 Hz the shifts are 0.625 ms apart, finer than the 1 ms
+    haptic step: the scripted device moves between steps, so they still differ.)"""
     runs = [release_run(bench, law, mode, hz, edits=edits, tag=tag, shift_s=k / (phases * hz))
             for k in range(phases)]
     worst = min(runs, key=lambda r: -math.inf if r["sticking_N"] is None else r["sticking_N"])
@@ -170,7 +172,7 @@ def release_map(bench):
         axis.plot([p["visual_hz"] for p in chosen], [p["sticking_N"] for p in chosen],
                   marker=marker, color=color, label=f"{law} law, --mode {mode}")
         # The phases' range, each pair's bars a little apart on the log axis.
-        nudge = 1.0 + 0.05 * (n - (len(combos) - 1) / 2)
+        nudge = 1.05 ** (n - (len(combos) - 1) / 2)
         for p in chosen:
             span = phase_range(p)
             if span is not None:
@@ -205,7 +207,8 @@ def cell_text(point):
     phase's in brackets."""
     worst = sticking_text(point["sticking_N"])
     span = phase_range(point)
-    best = f" ({span[0]:+.3f})" if span is not None and len(point["phase_sticking_N"]) > 1 else ""
+    best = (f" ({span[0]:+.3f})" if span is not None
+            and len(point.get("phase_sticking_N", ())) > 1 else "")
     return (f"**{worst}**" if point["sticks"] else worst) + best
 
 
@@ -267,10 +270,13 @@ def release_markdown(result):
              f"{widest[1]['law']}/{widest[1]['mode']} at {widest[1]['visual_hz']:g} Hz, runs "
              f"from {widest[0][0]:+.3f} to {widest[0][1]:+.3f} N"
              if widest is not None and result.get("phases", 1) > 1 else "")
-          + (". The default mode, hybrid, holds the frame's active rows as equalities too, but "
-             "releases a row that pulls harder than it pushed at the frame (docs/CONTACT.md), "
-             "which bounds its pull by the frame's push" if ("unilateral", "hybrid") in sticks
-             else "")
+          + (". The default mode, hybrid, holds the frame's active rows as equalities too, each "
+             "pulling no harder than it pushed at the frame (docs/CONTACT.md), and below 100 Hz "
+             "builds its model with the haptic step's body compliance: it pulls less than the "
+             "linear mode, and "
+             + ("sticks at " + ", ".join(f"{hz:g}" for hz in sticks[("unilateral", "hybrid")])
+                + " Hz" if sticks[("unilateral", "hybrid")] else "never sticks")
+             if ("unilateral", "hybrid") in sticks else "")
           + ". The lcp mode re-solves the unilateral problem every 1 ms"
           + (f" and stays within {lcp_off:.3f} N of {result['baseline'].split(' (')[0]}."
              if lcp_off is not None and result["reference"] is not None else ".")]

@@ -94,7 +94,7 @@ def release_panel(axis, runs, linear_release, new_cells):
     baseline = runs["release_baseline_N"]
     measured = [p for p in runs["release"] + linear_release if p["sticking_N"] is not None]
     low = min([p["sticking_N"] for p in measured] + [baseline]) - 0.1
-    axis.axhspan(low, baseline - STICK_MARGIN_N, color=FAIL_COLOR, alpha=0.8, lw=0)
+    axis.axhspan(low, baseline - STICK_MARGIN_N, color=FAIL_COLOR, alpha=0.45, lw=0)
     axis.axhline(baseline, color="k", ls="--", lw=1,
                  label=f"P2: {runs['release_baseline'].split(' (')[0]} {baseline:+.3f} N")
     for (law, mode), (color, _) in RELEASE_STYLES.items():
@@ -109,7 +109,8 @@ def release_panel(axis, runs, linear_release, new_cells):
             axis.plot(p["visual_hz"], p["sticking_N"], "o", ms=13, mfc="none", mec="k")
     axis.plot([], [], "o", ms=10, mfc="none", mec="k", ls="", label="new: sticks on P2 only")
     release_axis(axis, sorted({p["visual_hz"] for p in runs["release"]}), low,
-                 "sticking force while lifting (N)", "P2 body: release (sticking force; red: sticks)")
+                 "sticking force while lifting (N)",
+                 "P2 body: release (sticking force, worst phase; red: sticks)")
     axis.title.set_fontsize(9)
     axis.legend(fontsize=6, loc="lower right")
 
@@ -167,8 +168,9 @@ def quadratic_chart(bench, runs, comparison, linear_explicit, linear_release):
     return {"file": "stability_p2.png",
             "caption": "Maps 2–5 on a quadratic (P2) block_press, cell by cell as on the linear "
                        "body ('new': fails where the linear body held; 'tunnels': no contact in "
-                       "the model while the tool is through; the release against the P1 body's "
-                       "forces, dashed, each body's cells judged against its own baseline), and "
+                       "the model while the tool is through; the release at each cell's worst "
+                       "phase against the P1 body's forces, dashed, each body's cells judged "
+                       "against its own baseline), and "
                        "the explicit limit of block_tiny with both elements "
                        "against each one's 2/ω_max."}
 
@@ -207,7 +209,7 @@ def quadratic_markdown(result):
                              for k in keys) or "none"
         md.append(f"| {name} | {x['cells']} | {x['linear_failing']} | {x['quadratic_failing']} | "
                   f"{cells(x['new_failing'])} | {cells(x['no_longer_failing'])} |")
-    md += ["", "The release map on the quadratic body: sticking force (N), in bold where it sticks "
-           "against the quadratic body's own baseline:", ""] + release_table(
-               result["points"]["release"]) + [""]
+    md += ["", "The release map on the quadratic body: sticking force (N) at the worst phase, in "
+           "bold where it sticks against the quadratic body's own baseline, the best phase in "
+           "brackets:", ""] + release_table(result["points"]["release"]) + [""]
     return md

@@ -97,11 +97,6 @@ TEST(VisualFrame, SanityPassMovesTheNodesLeftInsideOutEveryFrame) {
   }
 }
 
-// The linear model's body compliance at the haptic step (ModelComplianceStep::kHaptic). With
-// A(Δt) = M + Δt D + Δt² K, A(Δt_v) − A(Δt_h) ⪰ 0 for Δt_h < Δt_v, so the body compliance
-// J A⁻¹ Jᵀ at the haptic step is at least the visual one: the body yields more, and less of a
-// push on the tool (∂F_c/∂F̂) reaches the contact. When the two steps agree the two models are
-// the same.
 // A 0.2 kg box set on `slab`'s top face and left there for `frames` frames under gravity.
 std::unique_ptr<VisualFrame> SettleBoxOnSlab(const fem::Model& slab,
                                              const VisualFrameOptions& options, int frames,
@@ -115,6 +110,11 @@ std::unique_ptr<VisualFrame> SettleBoxOnSlab(const fem::Model& slab,
   return frame;
 }
 
+// The linear model's body compliance at the haptic step (ModelComplianceStep::kHaptic). With
+// A(Δt) = M + Δt D + Δt² K, A(Δt_v) − A(Δt_h) ⪰ 0 for Δt_h < Δt_v, so the body compliance
+// J A⁻¹ Jᵀ at the haptic step is at least the visual one: the body yields more, and less of a
+// push on the tool (∂F_c/∂F̂) reaches the contact. When the two steps agree the two models are
+// the same.
 LinearContactModel ModelOfToolOnSoftSlab(ModelComplianceStep step, double haptic_dt_s) {
   const fem::Model body = MakeSlab(0.02, 5e4, false);
   VisualFrameOptions options = MakeOptions(1.0 / 30.0, ContactLaw::kUnilateral, 0.0);
@@ -141,28 +141,17 @@ TEST(VisualFrame, HapticStepComplianceYieldsMoreAndAgreesAtEqualSteps) {
               1e-9 * visual_equal.F_c0_N.norm());
 }
 
-// The equality law's compliance reaches the linear model (contact_solver.h: the frame's solve
-// holds W_ii (1 + ε), and the model must hold the same law or it answers a different problem
-// between frames). The model is rebuilt here from the rows the frame exports (every contact
-// coupled: lcp_reach_m_s 0), by the formula of linear_contact_model.h on the rows the frame found
-// active, with the tool's step system at the haptic Δt; ε = 0.5, so that a model built without it
-// differs by far more than the tolerance.
-TEST(VisualFrame, EqualityLawModelHoldsTheLawsCompliance) {
-  const fem::Model body = MakeSlab(0.02, 5e4, false);
-  VisualFrameOptions options = MakeOptions(1.0 / 30.0, ContactLaw::kEquality, 0.0);
-  options.response.solve.equality_compliance = 0.5;
-  options.haptic_dt_s = 1e-3;
-  options.model_compliance_step = ModelComplianceStep::kVisual;
-  options.export_contact_rows = true;
-  ToolState tool;
-  const std::unique_ptr<VisualFrame> frame = SettleBoxOnSlab(body, options, 6, &tool);
-
-  const ContactRows& rows = frame->contact_rows();
+// The linear model rebuilt from the rows the frame exports (every contact coupled: lcp_reach_m_s
+// 0), by the formula of linear_contact_model.h on the rows the frame found active (λ > 0), with
+// the tool's step system at the haptic Δt and W's diagonal scaled by `diagonal_factor`.
+LinearContactModel RebuildModelFromRows(const VisualFrame& frame, const ToolState& tool,
+                                        const VisualFrameOptions& options,
+                                        double diagonal_factor) {
+  const ContactRows& rows = frame.contact_rows();
   std::vector<Eigen::Index> active;
   for (Eigen::Index i = 0; i < rows.num_rows(); ++i)
     if (rows.lambda_frame_N[i] > 0.0) active.push_back(i);
   const Eigen::Index n = static_cast<Eigen::Index>(active.size());
-  ASSERT_GT(n, 3) << "precondition: the box rests on several contacts";
   ContactJacobian J;
   J.J_v.resize(n, 3);
   J.J_w.resize(n, 3);
@@ -175,20 +164,43 @@ TEST(VisualFrame, EqualityLawModelHoldsTheLawsCompliance) {
     for (Eigen::Index c = 0; c < n; ++c) W_body(r, c) = rows.W_body(active[r], active[c]);
   }
   const CouplingWrench no_coupling;  // the options' coupling: k = b = 0
-  const ToolStepSystem haptic = CalcToolStepSystem(frame->tool_model(), tool, no_coupling,
+  const ToolStepSystem haptic = CalcToolStepSystem(frame.tool_model(), tool, no_coupling,
                                                    options.gravity_m_s2, options.haptic_dt_s);
-  const Eigen::MatrixXd W_plain = CalcToolDelassus(J, haptic) + W_body;
-  Eigen::MatrixXd W_law = W_plain;
-  W_law.diagonal() *= 1.5;
-  const LinearContactModel expected = MakeLinearContactModel(J, W_law, haptic, body_rhs);
-  const LinearContactModel without = MakeLinearContactModel(J, W_plain, haptic, body_rhs);
-  const LinearContactModel& model = frame->linear_model();
-  EXPECT_EQ(model.num_contacts, n);
-  EXPECT_LT((model.dFc_dF - expected.dFc_dF).norm(), 1e-9 * expected.dFc_dF.norm());
-  EXPECT_LT((model.dTc_dT - expected.dTc_dT).norm(), 1e-9 * expected.dTc_dT.norm());
-  EXPECT_LT((model.F_c0_N - expected.F_c0_N).norm(), 1e-9 * expected.F_c0_N.norm());
-  EXPECT_GT((without.dFc_dF - expected.dFc_dF).norm(), 1e-2 * expected.dFc_dF.norm())
-      << "precondition: the compliance changes the model";
+  Eigen::MatrixXd W = CalcToolDelassus(J, haptic) + W_body;
+  W.diagonal() *= diagonal_factor;
+  return MakeLinearContactModel(J, W, haptic, body_rhs);
+}
+
+// The equality law's compliance reaches the linear model (contact_solver.h: the frame's solve
+// holds W_ii (1 + ε), and the model must hold the same law or it answers a different problem
+// between frames), and only that law's: ε = 0.5, so that a model built the other way differs by
+// far more than the tolerance, under the equality and the unilateral law.
+TEST(VisualFrame, EqualityLawModelHoldsTheLawsCompliance) {
+  const fem::Model body = MakeSlab(0.02, 5e4, false);
+  for (const ContactLaw law : {ContactLaw::kEquality, ContactLaw::kUnilateral}) {
+    SCOPED_TRACE(ToString(law));
+    VisualFrameOptions options = MakeOptions(1.0 / 30.0, law, 0.0);
+    options.response.solve.equality_compliance = 0.5;
+    options.haptic_dt_s = 1e-3;
+    options.model_compliance_step = ModelComplianceStep::kVisual;
+    options.export_contact_rows = true;
+    ToolState tool;
+    const std::unique_ptr<VisualFrame> frame = SettleBoxOnSlab(body, options, 6, &tool);
+    const double held = law == ContactLaw::kEquality
+                            ? 1.0 + options.response.solve.equality_compliance
+                            : 1.0;
+    const LinearContactModel expected = RebuildModelFromRows(*frame, tool, options, held);
+    const LinearContactModel other =
+        RebuildModelFromRows(*frame, tool, options, held == 1.0 ? 1.5 : 1.0);
+    const LinearContactModel& model = frame->linear_model();
+    ASSERT_GT(expected.num_contacts, 3) << "precondition: the box rests on several contacts";
+    EXPECT_EQ(model.num_contacts, expected.num_contacts);
+    EXPECT_LT((model.dFc_dF - expected.dFc_dF).norm(), 1e-9 * expected.dFc_dF.norm());
+    EXPECT_LT((model.dTc_dT - expected.dTc_dT).norm(), 1e-9 * expected.dTc_dT.norm());
+    EXPECT_LT((model.F_c0_N - expected.F_c0_N).norm(), 1e-9 * expected.F_c0_N.norm());
+    EXPECT_GT((other.dFc_dF - expected.dFc_dF).norm(), 1e-2 * expected.dFc_dF.norm())
+        << "precondition: the compliance changes the model";
+  }
 }
 
 // The lcp rows that travel (issue 13 item 5): with lcp_reach_m_s the frame exports every contact
