@@ -247,6 +247,13 @@ def release_markdown(result):
     lcp_off = max(abs(x - result["baseline_N"]) for x in lcp) if lcp else None
     spans = [(phase_range(p), p) for p in points if phase_range(p) is not None]
     widest = max(spans, key=lambda s: s[0][0] - s[0][1]) if spans else None
+    # Whether hybrid pulls less than the linear mode (unilateral law) at every rate both ran.
+    worst_at = {(p["mode"], p["visual_hz"]): p["sticking_N"] for p in points
+                if p["law"] == "unilateral"}
+    hybrid_below_linear = all(
+        worst_at[("hybrid", hz)] is not None and worst_at[("linear", hz)] is not None
+        and worst_at[("hybrid", hz)] >= worst_at[("linear", hz)]
+        for mode, hz in worst_at if mode == "hybrid" and ("linear", hz) in worst_at)
     said = "; ".join(f"{law}/{mode}: " + (", ".join(f"{hz:g}" for hz in hz_list) + " Hz"
                                          if hz_list else "never")
                      for (law, mode), hz_list in sticks.items())
@@ -272,8 +279,8 @@ def release_markdown(result):
              if widest is not None and result.get("phases", 1) > 1 else "")
           + (". The default mode, hybrid, holds the frame's active rows as equalities too, each "
              "pulling no harder than it pushed at the frame (docs/CONTACT.md), and below 100 Hz "
-             "builds its model with the haptic step's body compliance: it pulls less than the "
-             "linear mode, and "
+             "builds its model with the haptic step's body compliance: it pulls "
+             + ("less than the linear mode, and " if hybrid_below_linear else "")
              + ("sticks at " + ", ".join(f"{hz:g}" for hz in sticks[("unilateral", "hybrid")])
                 + " Hz" if sticks[("unilateral", "hybrid")] else "never sticks")
              if ("unilateral", "hybrid") in sticks else "")
