@@ -24,13 +24,14 @@
 // On the quadratic body the cancelling was not exact enough: the tool sank 0.24 mm further than
 // under the unilateral law, left 0.8 mm penetrations, and the release map's equality cells stuck
 // at 50 to 200 Hz (the map then ran each cell at one phase of the frame clock; since e90dff0 at
-// its worst of eight). A row alone keeps its force up to the factor 1/(1 + ε); a pair of rows nearly
-// one (W ≈ w[[1, 1 − η], [1 − η, 1]], η ≪ ε) keeps their sum so and splits it by their difference
-// of rhs over Δt ε w instead of Δt η w. On the one-phase release map (ε then scaled by the mean
-// diagonal, first tried) ε 1e-5 still left P2's equality cell at 20 Hz 40 mN stickier than at 1e-4; 1e-4 and
-// 1e-3 agreed within 6 mN. ε = 0 is the exact solve. (The unilateral solve's diagonal shift,
-// DelassusColumns in contact_solver.cc, is another thing: 1e-10 of the largest entry, only to keep
-// its free-set systems nonsingular; it does not damp a nearly singular W's near-null direction.)
+// its worst of eight). A row alone keeps its force up to the factor 1/(1 + ε); a pair of rows
+// nearly one (W ≈ w[[1, 1 − η], [1 − η, 1]], η ≪ ε) keeps their sum so and splits it by their
+// difference of rhs over Δt ε w instead of Δt η w. On the one-phase release map (ε then scaled by
+// the mean diagonal, first tried) ε 1e-5 still left P2's equality cell at 20 Hz 40 mN stickier
+// than at 1e-4; 1e-4 and 1e-3 agreed within 6 mN. ε = 0 is the exact solve. (The unilateral
+// solve's diagonal shift, DelassusColumns in contact_solver.cc, is another thing: 1e-10 of the
+// largest entry, only to keep its free-set systems nonsingular; it does not damp a nearly singular
+// W's near-null direction.)
 
 #include <Eigen/Core>
 #include <cstdint>

@@ -136,11 +136,10 @@ LABEL_OFFSETS = [(4, 3, "left", "bottom"), (4, -3, "left", "top"), (-4, 3, "righ
 
 def place_labels(axis, labels, fontsize=7, avoid=()):
     """Annotates each (x, y, text, color[, optional]) beside its point, at the first of
-    LABEL_OFFSETS where it
-    stays inside the axes and overlaps nothing placed before it: no label (in any panel of the
-    figure), no text on the axis ("finest", a line's name), not its legend, no marker of the
-    points labelled (a 5-point square around each) and no (x, y, radius in points) of `avoid` (a
-    ring drawn around a point). Where none is free, at the first offset, or not at all if the
+    LABEL_OFFSETS where it stays inside the axes and overlaps nothing placed before it: no label
+    (in any panel of the figure), no text on the axis ("finest", a line's name), not its legend,
+    no marker of the points labelled (a 5-point square around each) and no (x, y, radius in
+    points) of `avoid` (a ring drawn around a point). Where none is free, at the first offset, or not at all if the
     label is optional (draw_pareto's off the front: the tables name every point). Call once every
     panel of the figure is set up: placement is measured in the figure's pixels, and the first
     call fixes the layout. The required labels are placed first, then the optional ones, each in

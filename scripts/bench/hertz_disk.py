@@ -38,8 +38,8 @@ def run(bench):
         bench, runs, file="hertz_disk.png",
         title="Hertz on meshes graded from the contact zone (Gmsh)",
         caption="Hertz F = (4/3) E* R^1/2 d^3/2 on unstructured meshes graded from a disk of "
-                f"{1e3 * punch_rim.HERTZ_DISK_M:g} mm radius around the contact (edge on the disk / "
-                "far from it, mm)")
+                f"{1e3 * punch_rim.HERTZ_DISK_M:g} mm radius around the contact (edge on the "
+                "disk / far from it, mm)")
     md = [f"The sphere of the indentation experiment on Gmsh meshes graded from a disk of "
           f"{1e3 * punch_rim.HERTZ_DISK_M:g} mm radius in the top face (edge growing linearly "
           f"from the disk's to the far one over {1e3 * punch_rim.GRADING_DISTANCE_M:g} mm; the "

@@ -84,8 +84,8 @@ def press(bench, element, rim_m, far_m, nu, name="punch"):
     figures = indentation.score(summary, frames, name, case, nu)
     figures.pop("curve")
     # near_cell_m: the edge on the rim (punch) or the disk (sphere).
-    return {"element": element, "variant": variant, "near_cell_m": rim_m, "far_cell_m": far_m, "tets": tets, "poisson_ratio": nu,
-            **figures}
+    return {"element": element, "variant": variant, "near_cell_m": rim_m, "far_cell_m": far_m,
+            "tets": tets, "poisson_ratio": nu, **figures}
 
 
 def label_of(r):

@@ -212,14 +212,16 @@ def cell_text(point):
     return (f"**{worst}**" if point["sticks"] else worst) + best
 
 
+def release_combos(points):
+    """The (law, mode) pairs of `points`, in the order they first appear."""
+    return list(dict.fromkeys((p["law"], p["mode"]) for p in points))
+
+
 def release_table(points):
     """Markdown rows: the sticking force (N) per law and mode against the visual rate, the worst
     phase's (bold where it sticks) and the best's."""
     rates = sorted({p["visual_hz"] for p in points})
-    combos = []
-    for p in points:
-        if (p["law"], p["mode"]) not in combos:
-            combos.append((p["law"], p["mode"]))
+    combos = release_combos(points)
     md = ["| law, mode | " + " | ".join(f"{hz:g} Hz" for hz in rates) + " |",
           "|---|" + "---:|" * len(rates)]
     for law, mode in combos:
@@ -231,10 +233,7 @@ def release_table(points):
 
 def release_markdown(result):
     points = result["points"]
-    combos = []
-    for p in points:
-        if (p["law"], p["mode"]) not in combos:
-            combos.append((p["law"], p["mode"]))
+    combos = release_combos(points)
     sticks = {c: [p["visual_hz"] for p in points if (p["law"], p["mode"]) == c and p["sticks"]]
               for c in combos}
     worst = {c: min((p for p in points if (p["law"], p["mode"]) == c),
