@@ -34,6 +34,8 @@ import math
 import os
 import sys
 
+import indentation
+
 EXPECTED = ["indentation", "punch_rim", "hertz_disk", "modes", "cantilever", "stability", "economy"]
 
 
@@ -103,6 +105,7 @@ def check(results, results_dir):
         if not runs[-1]["relative_error"] < runs[0]["relative_error"]:
             problems.append(f"{name}: error does not fall with refinement: "
                             f"{[round(r['relative_error'], 3) for r in runs]}")
+        problems += check_cost_at_error(runs, name)
 
     # The punch on the rim-following lattice, nodes only: its footprint is the punch's, so its
     # coefficient is within a quarter of the bonded layer's (a conforming FEM's excess, either sign
@@ -140,6 +143,33 @@ def check(results, results_dir):
             problems.append(f"implicit Euler unbounded at {point['implicit_dt_s']:g} s")
     problems += check_release_phases(experiments["stability"]["release"]["points"])
     problems += check_economy(experiments["economy"], results_dir)
+    return problems
+
+
+def check_cost_at_error(p1_runs, name):
+    """indentation.cost_at_error (the frame at which P1's front reaches an error: RESULTS.md's
+    'a third of P1's error would take...') against error_at_cost, the interpolation it inverts:
+    back to the same cost between two front runs; below the cheapest, flagged extrapolated."""
+    problems = []
+    for nu in sorted({r["poisson_ratio"] for r in p1_runs}):
+        problems += check_cost_at_error_at(
+            [r for r in p1_runs if r["poisson_ratio"] == nu], f"{name} at ν {nu:g}")
+    return problems
+
+
+def check_cost_at_error_at(p1_runs, name):
+    key = "layer_relative_error"
+    front = indentation.pareto_front(p1_runs, key)
+    problems = []
+    for (c0, _), (c1, _) in zip(front, front[1:]):
+        cost = math.sqrt(c0 * c1)
+        back = indentation.cost_at_error(p1_runs, indentation.error_at_cost(p1_runs, cost, key), key)
+        if back is None or abs(back[0] / cost - 1.0) > 1e-9 or back[1]:
+            problems.append(f"{name}: cost_at_error gives {back} for the error at {cost:.4g} ms")
+    if len(front) >= 2:
+        back = indentation.cost_at_error(p1_runs, 1.1 * abs(front[0][1]), key)
+        if back is None or not back[0] < front[0][0] or not back[1]:
+            problems.append(f"{name}: cost_at_error gives {back} above the cheapest run's error")
     return problems
 
 

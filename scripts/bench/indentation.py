@@ -351,19 +351,52 @@ def chart(bench, name, case, results):
                           "lattices with a ring of nodes on the rim") + "."}
 
 
+def pareto_front(runs, key):
+    """(frame_ms, error) of the runs no cheaper run is as accurate as, cheapest first: each
+    cheaper than the next and more wrong (|error|)."""
+    front = []
+    for cost, error in sorted((r["frame_ms"], r[key]) for r in runs):
+        if not front or abs(error) < abs(front[-1][1]):
+            front.append((cost, error))
+    return front
+
+
 def error_at_cost(front_runs, frame_ms, key):
     """P1's error at a frame cost, interpolated (log cost, linear error) along its Pareto front;
     None outside the front's range of costs."""
-    points = sorted((r["frame_ms"], r[key]) for r in front_runs)
-    front = []
-    for cost, error in points:  # undominated: each cheaper than the next and more wrong
-        if not front or abs(error) < abs(front[-1][1]):
-            front.append((cost, error))
+    front = pareto_front(front_runs, key)
     for (c0, e0), (c1, e1) in zip(front, front[1:]):
         if c0 <= frame_ms <= c1:
             t = math.log(frame_ms / c0) / math.log(c1 / c0)
             return e0 + t * (e1 - e0)
     return None
+
+
+def cost_at_error(front_runs, error, key):
+    """The inverse of error_at_cost: (frame_ms, extrapolated) at which P1's front reaches |error|.
+    Beyond its cheapest run the line through its two cheapest is followed (extrapolated True);
+    None if the front has fewer than two runs, or does not reach |error| by its dearest."""
+    front = [(c, abs(e)) for c, e in pareto_front(front_runs, key)]
+    if len(front) < 2 or abs(error) < front[-1][1]:
+        return None
+    for (c0, e0), (c1, e1) in zip(front, front[1:]):
+        if e1 <= abs(error) <= e0:
+            return math.exp(math.log(c0) + (abs(error) - e0) / (e1 - e0) * math.log(c1 / c0)), False
+    (c0, e0), (c1, e1) = front[0], front[1]
+    return math.exp(math.log(c0) + (abs(error) - e0) / (e1 - e0) * math.log(c1 / c0)), True
+
+
+def third_clause(p1_runs, run, key):
+    """Where P2's error is above a third of P1's at its cost: how much shorter its frame would
+    have to be, on the same mesh, for P1's error there to be three times its own (the issue's
+    target, issue 27), from where P1's front reaches 3 |error|."""
+    reach = cost_at_error(p1_runs, 3.0 * run[key], key)
+    if reach is None:
+        return ""
+    frame_ms, extrapolated = reach
+    return (f". A third of P1's error would take this mesh's frame {run['frame_ms'] / frame_ms:.1f}×"
+            f" shorter: P1 is at {100 * 3 * abs(run[key]):+.0f} % at {frame_ms:.2g} ms"
+            + (" (extrapolated from its two cheapest meshes)" if extrapolated else ""))
 
 
 def comparison_markdown(results, label=None):
@@ -382,9 +415,11 @@ def comparison_markdown(results, label=None):
                              f"{100 * r[key]:+.1f} %; no P1 error to compare at that cost "
                              "(none charted there, or P1 crosses zero)")
             else:
+                ratio = abs(r[key] / p1_error)
                 lines.append(f"- ν {nu:g}, {label(r)} ({r['frame_ms']:.1f} ms): "
                              f"{100 * r[key]:+.1f} % against P1's {100 * p1_error:+.1f} % at the "
-                             f"same cost (ratio {abs(r[key] / p1_error):.2f})")
+                             f"same cost (ratio {ratio:.2f})"
+                             + (third_clause(p1, r, key) if ratio > 1 / 3 else ""))
     return lines
 
 
