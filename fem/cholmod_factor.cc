@@ -3,6 +3,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "fem/inverse_quadratic_form.h"
+
 // The one OpenMP routine used, from libgomp, the runtime Debian's CHOLMOD is built against (linked
 // in fem/CMakeLists.txt). Declared here rather than through <omp.h>: clang does not search GCC's
 // private include directory, and LLVM's omp.h is another package.
@@ -86,6 +88,7 @@ void CholmodFactor::Analyze(const Eigen::SparseMatrix<double>& A) {
   factor_ = cholmod_analyze(&A_view, &common_);
   if (!factor_) throw std::runtime_error("CHOLMOD symbolic analysis failed");
   analysed_nonzeros_ = A.nonZeros();
+  layout_ = SupernodalLayout();  // a new structure: read again once factored
 }
 
 bool CholmodFactor::Factorize(const Eigen::SparseMatrix<double>& A) {
@@ -146,28 +149,9 @@ Eigen::MatrixXd CholmodFactor::SolveColumnsWithCopyAt(const Eigen::MatrixXd& B,
 
 Eigen::MatrixXd CholmodFactor::CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J) {
   if (!factored_) throw std::logic_error("CholmodFactor: no factor");
-  // Sparse forward solves: a dense multi-column solve (BLAS-3 over the columns) was 1.3x faster
-  // at 125 rows in BM_ContactCompliance but 3x slower in the 1 kHz reference on block_press
-  // (~200 rows; cholmod_super_lsolve's gather over many small supernodes dominated).
-  // No body dof involved (every contact on fixed nodes): nothing to solve, and CHOLMOD's sparse
-  // solve refuses an all-zero right-hand side.
-  if (J.nonZeros() == 0) return Eigen::MatrixXd::Zero(J.rows(), J.rows());
-  Eigen::SparseMatrix<double> Jt = J.transpose();
-  Jt.makeCompressed();
-  cholmod_sparse Jt_view = ViewAsCholmod(Jt);
-  Jt_view.stype = 0;  // unsymmetric (rectangular)
-  KeepCholmodOnCallingThread();
-  cholmod_sparse* PJt = cholmod_spsolve(CHOLMOD_P, factor_, &Jt_view, &common_);
-  cholmod_sparse* Z = PJt ? cholmod_spsolve(CHOLMOD_L, factor_, PJt, &common_) : nullptr;
-  cholmod_free_sparse(&PJt, &common_);
-  if (!Z || !cholmod_sort(Z, &common_)) throw std::runtime_error("CHOLMOD sparse solve failed");
-  const Eigen::Map<const Eigen::SparseMatrix<double>> Z_map(
-      static_cast<Eigen::Index>(Z->nrow), static_cast<Eigen::Index>(Z->ncol),
-      static_cast<Eigen::Index>(cholmod_nnz(Z, &common_)), static_cast<const int*>(Z->p),
-      static_cast<const int*>(Z->i), static_cast<const double*>(Z->x));
-  Eigen::MatrixXd result = Eigen::MatrixXd(Z_map.transpose() * Z_map);
-  cholmod_free_sparse(&Z, &common_);
-  return result;
+  // The structure is the symbolic analysis's, which numeric factorisations keep (final_asis).
+  if (layout_.empty()) layout_.Assign(*factor_);
+  return fem::CalcInverseQuadraticForm(layout_, static_cast<const double*>(factor_->x), J);
 }
 
 }  // namespace hapsim::fem

@@ -12,6 +12,7 @@
 #include "fem/fem_options.h"
 #include "fem/half_precision_factor.h"
 #include "fem/single_precision_factor.h"
+#include "fem/supernodal_layout.h"
 
 namespace hapsim::fem {
 
@@ -57,9 +58,9 @@ class CholmodFactor {
   // columns). Precondition: Factorize returned true.
   Eigen::MatrixXd SolveColumns(const Eigen::MatrixXd& B);
 
-  // J A⁻¹ Jᵀ for sparse J (rows x n): with A = Pᵀ L Lᵀ P it is Zᵀ Z, Z = L⁻¹ P Jᵀ, computed by
-  // sparse forward solves only (each column of Jᵀ has a few entries, so Z stays sparse).
-  // Precondition: Factorize returned true. Returns a dense symmetric (rows x rows) matrix.
+  // J A⁻¹ Jᵀ for sparse J (rows x n), solved only on the supernodes J's dofs reach
+  // (fem/inverse_quadratic_form.h). Precondition: Factorize returned true. Returns a dense
+  // symmetric (rows x rows) matrix.
   Eigen::MatrixXd CalcInverseQuadraticForm(const Eigen::SparseMatrix<double>& J);
 
   bool is_factored() const { return factored_; }
@@ -75,6 +76,7 @@ class CholmodFactor {
   FactorPrecision copy_precision_ = FactorPrecision::kDouble;  // kDouble: no copy
   SinglePrecisionFactor single_;
   HalfPrecisionFactor half_;
+  SupernodalLayout layout_;  // L's structure, for CalcInverseQuadraticForm; empty until then
   cholmod_dense* solution_ = nullptr;  // reused by cholmod_solve2
   cholmod_dense* work_y_ = nullptr;
   cholmod_dense* work_e_ = nullptr;

@@ -15,7 +15,8 @@ if [ "${1:-}" = "--demo" ]; then
 fi
 
 # Why each package: Eigen (linear algebra), SuiteSparse (CHOLMOD sparse Cholesky), OpenBLAS
-# serial (CHOLMOD's supernodal kernels; about 2x faster than the reference BLAS, single-threaded
+# serial (CHOLMOD's supernodal kernels, and the exact compliance's, fem/inverse_quadratic_form.cc, through
+# libblas-dev's libblas.so; about 2x faster than the reference BLAS, single-threaded
 # so benchmarks measure one core), LAPACK (dgetrf for the frame friction solve's Newton steps,
 # frame_friction_solver.cc; SuiteSparse already pulls it in), yaml-cpp (scenes), CLI11 (command
 # line), GoogleTest and
@@ -34,7 +35,7 @@ fi
 # CMakeLists.txt uses it when present).
 packages=(
   build-essential cmake pkg-config
-  libeigen3-dev libsuitesparse-dev libopenblas0-serial liblapack-dev
+  libeigen3-dev libsuitesparse-dev libopenblas0-serial libblas-dev liblapack-dev
   libyaml-cpp-dev libcli11-dev libfcl-dev
   liblcm-dev liblcm-bin libssl-dev
   nlohmann-json3-dev libgmsh-dev

@@ -8,6 +8,7 @@
 #include <random>
 #include <string>
 
+#include "fem/cholmod_factor.h"
 #include "fem/lattice_mesher.h"
 #include "fem/model.h"
 #include "fem/time_stepper.h"
@@ -24,6 +25,23 @@ Model MakeBlock(const Eigen::Vector3i& cells = {4, 4, 2}, bool fix_bottom = true
   return MakeModel(
       mesh, material,
       fix_bottom ? FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0.0) : std::vector<int>{});
+}
+
+// A block of quadratic tets (the mid-edge nodes of MakeBlock's lattice added), bottom fixed.
+Model MakeQuadraticBlock(const Eigen::Vector3i& cells) {
+  const TetMesh mesh =
+      MakeQuadraticMesh(MakeBoxTetMesh({0, 0, 0}, {0.04, 0.04, 0.02}, cells));
+  Material material;
+  material.youngs_modulus_Pa = 5e4;
+  return MakeModel(mesh, material, FindNodesInBox(mesh, {-1, -1, -1}, {1, 1, 1e-9}, 0.0));
+}
+
+// The implicit step's matrix at rest, A = M + (Δt β + Δt²) K, as a CG step assembles it.
+Eigen::SparseMatrix<double> RestSystemMatrix(const Model& model) {
+  TimeStepper stepper(model, FemOptions{}, 1.0 / 60.0, Eigen::VectorXd::Zero(model.num_dofs()));
+  Eigen::VectorXd dv;
+  stepper.CalcFreeVelocityChange(MakeRestState(model), &dv);
+  return stepper.system_matrix();
 }
 
 // Rows like contact rows: a unit direction spread over three free nodes with barycentric weights.
@@ -69,6 +87,45 @@ TEST(ContactCompliance, CholmodMatchesDenseInverse) {
   EXPECT_LT((x - A.ldlt().solve(rhs)).norm(), 1e-10 * x.norm());
   // With the factor the free step made of this A: no second factorisation in the frame.
   EXPECT_EQ(stepper.solver()->num_factorizations(), factorizations);
+}
+
+// The reach solve (fem/inverse_quadratic_form.h) against a dense factorisation of the same A: on
+// linear and quadratic tets; rows that share dofs, touch a fixed dof (A's identity there), or
+// reach the elimination tree's root from a few nodes only; then, with the same factor object, a
+// matrix of another pattern (the structure read again).
+TEST(ContactCompliance, ReachSolveMatchesDenseInverse) {
+  CholmodFactor factor;
+  const auto expect_dense = [&factor](const Model& model, const Eigen::SparseMatrix<double>& J,
+                                      const std::string& what) {
+    const Eigen::SparseMatrix<double> A = RestSystemMatrix(model);
+    ASSERT_TRUE(factor.Factorize(A)) << what;
+    const Eigen::MatrixXd A_dense =
+        Eigen::MatrixXd(Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>()));
+    const Eigen::MatrixXd Jd = Eigen::MatrixXd(J);
+    const Eigen::MatrixXd expected = Jd * A_dense.ldlt().solve(Jd.transpose());
+    const Eigen::MatrixXd W = factor.CalcInverseQuadraticForm(J);
+    EXPECT_LT((W - expected).norm(), 1e-10 * expected.norm()) << what;
+    EXPECT_EQ((W - W.transpose()).norm(), 0.0) << what;
+  };
+  const Model linear = MakeBlock({4, 4, 2});
+  expect_dense(linear, MakeContactRows(linear, 30, 5), "linear, 30 rows");
+  const Model quadratic = MakeQuadraticBlock({3, 3, 2});
+  ASSERT_TRUE(quadratic.is_quadratic());
+  expect_dense(quadratic, MakeContactRows(quadratic, 40, 6), "quadratic, 40 rows");
+  // Two rows on one node's dofs, and one on a fixed node (its bottom corner) and a free one.
+  const int fixed_node = 0, free_node = quadratic.num_nodes() - 1;
+  ASSERT_TRUE(quadratic.dof_is_fixed[3 * fixed_node]);
+  ASSERT_FALSE(quadratic.dof_is_fixed[3 * free_node]);
+  Eigen::SparseMatrix<double> J(3, quadratic.num_dofs());
+  J.insert(0, 3 * free_node + 2) = 1.0;
+  J.insert(1, 3 * free_node + 2) = -0.5, J.insert(1, 3 * free_node) = 0.5;
+  J.insert(2, 3 * fixed_node + 1) = 1.0, J.insert(2, 3 * free_node + 1) = 0.25;
+  J.makeCompressed();
+  expect_dense(quadratic, J, "quadratic, shared and fixed dofs");
+  // No entry at all: zero, as no dof moves.
+  EXPECT_EQ(factor.CalcInverseQuadraticForm(Eigen::SparseMatrix<double>(2, quadratic.num_dofs()))
+                .norm(),
+            0.0);
 }
 
 TEST(ContactCompliance, LaggedFactorApproximatesTheCurrentCompliance) {
