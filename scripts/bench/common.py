@@ -8,6 +8,7 @@ lines RESULTS.md shows under the experiment's title. Nothing here knows about on
 import copy
 import csv
 import json
+import math
 import os
 import platform
 import subprocess
@@ -20,6 +21,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402,F401  (experiments take plt from here)
+import matplotlib.text  # noqa: E402  (place_labels measures a text without its line)
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -132,6 +134,14 @@ LABEL_OFFSETS = [(4, 3, "left", "bottom"), (4, -3, "left", "top"), (-4, 3, "righ
                  (10, 0, "left", "center"), (-10, 0, "right", "center"),
                  (4, 19, "left", "bottom"), (4, -19, "left", "top"),
                  (-4, 19, "right", "bottom"), (-4, -19, "right", "top")]
+# Where a label that must be drawn finds none of those free: farther out, with a thin line to its
+# point (rings of 26, 38 and 52 points, twelve directions each).
+LEADER_OFFSETS = [(round(r * math.cos(math.radians(a))), round(r * math.sin(math.radians(a))),
+                   "left" if math.cos(math.radians(a)) > 0.1 else
+                   "right" if math.cos(math.radians(a)) < -0.1 else "center",
+                   "bottom" if math.sin(math.radians(a)) > 0.1 else
+                   "top" if math.sin(math.radians(a)) < -0.1 else "center")
+                  for r in (26, 38, 52) for a in range(15, 360, 30)]
 
 
 def place_labels(axis, labels, fontsize=7, avoid=()):
@@ -139,8 +149,9 @@ def place_labels(axis, labels, fontsize=7, avoid=()):
     LABEL_OFFSETS where it stays inside the axes and overlaps nothing placed before it: no label
     (in any panel of the figure), no text on the axis ("finest", a line's name), not its legend,
     no marker of the points labelled (a 5-point square around each) and no (x, y, radius in
-    points) of `avoid` (a ring drawn around a point). Where none is free, at the first offset, or not at all if the
-    label is optional (draw_pareto's off the front: the tables name every point). Call once every
+    points) of `avoid` (a ring drawn around a point). Where none is free, a label that must be
+    drawn goes farther out with a line to its point (LEADER_OFFSETS), else at the first offset; an
+    optional one (draw_pareto's off the front: the tables name every point) is left out. Call once every
     panel of the figure is set up: placement is measured in the figure's pixels, and the first
     call fixes the layout. The required labels are placed first, then the optional ones, each in
     the order given, so put the ones that matter most first."""
@@ -172,21 +183,31 @@ def place_labels(axis, labels, fontsize=7, avoid=()):
     def optional(i):
         return len(labels[i]) > 4 and labels[i][4]
 
+    def is_free(box, i):
+        return (inside[0] <= box[0] and box[2] <= inside[2] and inside[1] <= box[1]
+                and box[3] <= inside[3]
+                and not any(overlaps(box, other) for other in taken)
+                and not any(overlaps(box, m) for j, m in enumerate(markers) if j != i))
+
     for i in sorted(range(len(labels)), key=optional):
         x, y, text, color = labels[i][:4]
         if not text:
             continue
         chosen = None
-        for dx, dy, ha, va in LABEL_OFFSETS:
+        offsets = LABEL_OFFSETS + ([] if optional(i) else LEADER_OFFSETS)
+        for k, (dx, dy, ha, va) in enumerate(offsets):
+            leader = k >= len(LABEL_OFFSETS)
             note = axis.annotate(text, (x, y), textcoords="offset points", xytext=(dx, dy),
-                                 ha=ha, va=va, fontsize=fontsize, color=color)
+                                 ha=ha, va=va, fontsize=fontsize, color=color,
+                                 arrowprops=dict(arrowstyle="-", color=color, lw=0.5,
+                                                 shrinkA=0, shrinkB=3) if leader else None)
             note.set_in_layout(False)
-            box = tuple(note.get_window_extent(renderer).extents)
-            free = (inside[0] <= box[0] and box[2] <= inside[2] and inside[1] <= box[1]
-                    and box[3] <= inside[3]
-                    and not any(overlaps(box, other) for other in taken)
-                    and not any(overlaps(box, m) for j, m in enumerate(markers) if j != i))
-            if free or (chosen is None and not optional(i)):
+            # The text's own box: an annotation's extent takes in its line too, so the text's is
+            # taken once the annotation has placed it.
+            note.update_positions(renderer)
+            box = tuple(matplotlib.text.Text.get_window_extent(note, renderer).extents)
+            free = is_free(box, i)
+            if free or (chosen is None and not optional(i) and not leader):
                 if chosen is not None:
                     chosen[0].remove()
                 chosen = (note, box)

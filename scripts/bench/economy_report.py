@@ -24,25 +24,43 @@ def chart(bench, scenes):
                   if "failed" not in r and r["config"] != result["finest"]["config"]]
         extra = [dict(r, knob="combined") for r in result["combined_runs"]
                  if "failed" not in r and r["config"] != result["finest"]["config"]]
+        tolerance = result["tolerance_N"]
         positive = [r["rms_error_N"] for r in points + extra if r["rms_error_N"] > 0]
-        floor = min(positive + [result["tolerance_N"]]) / 3.0
+        # The panel spans at most 10⁻³ to 10² times the tolerance: a run outside (a zero or
+        # round-off error, a rate that blows up) sits on that edge as a triangle pointing off the
+        # scale, its label saying its error, so the others keep their room.
+        floor = max(min(positive + [tolerance]) / 3.0, tolerance / 1e3)
+        ceiling = max(min(max(positive + [tolerance]), 1e2 * tolerance), floor)
+
+        def shown(error):
+            return min(max(error, floor), ceiling)
+
+        def label_text(r, text):
+            error = r["rms_error_N"]
+            return text if floor <= error <= ceiling else f"{text} ({error:.2g} N)"
+
         labels = {}  # knob → its points' labels, placed once the axes are set
         for knob in result["knobs"] + ["combined"]:
             mine = [r for r in points + extra if r["knob"] == knob]
             if not mine:
                 continue
-            axis.scatter([r["cost_ms_per_s"] for r in mine],
-                         [max(r["rms_error_N"], floor) for r in mine], color=COLORS[knob],
-                         marker="s" if knob == "combined" else "o", s=22, zorder=3,
-                         label=KNOB_NAMES[knob])
+            for part, marker in ((lambda e: floor <= e <= ceiling,
+                                  "s" if knob == "combined" else "o"),
+                                 (lambda e: e < floor, "v"), (lambda e: e > ceiling, "^")):
+                these = [r for r in mine if part(r["rms_error_N"])]
+                if these:
+                    axis.scatter([r["cost_ms_per_s"] for r in these],
+                                 [shown(r["rms_error_N"]) for r in these], color=COLORS[knob],
+                                 marker=marker, s=22, zorder=3,
+                                 label=KNOB_NAMES[knob] if marker in "so" else None)
             # Rates from the value: results.json files of earlier runs hold "33.3333 Hz".
-            labels[knob] = [(r["cost_ms_per_s"], max(r["rms_error_N"], floor),
-                             rate_text(r["value"]) if knob == "visual_hz" else r["label"],
-                             COLORS[knob]) for r in mine]
+            labels[knob] = [(r["cost_ms_per_s"], shown(r["rms_error_N"]),
+                             label_text(r, rate_text(r["value"]) if knob == "visual_hz"
+                                        else r["label"]), COLORS[knob]) for r in mine]
         chosen = result["chosen"]
-        axis.scatter([chosen["cost_ms_per_s"]], [max(chosen["rms_error_N"], floor)], s=180,
+        axis.scatter([chosen["cost_ms_per_s"]], [shown(chosen["rms_error_N"])], s=180,
                      facecolors="none", edgecolors="r", lw=2, zorder=4, label="chosen")
-        axis.axhline(result["tolerance_N"], color="r", ls="--", lw=1)
+        axis.axhline(tolerance, color="r", ls="--", lw=1)
         axis.axvline(result["finest"]["cost_ms_per_s"], color="k", ls=":", lw=1)
         axis.annotate("finest", (result["finest"]["cost_ms_per_s"], 0.03),
                       xycoords=("data", "axes fraction"), rotation=90, fontsize=7, ha="right")
@@ -62,7 +80,7 @@ def chart(bench, scenes):
         # The combined runs first: their labels say what the squares are.
         placements.append((axis, [label for knob in ["combined"] + result["knobs"]
                                   for label in labels.get(knob, [])],
-                           [(chosen["cost_ms_per_s"], max(chosen["rms_error_N"], floor), 8)]))
+                           [(chosen["cost_ms_per_s"], shown(chosen["rms_error_N"]), 8)]))
         for handle, label in zip(*axis.get_legend_handles_labels()):
             legend.setdefault(label, handle)
     axes.flat[len(names)].legend(list(legend.values()), list(legend.keys()), loc="center",
@@ -75,7 +93,9 @@ def chart(bench, scenes):
                        "the visual compute per simulated second, one knob moved at a time "
                        "(colours; labels: the knob's value) and the knobs' choices combined "
                        "(squares); red ring: the chosen configuration, dashed: the tolerance, "
-                       "dotted: the finest configuration's cost."}
+                       "dotted: the finest configuration's cost; a triangle: a run off the scale "
+                       "(below 10⁻³ or above 10² times the tolerance, or an exact zero), at its "
+                       "edge, its label giving its error."}
 
 
 def markdown(scenes, skipped, tolerance):
