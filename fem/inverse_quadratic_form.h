@@ -16,11 +16,11 @@
 //
 // Measured (docs/BENCHMARKS.md, 2026-11-29, AMD EPYC VM): the compliance of block_press's frames
 // (up to 218 contacts) 13.0 → 4.4 ms median, of the quadratic liver's (12.8 mm cells, up to 367)
-// 110 → 34 ms; the same forces to 1e-9 N. The same sweeps through Eigen's products (SSE2 in this
-// build) gained half as much.
+// 103 → 35 ms; block_press's device forces the same to 1e-9 N. The same sweeps through Eigen's
+// products (SSE2 in this build) gained half as much.
 //
-// The rounding is that of any double-precision triangular solve; tests/fem/contact_compliance_test.cc
-// checks the result against a dense factorisation of A.
+// The rounding is that of any double-precision triangular solve;
+// tests/fem/contact_compliance_test.cc checks the result against a dense factorisation of A.
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>

@@ -16,7 +16,7 @@ std::vector<int> CopyInts(const void* data, size_t size) {
 void SupernodalLayout::Assign(const cholmod_factor& L) {
   if (!L.is_super || !L.is_ll || L.xtype != CHOLMOD_REAL || L.dtype != CHOLMOD_DOUBLE ||
       L.itype != CHOLMOD_INT)
-    throw std::invalid_argument("a reduced-precision factor needs a real supernodal LLᵀ factor");
+    throw std::invalid_argument("SupernodalLayout needs a real supernodal LLᵀ factor");
   super = CopyInts(L.super, L.nsuper + 1);
   pi = CopyInts(L.pi, L.nsuper + 1);
   px = CopyInts(L.px, L.nsuper + 1);

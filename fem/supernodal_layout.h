@@ -1,6 +1,7 @@
 #pragma once
 // The structure of a supernodal CHOLMOD factor A = Pᵀ L Lᵀ P, copied out of it, for the
-// reduced-precision copies of L (fem/single_precision_factor.h, fem/half_precision_factor.h).
+// reduced-precision copies of L (fem/single_precision_factor.h, fem/half_precision_factor.h) and
+// the exact compliance's sweeps on CHOLMOD's own values (fem/inverse_quadratic_form.h).
 //
 // Layout (CHOLMOD's supernodal factor, read as documented in cholmod_core.h): supernode s holds
 // columns super[s] .. super[s+1]−1 of L as a dense column-major block of nsrow = pi[s+1] − pi[s]

@@ -15,9 +15,9 @@ if [ "${1:-}" = "--demo" ]; then
 fi
 
 # Why each package: Eigen (linear algebra), SuiteSparse (CHOLMOD sparse Cholesky), OpenBLAS
-# serial (CHOLMOD's supernodal kernels, and the exact compliance's, fem/inverse_quadratic_form.cc, through
-# libblas-dev's libblas.so; about 2x faster than the reference BLAS, single-threaded
-# so benchmarks measure one core), LAPACK (dgetrf for the frame friction solve's Newton steps,
+# serial (CHOLMOD's supernodal kernels, and the exact compliance's in
+# fem/inverse_quadratic_form.cc through libblas-dev's libblas.so; about 2x faster than the
+# reference BLAS, single-threaded so benchmarks measure one core), LAPACK (dgetrf for the frame friction solve's Newton steps,
 # frame_friction_solver.cc; SuiteSparse already pulls it in), yaml-cpp (scenes), CLI11 (command
 # line), GoogleTest and
 # Google Benchmark (tests, benchmarks), nlohmann-json (JSON outputs), matplotlib (charts), PyYAML

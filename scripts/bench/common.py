@@ -150,9 +150,9 @@ def place_labels(axis, labels, fontsize=7, avoid=()):
     (in any panel of the figure), no text on the axis ("finest", a line's name), not its legend,
     no marker of the points labelled (a 5-point square around each) and no (x, y, radius in
     points) of `avoid` (a ring drawn around a point). Where none is free, a label that must be
-    drawn goes farther out with a line to its point (LEADER_OFFSETS), else at the first offset; an
-    optional one (draw_pareto's off the front: the tables name every point) is left out. Call once every
-    panel of the figure is set up: placement is measured in the figure's pixels, and the first
+    drawn goes farther out with a line to its point (LEADER_OFFSETS), else at the first offset;
+    an optional one (draw_pareto's off the front: the tables name every point) is left out. Call
+    once every panel of the figure is set up: placement is measured in the figure's pixels, and the first
     call fixes the layout. The required labels are placed first, then the optional ones, each in
     the order given, so put the ones that matter most first."""
     fig = axis.figure

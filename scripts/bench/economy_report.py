@@ -44,6 +44,7 @@ def chart(bench, scenes):
             mine = [r for r in points + extra if r["knob"] == knob]
             if not mine:
                 continue
+            named = False  # the knob's legend entry: its first part drawn, whichever it is
             for part, marker in ((lambda e: floor <= e <= ceiling,
                                   "s" if knob == "combined" else "o"),
                                  (lambda e: e < floor, "v"), (lambda e: e > ceiling, "^")):
@@ -52,7 +53,8 @@ def chart(bench, scenes):
                     axis.scatter([r["cost_ms_per_s"] for r in these],
                                  [shown(r["rms_error_N"]) for r in these], color=COLORS[knob],
                                  marker=marker, s=22, zorder=3,
-                                 label=KNOB_NAMES[knob] if marker in "so" else None)
+                                 label=None if named else KNOB_NAMES[knob])
+                    named = True
             # Rates from the value: results.json files of earlier runs hold "33.3333 Hz".
             labels[knob] = [(r["cost_ms_per_s"], shown(r["rms_error_N"]),
                              label_text(r, rate_text(r["value"]) if knob == "visual_hz"

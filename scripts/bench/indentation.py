@@ -353,10 +353,11 @@ def chart(bench, name, case, results):
 
 def pareto_front(runs, key):
     """(frame_ms, error) of the runs no cheaper run is as accurate as, cheapest first: each
-    cheaper than the next and more wrong (|error|)."""
+    cheaper than the next and more wrong (|error|; of runs of equal cost, the more accurate)."""
     front = []
-    for cost, error in sorted((r["frame_ms"], r[key]) for r in runs):
-        if not front or abs(error) < abs(front[-1][1]):
+    for cost, error in sorted(((r["frame_ms"], r[key]) for r in runs),
+                              key=lambda point: (point[0], abs(point[1]))):
+        if not front or (cost > front[-1][0] and abs(error) < abs(front[-1][1])):
             front.append((cost, error))
     return front
 
@@ -373,30 +374,42 @@ def error_at_cost(front_runs, frame_ms, key):
 
 
 def cost_at_error(front_runs, error, key):
-    """The inverse of error_at_cost: (frame_ms, extrapolated) at which P1's front reaches |error|.
-    Beyond its cheapest run the line through its two cheapest is followed (extrapolated True);
-    None if the front has fewer than two runs, or does not reach |error| by its dearest."""
+    """(frame_ms, extrapolated): the frame cost at which P1's front is |error| off. Between two
+    front runs |error| is interpolated in log cost, so where their errors have one sign this is
+    the inverse of error_at_cost. Below the cheapest run it follows the power law |error| ∝ cost^s
+    through the two cheapest front runs (extrapolated True), the form a mesh's convergence takes
+    (error ∝ h^p, cost ∝ h^−q). None if the front has fewer than two runs, or is more wrong than
+    |error| even at its dearest run."""
     front = [(c, abs(e)) for c, e in pareto_front(front_runs, key)]
-    if len(front) < 2 or abs(error) < front[-1][1]:
+    target = abs(error)
+    if len(front) < 2 or target < front[-1][1]:
         return None
     for (c0, e0), (c1, e1) in zip(front, front[1:]):
-        if e1 <= abs(error) <= e0:
-            return math.exp(math.log(c0) + (abs(error) - e0) / (e1 - e0) * math.log(c1 / c0)), False
+        if e1 <= target <= e0:  # e1 < e0: the front's |error| falls strictly
+            return math.exp(math.log(c0) + (target - e0) / (e1 - e0) * math.log(c1 / c0)), False
     (c0, e0), (c1, e1) = front[0], front[1]
-    return math.exp(math.log(c0) + (abs(error) - e0) / (e1 - e0) * math.log(c1 / c0)), True
+    if e1 <= 0.0:
+        return None
+    slope = math.log(e1 / e0) / math.log(c1 / c0)  # negative: e1 < e0, c1 > c0
+    return c0 * (target / e0) ** (1.0 / slope), True
 
 
 def third_clause(p1_runs, run, key):
     """Where P2's error is above a third of P1's at its cost: how much shorter its frame would
     have to be, on the same mesh, for P1's error there to be three times its own (the issue's
-    target, issue 27), from where P1's front reaches 3 |error|."""
+    target, issue 27), from where P1's front is 3 |error| off (cost_at_error)."""
     reach = cost_at_error(p1_runs, 3.0 * run[key], key)
     if reach is None:
         return ""
     frame_ms, extrapolated = reach
-    return (f". A third of P1's error would take this mesh's frame {run['frame_ms'] / frame_ms:.1f}×"
-            f" shorter: P1 is at {100 * 3 * abs(run[key]):+.0f} % at {frame_ms:.2g} ms"
-            + (" (extrapolated from its two cheapest meshes)" if extrapolated else ""))
+    how = (" (a power law through its two cheapest front meshes, extrapolated)" if extrapolated
+           else "")
+    off = f"{100 * 3 * abs(run[key]):.0f} %"
+    if not frame_ms > run["frame_ms"] / 1000.0:  # also an underflow to zero
+        return (f". A third of P1's error would take this mesh's frame over 1000× shorter: P1 is "
+                f"{off} off only below {run['frame_ms'] / 1000.0:.2g} ms{how}")
+    return (f". A third of P1's error would take this mesh's frame "
+            f"{run['frame_ms'] / frame_ms:.1f}× shorter: P1 is {off} off at {frame_ms:.2g} ms{how}")
 
 
 def comparison_markdown(results, label=None):

@@ -105,7 +105,6 @@ TEST(ContactCompliance, ReachSolveMatchesDenseInverse) {
     const Eigen::MatrixXd expected = Jd * A_dense.ldlt().solve(Jd.transpose());
     const Eigen::MatrixXd W = factor.CalcInverseQuadraticForm(J);
     EXPECT_LT((W - expected).norm(), 1e-10 * expected.norm()) << what;
-    EXPECT_EQ((W - W.transpose()).norm(), 0.0) << what;
   };
   const Model linear = MakeBlock({4, 4, 2});
   expect_dense(linear, MakeContactRows(linear, 30, 5), "linear, 30 rows");
