@@ -26,7 +26,8 @@ the bench did not produce:
 - economy: per scene, the chosen configuration's RMS device-force error against the finest run,
   recomputed here from the two runs' haptic.csv, within the tolerance recomputed from the finest
   run's peak (max(5 %, 0.05 N)); the finest configuration run a second time gives the same force
-  history (the comparison of configurations rests on it); and at least one knob moved.
+  history (the comparison of configurations rests on it), and its run with a perturbed stiffness
+  is there, its reported difference recomputed; and at least one knob moved.
 
 Usage: scripts/bench/check_quick.py OUT_DIR/results.json
 """
@@ -210,7 +211,8 @@ def device_forces(folder):
 def check_economy(economy, results_dir):
     """The chosen run's error recomputed from the two runs' haptic.csv, step by step matched on
     time, against the tolerance recomputed from the finest run's own peak; the finest's repeat
-    equal to it; and the search moved at least one knob on the quick scene."""
+    equal to it; its perturbed run's difference recomputed; and the search moved at least one knob
+    on the quick scene."""
     problems = []
     if not economy["scenes"]:
         problems.append("economy: no scene ran")
@@ -234,6 +236,22 @@ def check_economy(economy, results_dir):
         if repeat != finest:
             problems.append(f"economy: {name}: the finest configuration run twice gave two force "
                             "histories (the runs are not deterministic)")
+        # The perturbed run (every Young's modulus 1 + 1e-12 times as large): its reported
+        # sensitivity recomputed from its own haptic.csv.
+        perturbed = scene.get("finest_perturbed")
+        if scene["fem_built"] and (not perturbed or "failed" in perturbed):
+            problems.append(f"economy: {name}: no perturbed run of the finest configuration")
+        elif perturbed:
+            moved = device_forces(os.path.join(results_dir, perturbed["folder"]))
+            if set(moved) != set(finest):
+                problems.append(f"economy: {name}: the perturbed run's steps are not the finest's")
+            else:
+                moved_N = math.sqrt(sum(math.dist(moved[t], finest[t]) ** 2 for t in finest)
+                                    / len(finest))
+                if not math.isclose(moved_N, perturbed["rms_error_N"], rel_tol=1e-6,
+                                    abs_tol=1e-12):
+                    problems.append(f"economy: {name}: perturbed RMS recomputed {moved_N:.3g} N, "
+                                    f"reported {perturbed['rms_error_N']:.3g} N")
         if scene["chosen"]["changed"] == "nothing":
             problems.append(f"economy: {name}: no knob moved from the finest configuration")
     return problems
