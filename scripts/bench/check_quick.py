@@ -37,6 +37,8 @@ import math
 import os
 import sys
 
+import yaml
+
 import indentation
 
 EXPECTED = ["indentation", "punch_rim", "hertz_disk", "modes", "cantilever", "stability", "economy"]
@@ -208,6 +210,24 @@ def device_forces(folder):
                 for row in csv.DictReader(f)}
 
 
+def youngs_moduli(results_dir, folder):
+    """Every youngs_modulus_Pa in the scene file of the run in `folder` (runs/NAME: the bench wrote
+    its scene as scenes/NAME.yaml), in the file's order."""
+    with open(os.path.join(results_dir, "scenes", os.path.basename(folder) + ".yaml")) as f:
+        scene = yaml.safe_load(f)
+    found = []
+
+    def walk(node):
+        if isinstance(node, dict):
+            for key, value in node.items():
+                found.append(value) if key == "youngs_modulus_Pa" else walk(value)
+        elif isinstance(node, list):
+            for value in node:
+                walk(value)
+    walk(scene)
+    return found
+
+
 def check_economy(economy, results_dir):
     """The chosen run's error recomputed from the two runs' haptic.csv, step by step matched on
     time, against the tolerance recomputed from the finest run's own peak; the finest's repeat
@@ -236,12 +256,22 @@ def check_economy(economy, results_dir):
         if repeat != finest:
             problems.append(f"economy: {name}: the finest configuration run twice gave two force "
                             "histories (the runs are not deterministic)")
-        # The perturbed run (every Young's modulus 1 + 1e-12 times as large): its reported
-        # sensitivity recomputed from its own haptic.csv.
+        # The perturbed run (every Young's modulus slightly larger): the moduli its scene file
+        # holds against the finest's times its scale, and its reported sensitivity recomputed from
+        # its own haptic.csv.
         perturbed = scene.get("finest_perturbed")
         if scene["fem_built"] and (not perturbed or "failed" in perturbed):
-            problems.append(f"economy: {name}: no perturbed run of the finest configuration")
+            problems.append(f"economy: {name}: no perturbed run of the finest configuration"
+                            + (f" ({perturbed['failed']})" if perturbed else ""))
         elif perturbed:
+            moduli = [youngs_moduli(results_dir, scene[k]["folder"])
+                      for k in ("finest", "finest_perturbed")]
+            if not moduli[0] or len(moduli[0]) != len(moduli[1]) or not all(
+                    math.isclose(b, a * perturbed["youngs_scale"], rel_tol=1e-15)
+                    and b != a for a, b in zip(*moduli)):
+                problems.append(f"economy: {name}: the perturbed run's Young's moduli {moduli[1]} "
+                                f"are not the finest's {moduli[0]} times "
+                                f"{perturbed['youngs_scale']!r}")
             moved = device_forces(os.path.join(results_dir, perturbed["folder"]))
             if set(moved) != set(finest):
                 problems.append(f"economy: {name}: the perturbed run's steps are not the finest's")

@@ -30,8 +30,8 @@ device force, 0.05 N); the knobs' choices are then run together and checked agai
 tolerance. Where they add up past it, the knob with the largest error of its own steps one value
 back towards the finest, and the combination is run again.
 
-The finest configuration is run twice more: as it is (a configuration must give one force history)
-and with every Young's modulus 1 + 1e-12 times as large (PERTURBATION). Where that far smaller
+The finest configuration is run again as it is (a configuration must give one force history) and,
+in a scene with FEM, once more with every Young's modulus 1 + 1e-12 times as large (PERTURBATION). Where that far smaller
 change moves the force history by more than the tolerance, the scene's history is not well posed
 (a contact that flips on rounding sends it elsewhere) and its knobs' errors do not rank its
 configurations: the report says so.
@@ -306,7 +306,8 @@ def edits_for(spec, config, youngs_scale=1.0):
                                                                   ["file"])
             if "deformable" in item:
                 item["deformable"] = variant_body(item["deformable"], config["mesh"])
-                item["deformable"]["material"]["youngs_modulus_Pa"] *= youngs_scale
+                if youngs_scale != 1.0:
+                    item["deformable"]["material"]["youngs_modulus_Pa"] *= youngs_scale
                 if first:
                     item["deformable"]["elasticity"] = config["elasticity"]
                 first = False
@@ -361,6 +362,8 @@ class SceneRuns:
             options += ["--mode", spec["mode"]]
         started = time.monotonic()
         record = {"config": dict(config), "description": describe(spec, config)}
+        if again == "perturbed":
+            record["youngs_scale"] = 1.0 + PERTURBATION
         try:
             youngs_scale = 1.0 + PERTURBATION if again == "perturbed" else 1.0
             scene = self.bench.scene_variant(spec["path"], edits_for(spec, config, youngs_scale),

@@ -2,8 +2,6 @@
 sweep (error against the finest configuration over the visual compute per simulated second) with
 the chosen configuration ringed, and the tables of the choices and the sweeps.
 """
-import math
-
 from common import place_labels, plt, rate_text, save_figure
 
 KNOB_NAMES = {"mesh": "mesh", "elasticity": "element law", "compliance": "compliance",
@@ -76,9 +74,9 @@ def chart(bench, scenes):
                         if chosen["config"] != result["finest"]["config"]
                         else f"{name}: the finest is needed") +
                  f"\n(dashed: tolerance {result['tolerance_N']:.3g} N"
-                 + ("" if well_posed(result) else
-                    f"; E × (1 + 1e-12) moves it "
-                    f"{result['finest_perturbed'].get('rms_error_N', math.nan):.2g} N") + ")")
+                 + ("" if well_posed(result) is not False else
+                    f"; E × ({perturbation_text(result['finest_perturbed'])}) moves it "
+                    f"{result['finest_perturbed']['rms_error_N']:.2g} N") + ")")
         axis.title.set_fontsize(10)
         # A panel spanning less than a decade labels its minor ticks (3×10⁻², 4×10⁻², ...):
         # smaller figures keep them apart.
@@ -106,24 +104,34 @@ def chart(bench, scenes):
 
 
 def well_posed(result):
-    """Whether the finest run's force moved by no more than the tolerance when its stiffness was
-    perturbed (economy.PERTURBATION); true where it was not run (no FEM)."""
+    """Whether the finest run's force moved by no more than the tolerance when its Young's moduli
+    were perturbed (economy.PERTURBATION): True, False, or None where that run is missing (no FEM)
+    or failed."""
     perturbed = result.get("finest_perturbed")
-    return not perturbed or perturbed.get("rms_error_N", math.inf) <= result["tolerance_N"]
+    if not perturbed or "rms_error_N" not in perturbed:
+        return None
+    return perturbed["rms_error_N"] <= result["tolerance_N"]
+
+
+def perturbation_text(perturbed):
+    """'1 + 1e-12', from the perturbed run's own record."""
+    return f"1 + {perturbed['youngs_scale'] - 1.0:.0e}"
 
 
 def sensitivity_text(scenes):
-    """The finest runs' RMS difference with every Young's modulus 1 + 1e-12 times as large
+    """The finest runs' RMS difference with every Young's modulus slightly larger
     (economy.PERTURBATION), and the scenes where it passes the tolerance."""
     perturbed = {name: r["finest_perturbed"] for name, r in scenes.items()
                  if r.get("finest_perturbed")}
     if not perturbed:
         return ""
-    text = ("Run once more with every Young's modulus 1 + 1e-12 times as large, a change far "
+    scale = perturbation_text(next(iter(perturbed.values())))
+    text = (f"Run once more with every Young's modulus {scale} times as large, a change far "
             "below any knob's, the finest configuration's force moved by (RMS) "
-            + ", ".join(f"{name} {r.get('rms_error_N', float('nan')):.2g} N"
+            + ", ".join(f"{name} {r['rms_error_N']:.2g} N" if "rms_error_N" in r
+                        else f"{name}: failed ({r.get('failed', 'no result')})"
                         for name, r in perturbed.items()) + ".")
-    unstable = [name for name in perturbed if not well_posed(scenes[name])]
+    unstable = [name for name in perturbed if well_posed(scenes[name]) is False]
     if unstable:
         text += (" In " + ", ".join(unstable) + " that is more than the tolerance: the scene's "
                  "force history is not well posed (a contact that flips on rounding sends it "
@@ -143,7 +151,8 @@ def markdown(scenes, skipped, tolerance):
           "twice: the repeat's RMS difference (a configuration gives one force history, so the "
           "errors below are the knobs' own) was "
           + ", ".join(f"{name} {r['finest_repeat'].get('rms_error_N', float('nan')):.2g} N"
-                      for name, r in scenes.items()) + ". " + sensitivity_text(scenes), "",
+                      for name, r in scenes.items()) + "."
+          + (" " + sensitivity_text(scenes) if sensitivity_text(scenes) else ""), "",
           "The mesh knob moves the element order with the size (issue 27): linear tets (P1) at "
           "0.5, 0.75 and 1 times the shipped cells and at the finest linear cells, quadratic ones "
           "(P2) at 0.5 times the shipped cells and at half the finest linear cells, the finest "
