@@ -1,6 +1,5 @@
 #include "fem/inverse_quadratic_form.h"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <stdexcept>
 #include <string>

@@ -262,11 +262,13 @@ def variant_mesh(mesh, factor):
     return mesh
 
 
-def variant_body(body, mesh):
-    """A deformable object with its mesh scaled, its element order set (the mesh knob's value) and
-    every surface file it names made absolute."""
+def variant_body(body, mesh, youngs_scale=1.0):
+    """A deformable object with its mesh scaled, its element order set (the mesh knob's value),
+    every surface file it names made absolute, and its Young's modulus times youngs_scale."""
     element, factor = parse_mesh(mesh)
     body = copy.deepcopy(body)
+    if youngs_scale != 1.0:
+        body["material"]["youngs_modulus_Pa"] *= youngs_scale
     body["mesh"] = variant_mesh(body["mesh"], factor)
     if element != "p1" or "element" in body:
         body["element"] = element
@@ -289,14 +291,12 @@ def edits_for(spec, config, youngs_scale=1.0):
     if "mesh" in shape:
         edits["tool.shape.mesh.file"] = absolute(shape["mesh"]["file"])
     if "body" in scene:
-        body = variant_body(scene["body"], config["mesh"])
-        for key in ("mesh", "visual", "collision", "element"):
+        body = variant_body(scene["body"], config["mesh"], youngs_scale)
+        for key in ("mesh", "visual", "collision", "element") + (("material",) if youngs_scale != 1.0
+                                                                  else ()):
             if key in body:
                 edits[f"body.{key}"] = body[key]
         edits["body.elasticity"] = config["elasticity"]
-        if youngs_scale != 1.0:
-            edits["body.material.youngs_modulus_Pa"] = (body["material"]["youngs_modulus_Pa"]
-                                                        * youngs_scale)
     if "objects" in scene:
         objects = copy.deepcopy(scene["objects"])
         first = True
@@ -305,9 +305,8 @@ def edits_for(spec, config, youngs_scale=1.0):
                 item["rigid"]["shape"]["mesh"]["file"] = absolute(item["rigid"]["shape"]["mesh"]
                                                                   ["file"])
             if "deformable" in item:
-                item["deformable"] = variant_body(item["deformable"], config["mesh"])
-                if youngs_scale != 1.0:
-                    item["deformable"]["material"]["youngs_modulus_Pa"] *= youngs_scale
+                item["deformable"] = variant_body(item["deformable"], config["mesh"],
+                                                  youngs_scale)
                 if first:
                     item["deformable"]["elasticity"] = config["elasticity"]
                 first = False

@@ -140,6 +140,7 @@ def sensitivity_text(scenes):
 
 
 def markdown(scenes, skipped, tolerance):
+    sensitivity = sensitivity_text(scenes)
     md = ["Per scene, one knob at a time moved from the finest configuration (refined mesh of "
           "quadratic tets, corotational, exact compliance, the scene's contact law, 100 Hz visual "
           "frames), "
@@ -152,7 +153,7 @@ def markdown(scenes, skipped, tolerance):
           "errors below are the knobs' own) was "
           + ", ".join(f"{name} {r['finest_repeat'].get('rms_error_N', float('nan')):.2g} N"
                       for name, r in scenes.items()) + "."
-          + (" " + sensitivity_text(scenes) if sensitivity_text(scenes) else ""), "",
+          + (" " + sensitivity if sensitivity else ""), "",
           "The mesh knob moves the element order with the size (issue 27): linear tets (P1) at "
           "0.5, 0.75 and 1 times the shipped cells and at the finest linear cells, quadratic ones "
           "(P2) at 0.5 times the shipped cells and at half the finest linear cells, the finest "

@@ -57,6 +57,7 @@ presses the punch on unstructured meshes graded towards the rim instead.
 import math
 
 from common import draw_pareto, place_labels, plt, save_figure
+from common import pareto_front as common_pareto_front
 
 # name, scene, block top z, tool offset (sphere centre or punch centre above its contact point),
 # depth window for the fit (m), the law's exponent p (F = C d^p) and its C from the scene's values
@@ -352,14 +353,10 @@ def chart(bench, name, case, results):
 
 
 def pareto_front(runs, key):
-    """(frame_ms, error) of the runs no cheaper run is as accurate as, cheapest first: each
-    cheaper than the next and more wrong (|error|; of runs of equal cost, the more accurate)."""
-    front = []
-    for cost, error in sorted(((r["frame_ms"], r[key]) for r in runs),
-                              key=lambda point: (point[0], abs(point[1]))):
-        if not front or (cost > front[-1][0] and abs(error) < abs(front[-1][1])):
-            front.append((cost, error))
-    return front
+    """(frame_ms, error) of the runs on the front of |error| against cost (common.pareto_front),
+    cheapest first: each cheaper than the next and more wrong."""
+    front = common_pareto_front([(r["frame_ms"], abs(r[key])) for r in runs])
+    return [(runs[i]["frame_ms"], runs[i][key]) for i in front]
 
 
 def error_at_cost(front_runs, frame_ms, key):
