@@ -11,7 +11,8 @@ is moved from there towards the cheaper end:
   factor), and quadratic tets (p2) at 0.5 times the shipped cells and at half the finest's; a file
   mesh stays as shipped (and linear);
 - element law: linear against corotational;
-- contact compliance: warped (precomputed at rest, rotated) against exact (forward solves);
+- contact compliance: warped (precomputed at rest, rotated) against exact (forward and backward
+  solves on the contact dofs' reach, fem/inverse_quadratic_form.h);
 - contact law: equality against unilateral where the scene allows it (not with rigid objects);
   friction only where the scene already has it;
 - visual rate: 10, 20, 25, 50, 100 Hz and the scene's own, each a divisor of the haptic rate.
