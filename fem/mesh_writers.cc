@@ -20,6 +20,10 @@ void WriteXyz(std::ostream& out, const Eigen::Vector3d& v) {
   out << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
 }
 
+// Gmsh's element type: 4, the linear tet, or 11, the quadratic one (its node order is
+// fem/quadratic_tet.h's: the corners, then the nodes of edges 01 12 20 30 32 31).
+int GmshTetType(const TetMesh& mesh) { return mesh.is_quadratic() ? 11 : 4; }
+
 // MSH 2.2: tags 1..N and 1..T; each tet carries 2 tags (physical 1, elementary 1).
 void WriteGmsh22(const TetMesh& mesh, std::ostream& out) {
   out << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
@@ -30,8 +34,8 @@ void WriteGmsh22(const TetMesh& mesh, std::ostream& out) {
   }
   out << "$EndNodes\n$Elements\n" << mesh.num_tets() << '\n';
   for (int t = 0; t < mesh.num_tets(); ++t) {
-    out << t + 1 << " 4 2 1 1";
-    for (int a = 0; a < 4; ++a) out << ' ' << mesh.tets(a, t) + 1;
+    out << t + 1 << ' ' << GmshTetType(mesh) << " 2 1 1";
+    for (int a = 0; a < mesh.nodes_per_tet(); ++a) out << ' ' << mesh.node(a, t) + 1;
     out << '\n';
   }
   out << "$EndElements\n";
@@ -61,10 +65,10 @@ void WriteGmsh41(const TetMesh& mesh, std::ostream& out) {
       << (t_count > 0 ? 1 : 0) << ' ' << t_count << ' ' << (t_count > 0 ? 1 : 0) << ' ' << t_count
       << '\n';
   if (t_count > 0) {
-    out << "3 1 4 " << t_count << '\n';
+    out << "3 1 " << GmshTetType(mesh) << ' ' << t_count << '\n';
     for (int t = 0; t < t_count; ++t) {
       out << t + 1;
-      for (int a = 0; a < 4; ++a) out << ' ' << mesh.tets(a, t) + 1;
+      for (int a = 0; a < mesh.nodes_per_tet(); ++a) out << ' ' << mesh.node(a, t) + 1;
       out << '\n';
     }
   }

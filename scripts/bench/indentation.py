@@ -254,12 +254,18 @@ def locking_markdown(name, at_nu, at_low_nu):
 
 
 # (element, ν): colour, marker of a Pareto series; the variants "nodes" and "rim" share a panel
-# (the punch's right-hand one), the nodes-only runs drawn as triangles.
+# (the punch's right-hand one), the nodes-only runs drawn as triangles, and the quarter-point
+# quadratic runs (punch_rim.py) as diamonds beside their plain meshes' squares.
 SERIES = {("p1", 0.45): ("k", "o"), ("p1", 0.49): ("0.55", "o"),
           ("p2", 0.45): ("tab:blue", "s"), ("p2", 0.49): ("tab:cyan", "s")}
 VARIANT_TEXT = {"features": "", "nodes": ", nodes only", "rim": ", nodes only, rim-following",
                 "graded": ", nodes only, graded to the rim (Gmsh)",
-                "disk": ", graded from the contact zone (Gmsh)"}
+                "disk": ", graded from the contact zone (Gmsh)",
+                "quarter": ", nodes only, graded to the rim (Gmsh), quarter-point"}
+VARIANT_MARKER = {"nodes": "^", "quarter": "D"}
+# The linear runs a quadratic variant is compared with: its own, but for the quarter-point meshes,
+# whose nodes the linear element does not have (the same meshes' kind, graded to the rim).
+P1_VARIANT_OF = {"quarter": "graded"}
 
 
 def mesh_label(cells):
@@ -287,7 +293,7 @@ def pareto_panel(axis, results, variants, title, label=None):
                 labels += draw_pareto(
                     axis, [(r["frame_ms"], 100 * r["layer_relative_error"]) for r in series],
                     [label(r) for r in series], color=color,
-                    marker=marker if variant != "nodes" else "^",
+                    marker=VARIANT_MARKER.get(variant, marker),
                     name=f"{element.upper()}, ν {nu:g}{VARIANT_TEXT[variant]}")
     axis.axhline(0.0, color="k", lw=0.8)
     axis.set(xscale="log", xlabel="median visual frame (ms)",
@@ -411,14 +417,16 @@ def third_clause(p1_runs, run, key):
 
 def comparison_markdown(results, label=None):
     """Per quadratic run: the linear element's error at the same frame cost (the same contact, its
-    `variant`), and the ratio; errors against the bonded layer. label(run): its name (label_of)."""
+    `variant`, or P1_VARIANT_OF's), and the ratio; errors against the bonded layer. label(run): its
+    name (label_of)."""
     label = label or label_of
     lines = []
     key = "layer_relative_error"
     for nu in sorted({r["poisson_ratio"] for r in results}):
         for r in (r for r in results if r["element"] == "p2" and r["poisson_ratio"] == nu):
+            p1_variant = P1_VARIANT_OF.get(r["variant"], r["variant"])
             p1 = [q for q in results if (q["element"], q["poisson_ratio"], q["variant"])
-                  == ("p1", nu, r["variant"])]
+                  == ("p1", nu, p1_variant)]
             p1_error = error_at_cost(p1, r["frame_ms"], key)
             if p1_error is None or abs(p1_error) < 1e-3:
                 lines.append(f"- ν {nu:g}, {label(r)} ({r['frame_ms']:.1f} ms): "

@@ -14,7 +14,24 @@ of the other's. The coefficient is fitted as the indentation experiment fits it 
 the same bonded-layer reference. A fine quadratic mesh (16k tets) tests that reference from one
 side: a conforming mesh is stiffer than the block it discretises, so the block is at most that much
 stiffer than the layer formula says (its finite width, 20 a, is not in the formula either).
+
+The quadratic meshes are pressed twice: as the linear mesh's edges' midpoints give them, and with
+the node of each edge leaving the rim a quarter of the way along it (QUARTER_POINT_FRACTION,
+fem/quarter_point_nodes.h), which makes the rim's elements hold the field's √ρ there, where no
+grading of polynomial elements can. The linear element has no such nodes: its runs of the same
+meshes' kind are what both are compared with. The fine quadratic mesh is pressed both ways too.
+Hand runs chose the fraction (ν 0.45, 2026-11-29, P2 2/15): +9.45 % at 0.27, +9.29 % at 0.26,
++9.17 % at 0.251, against +15.8 % with the nodes at the midpoints; exactly at ¼ the element is
+flat at its corner and refused. They also found the quarter-point meshes' error then set by the
+far cells (2/12 +5.4 % at 1.4 ms, 2/10 +3.6 % at 2.1 ms, against 2/15's +9.3 % at 0.86 ms): the
+sweep keeps the plain meshes' sizes, so that each pair differs by the nodes alone.
+
+Every rim is a polygon of the mesh's rim nodes (`rim_nodes`), inscribed in the circle: n nodes
+inscribe 1 − sin(2π/n)·n/2π less area, and a flat punch's stiffness goes about as the root of its
+area (a square one is within 2 % of the circle of its area; Johnson §5.2), so a coarse rim is
+softer than the circle for that alone; the markdown gives it per rim.
 """
+import math
 import os
 
 import yaml
@@ -33,6 +50,8 @@ MESHES = {"p1": [(0.6e-3, 10e-3), (0.4e-3, 6.5e-3), (0.3e-3, 5e-3), (0.25e-3, 4e
                  (0.6e-3, 8e-3)]}
 QUICK_MESHES = {"p1": [(0.6e-3, 10e-3)], "p2": [(2e-3, 15e-3)]}
 CONVERGED = ("p2", 0.5e-3, 4e-3)
+# Where the node of an edge leaving the rim sits on quarter-point meshes (the docstring).
+QUARTER_POINT_FRACTION = 0.26
 # What each case's mesh is graded from (punch_block_mesh): the punch's rim, nodes only, as above;
 # the sphere's contact zone (hertz_disk.py), a disk of HERTZ_DISK_M, the tool's features on.
 HERTZ_DISK_M = 3e-3
@@ -48,12 +67,13 @@ GRADED_CASES = {
 _MADE = {}  # (bench's folder, case, h_rim, h_far): (mesh file, tets); each mesh made once
 
 
-def make_mesh(bench, rim_m, far_m, name="punch"):
-    """The block's mesh file (OUT/meshes/) and its tet count, from punch_block_mesh, which the
-    build puts beside `hapsim` (BUILD/apps/hapsim, BUILD/tests/punch_block_mesh). The block's
-    corners are the case's scene's; name "punch" grades from the rim, "hertz" from the disk."""
+def make_mesh(bench, rim_m, far_m, name="punch", quarter=False):
+    """The block's mesh file (OUT/meshes/), its tet count and its nodes on the rim circle, from
+    punch_block_mesh, which the build puts beside `hapsim` (BUILD/apps/hapsim,
+    BUILD/tests/punch_block_mesh). The block's corners are the case's scene's; name "punch" grades
+    from the rim, "hertz" from the disk; quarter: quadratic, with quarter-point nodes at the rim."""
     prefix, _, grading, _ = GRADED_CASES[name]
-    key = (bench.out_dir, name, rim_m, far_m)
+    key = (bench.out_dir, name, rim_m, far_m, quarter)
     if key in _MADE:
         return _MADE[key]
     program = os.path.join(os.path.dirname(os.path.dirname(bench.hapsim)), "tests",
@@ -62,22 +82,32 @@ def make_mesh(bench, rim_m, far_m, name="punch"):
         raise BenchError(f"{program} is missing: the build makes it with the tests")
     with open(os.path.join(REPO, indentation.CASES[name]["scene"])) as f:
         box = yaml.safe_load(f)["body"]["mesh"]["box"]
-    path = bench.path("meshes", f"{prefix}_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm.msh")
+    path = bench.path("meshes", f"{prefix}_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm"
+                      + ("_quarter" if quarter else "") + ".msh")
     out = bench.run_program(program, "--min-m", *box["min_m"], "--max-m", *box["max_m"],
                             *grading, "--rim-cell-size-m", rim_m, "--cell-size-m", far_m,
-                            "--grading-distance-m", GRADING_DISTANCE_M, "--out", path)
-    _MADE[key] = (path, int(out.split()[-1]))
+                            "--grading-distance-m", GRADING_DISTANCE_M, "--out", path,
+                            *(["--quarter-point-fraction", QUARTER_POINT_FRACTION] if quarter
+                              else []))
+    counts = dict(line.split() for line in out.strip().splitlines())  # "tets N", "rim_nodes M"
+    _MADE[key] = (path, int(counts["tets"]), int(counts["rim_nodes"]))
     return _MADE[key]
 
 
-def press(bench, element, rim_m, far_m, nu, name="punch"):
+def press(bench, element, rim_m, far_m, nu, name="punch", quarter=False):
     """One press on the graded mesh (h_rim, h_far) in `element` at ν: the punch nodes only, the
-    sphere as its scene has it; its fit and errors as indentation.press gives them."""
+    sphere as its scene has it; its fit and errors as indentation.press gives them. quarter: the
+    quadratic mesh with quarter-point nodes at the rim (variant "quarter")."""
     case = indentation.CASES[name]
     prefix, variant, _, contact_edits = GRADED_CASES[name]
-    label = f"{prefix}_{element}_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm_nu{nu:g}"
+    if quarter:
+        if element != "p2" or name != "punch":
+            raise BenchError("quarter-point nodes are for the punch's quadratic meshes")
+        variant = "quarter"
+    label = (f"{prefix}_{element}_{1e3 * rim_m:g}mm_{1e3 * far_m:g}mm"
+             + ("_quarter" if quarter else "") + f"_nu{nu:g}")
     bench.progress(f"{prefix}: {label}")
-    mesh_path, tets = make_mesh(bench, rim_m, far_m, name)
+    mesh_path, tets, rim_nodes = make_mesh(bench, rim_m, far_m, name, quarter)
     edits = {"body.mesh": {"file": mesh_path}, "body.material.poisson_ratio": nu,
              "body.element": element, **contact_edits}
     summary, frames, _ = bench.sim(bench.scene_variant(case["scene"], edits, label), label)
@@ -85,11 +115,12 @@ def press(bench, element, rim_m, far_m, nu, name="punch"):
     figures.pop("curve")
     # near_cell_m: the edge on the rim (punch) or the disk (sphere).
     return {"element": element, "variant": variant, "near_cell_m": rim_m, "far_cell_m": far_m,
-            "tets": tets, "poisson_ratio": nu, **figures}
+            "tets": tets, "rim_nodes": rim_nodes, "poisson_ratio": nu, **figures}
 
 
 def label_of(r):
-    return f"{r['element'].upper()} {1e3 * r['near_cell_m']:g}/{1e3 * r['far_cell_m']:g}"
+    return (f"{r['element'].upper()}{'q' if r['variant'] == 'quarter' else ''} "
+            f"{1e3 * r['near_cell_m']:g}/{1e3 * r['far_cell_m']:g}")
 
 
 def table_markdown(runs, nus, where="rim"):
@@ -98,22 +129,23 @@ def table_markdown(runs, nus, where="rim"):
           "|---|---:|" + "---:|" * len(nus)]
     keys = []
     for r in runs:
-        key = (r["element"], r["near_cell_m"], r["far_cell_m"])
+        key = (r["element"], r["variant"], r["near_cell_m"], r["far_cell_m"])
         if key not in keys:
             keys.append(key)
-    for element, rim_m, far_m in keys:
+    for element, variant, rim_m, far_m in keys:
         cells, tets = [], None
         for nu in nus:
-            r = next((r for r in runs if (r["element"], r["near_cell_m"], r["far_cell_m"],
-                                          r["poisson_ratio"]) == (element, rim_m, far_m, nu)),
-                     None)
+            r = next((r for r in runs if (r["element"], r["variant"], r["near_cell_m"],
+                                          r["far_cell_m"], r["poisson_ratio"])
+                      == (element, variant, rim_m, far_m, nu)), None)
             if r is None:
                 cells.append("–")
                 continue
             tets = r["tets"]
             cells.append(f"{r['frame_ms']:.1f} ms, {100 * r['relative_error']:+.1f} % / "
                          f"{100 * r['layer_relative_error']:+.1f} %")
-        md.append(f"| {element.upper()}, {1e3 * rim_m:g} / {1e3 * far_m:g} | {tets} | "
+        kind = f"{element.upper()}{', quarter-point' if variant == 'quarter' else ''}"
+        md.append(f"| {kind}, {1e3 * rim_m:g} / {1e3 * far_m:g} | {tets} | "
                   + " | ".join(cells) + " |")
     return md
 
@@ -121,11 +153,14 @@ def table_markdown(runs, nus, where="rim"):
 def chart(bench, runs, file="punch_rim.png",
           title="punch on meshes graded to the rim (Gmsh), nodes only",
           caption="Boussinesq F = 2 a E* d on unstructured meshes graded towards the punch's "
-                  "rim (edge on the rim / far from it, mm)"):
+                  "rim (edge on the rim / far from it, mm; P2q diamonds: the quadratic meshes "
+                  "with quarter-point nodes at the rim)"):
     fig, axis = plt.subplots(figsize=(7, 4.8))
     labels = indentation.pareto_panel(
         axis, runs, sorted({r["variant"] for r in runs}),
-        title + "\n(labels: edge near / far, mm; lines: Pareto fronts)", label=label_of)
+        title + "\n(labels: edge near / far, mm; "
+        + ("P2q: quarter-point nodes at the rim; " if any(r["variant"] == "quarter" for r in runs)
+           else "") + "lines: Pareto fronts)", label=label_of)
     place_labels(axis, labels)
     save_figure(fig, bench.path(file))
     return {"file": file,
@@ -133,29 +168,59 @@ def chart(bench, runs, file="punch_rim.png",
                        "the median visual frame, linear and quadratic tets at ν 0.45 and 0.49."}
 
 
+def polygon_markdown(runs):
+    """Per rim edge, its meshes' polygon: nodes, the area it inscribes less than the circle, and
+    the stiffness that costs at K ∝ (area)^½ (the module's docstring)."""
+    polygons = sorted({(r["near_cell_m"], r["rim_nodes"]) for r in runs}, reverse=True)
+    parts = []
+    for rim_m, n in polygons:
+        area = n / (2.0 * math.pi) * math.sin(2.0 * math.pi / n)
+        parts.append(f"{1e3 * rim_m:g} mm, {n} nodes: area {100 * (area - 1):+.2f} %, stiffness "
+                     f"{100 * (math.sqrt(area) - 1):+.2f} %")
+    return ["The rim polygons (edge on the rim: nodes on it, the area they inscribe against the "
+            "circle's, and the stiffness that alone takes off): " + "; ".join(parts) + ".", ""]
+
+
+def converged_markdown(bench):
+    """The fine mesh, with its edge nodes at the midpoints and at quarter points: how far the
+    block can be from the bonded-layer formula."""
+    element, rim_m, far_m = CONVERGED
+    fine = [press(bench, element, rim_m, far_m, indentation.NU, quarter=quarter)
+            for quarter in (False, True)]
+    said = [f"{label_of(r)} ({r['tets']} tets, {r['frame_ms']:.0f} ms a frame) is "
+            f"{100 * r['layer_relative_error']:+.1f} % from the bonded layer at ν "
+            f"{indentation.NU:g} ({100 * r['relative_error']:+.1f} % from the half-space)"
+            for r in fine]
+    md = [f"The reference, tested by a fine mesh: {said[0]}; with quarter-point nodes at the rim "
+          f"{said[1]}. A conforming mesh is stiffer than the block, so the block is at most "
+          f"{100 * min(r['layer_relative_error'] for r in fine):.1f} % stiffer than the layer "
+          "formula: the errors above are the meshes', to about that.", ""]
+    return fine, md
+
+
 def run(bench):
     meshes = QUICK_MESHES if bench.quick else MESHES
     nus = (indentation.NU,) if bench.quick else indentation.TISSUE_NUS
-    runs = [press(bench, element, rim_m, far_m, nu) for nu in nus
-            for element, sizes in meshes.items() for rim_m, far_m in sizes]
+    runs = []
+    for nu in nus:
+        runs += [press(bench, element, rim_m, far_m, nu) for element, sizes in meshes.items()
+                 for rim_m, far_m in sizes]
+        runs += [press(bench, "p2", rim_m, far_m, nu, quarter=True)
+                 for rim_m, far_m in meshes["p2"]]
     output = {"runs": runs, "grading_distance_m": GRADING_DISTANCE_M,
+              "quarter_point_fraction": QUARTER_POINT_FRACTION,
               "figures": [chart(bench, runs)]}
     md = [f"The punch of the indentation experiment on Gmsh meshes graded towards its rim (edge "
           f"growing linearly from the rim's to the far one over {1e3 * GRADING_DISTANCE_M:g} mm; "
-          "nodes only; errors against the half-space and the bonded layer):", ""]
-    md += table_markdown(runs, nus) + ["", "Quadratic against linear at the same frame cost "
-                                       "(errors against the bonded layer):", ""]
+          "nodes only; the quadratic meshes also with the node of each edge leaving the rim "
+          f"{QUARTER_POINT_FRACTION:g} of the way along it, quarter-point; errors against the "
+          "half-space and the bonded layer):", ""]
+    md += table_markdown(runs, nus) + [""] + polygon_markdown(runs)
+    md += ["Quadratic against linear at the same frame cost (errors against the bonded layer; "
+           "P2q: quarter-point nodes at the rim, against the same linear meshes):", ""]
     md += indentation.comparison_markdown(runs, label=label_of) + [""]
     if not bench.quick:
-        element, rim_m, far_m = CONVERGED
-        fine = press(bench, element, rim_m, far_m, indentation.NU)
-        output["converged_run"] = fine
-        md += [f"The reference, tested by a fine mesh: {label_of(fine)} ({fine['tets']} tets, "
-               f"{fine['frame_ms']:.0f} ms a frame) is "
-               f"{100 * fine['layer_relative_error']:+.1f} % from the bonded layer at ν "
-               f"{indentation.NU:g} ({100 * fine['relative_error']:+.1f} % from the half-space). "
-               "A conforming mesh is stiffer than the block, so the block is at most that much "
-               "stiffer than the layer formula: the errors above are the meshes', to about that.",
-               ""]
+        output["converged_runs"], converged = converged_markdown(bench)
+        md += converged
     output["markdown"] = md
     return output

@@ -7,14 +7,19 @@
 // the textbook remedy; the lattices of scenes/flat_punch.yaml can only be fine around a point.
 // With --from-disk the size grows from the whole disk inside the circle instead: the sphere's
 // contact zone (scripts/bench/hertz_disk.py), fine all across it.
+// With --quarter-point-fraction q the mesh is written quadratic instead, its edge nodes at the
+// midpoints except on the edges that leave a node of the rim, whose nodes sit q of the way along
+// (fem/quarter_point_nodes.h: q ≈ ¼ makes the elements at the rim hold the √ρ field there).
 // Not a test: a bench program. Writes linear tets (MSH 4.1; the scene's `element: p2` adds the
-// mid-edge nodes on straight edges), through a temporary file renamed at the end, and prints
-// "tets N". Usage: punch_block_mesh --help.
+// mid-edge nodes on straight edges) or, with a fraction, quadratic ones, through a temporary file
+// renamed at the end, and prints "tets N" and "rim_nodes M" (the nodes on the rim circle: its
+// polygon's sides). Usage: punch_block_mesh --help.
 #include <CLI/CLI.hpp>
 #include <gmsh.h>
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <exception>
@@ -25,6 +30,9 @@
 #include <vector>
 
 #include "fem/gmsh_session.h"
+#include "fem/mesh_io.h"
+#include "fem/quarter_point_nodes.h"
+#include "fem/tet_mesh.h"
 
 namespace {
 
@@ -36,6 +44,7 @@ struct Options {
   double cell_size_m = 0.0;
   double grading_distance_m = 0.02;
   bool from_disk = false;  // grade from the whole disk inside the rim, not from the rim alone
+  double quarter_point_fraction = 0.0;  // 0: linear tets; else quadratic, as the header says
   std::string out;
 };
 
@@ -82,8 +91,45 @@ void GradeTowardsRim(const Options& o, const gmsh::vectorpair& rim) {
   gmsh::option::setNumber("Mesh.Optimize", 1);
 }
 
-// Meshes and writes `temporary`; the number of tets.
-std::size_t MeshInto(const Options& o, const std::string& temporary) {
+// The nodes of the linear `mesh` on the rim circle: in the top face, at the rim's radius from its
+// centre (Gmsh puts them on the circle to round-off).
+std::vector<bool> FindRimNodes(const Options& o, const hapsim::fem::TetMesh& mesh) {
+  const double cx = 0.5 * (o.min_m[0] + o.max_m[0]), cy = 0.5 * (o.min_m[1] + o.max_m[1]);
+  const double tolerance_m = 1e-6 * o.rim_radius_m;
+  std::vector<bool> on_rim(static_cast<std::size_t>(mesh.num_nodes()), false);
+  for (int n = 0; n < mesh.num_nodes(); ++n) {
+    const auto x = mesh.rest_positions_m.col(n);
+    on_rim[static_cast<std::size_t>(n)] =
+        std::abs(x.z() - o.max_m[2]) < tolerance_m &&
+        std::abs(std::hypot(x.x() - cx, x.y() - cy) - o.rim_radius_m) < tolerance_m;
+  }
+  return on_rim;
+}
+
+struct Meshed {
+  std::size_t num_tets = 0;
+  long num_rim_nodes = 0;
+};
+
+// Counts the rim's nodes in the linear mesh in `temporary` and, with a quarter-point fraction,
+// rewrites it as quadratic with the rim's edges' nodes moved (the header).
+long FinishMesh(const Options& o, const std::string& temporary) {
+  hapsim::fem::TetMesh mesh = hapsim::fem::ReadTetMesh(temporary);
+  std::vector<bool> on_rim = FindRimNodes(o, mesh);
+  const long num_rim_nodes = std::count(on_rim.begin(), on_rim.end(), true);
+  if (o.quarter_point_fraction == 0.0) return num_rim_nodes;
+  if (num_rim_nodes < 3) throw std::runtime_error("fewer than 3 nodes found on the rim circle");
+  mesh = hapsim::fem::MakeQuadraticMesh(mesh);
+  on_rim.resize(static_cast<std::size_t>(mesh.num_nodes()), false);  // edge nodes: not on it
+  hapsim::fem::MoveEdgeNodesToQuarterPoints(on_rim, o.quarter_point_fraction, &mesh);
+  if (auto problem = hapsim::fem::FindRestMeshProblem(mesh))
+    throw std::runtime_error("the quarter-point mesh is unusable: " + *problem);
+  hapsim::fem::WriteGmshMesh(mesh, temporary, 4);
+  return num_rim_nodes;
+}
+
+// Meshes and writes `temporary`.
+Meshed MeshInto(const Options& o, const std::string& temporary) {
   hapsim::fem::internal::GmshSession session;
   gmsh::model::add("punch_block");
   const gmsh::vectorpair rim = MakeBlockWithRim(o);
@@ -96,7 +142,7 @@ std::size_t MeshInto(const Options& o, const std::string& temporary) {
   gmsh::model::mesh::getElementsByType(4, tets, nodes);
   gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
   gmsh::write(temporary);  // Gmsh picks the format by the extension
-  return tets.size();
+  return {tets.size(), FinishMesh(o, temporary)};
 }
 
 }  // namespace
@@ -123,6 +169,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_flag("--from-disk", o.from_disk,
                "Grade from the whole disk inside the rim (a sphere's contact zone), not the rim");
+  app.add_option("--quarter-point-fraction", o.quarter_point_fraction,
+                 "Write quadratic tets whose edges leaving the rim have their nodes this fraction "
+                 "of the way along (1/4 < q <= 1/2; about 1/4 holds the root-of-distance field at "
+                 "the rim); 0 writes linear tets")
+      ->capture_default_str();
   app.add_option("--out", o.out, "Output mesh, FILE.msh")->required();
   CLI11_PARSE(app, argc, argv);
   for (int a = 0; a < 3; ++a)
@@ -140,15 +191,26 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "punch_block_mesh: --rim-cell-size-m must not exceed --cell-size-m\n");
     return 2;
   }
+  if (o.quarter_point_fraction != 0.0 &&
+      !(o.quarter_point_fraction > 0.25 && o.quarter_point_fraction <= 0.5)) {
+    std::fprintf(stderr, "punch_block_mesh: --quarter-point-fraction must be 0 or in (1/4, 1/2] "
+                         "(at 1/4 exactly the rim's elements are singular at their corner)\n");
+    return 2;
+  }
+  if (o.quarter_point_fraction != 0.0 && o.from_disk) {
+    std::fprintf(stderr, "punch_block_mesh: --quarter-point-fraction is for the rim, not "
+                         "--from-disk\n");
+    return 2;
+  }
   if (std::filesystem::path(o.out).extension() != ".msh") {
     std::fprintf(stderr, "punch_block_mesh: --out must end in .msh\n");
     return 2;
   }
   const std::string temporary = o.out + ".tmp.msh";
   try {
-    const std::size_t num_tets = MeshInto(o, temporary);
+    const Meshed meshed = MeshInto(o, temporary);
     std::filesystem::rename(temporary, o.out);
-    std::printf("tets %zu\n", num_tets);
+    std::printf("tets %zu\nrim_nodes %ld\n", meshed.num_tets, meshed.num_rim_nodes);
     return 0;
   } catch (const std::string& gmsh_error) {  // Gmsh 4.8's API throws its message as a string
     std::fprintf(stderr, "punch_block_mesh: Gmsh: %s\n", gmsh_error.c_str());

@@ -110,6 +110,7 @@ void ExpectSameMesh(const TetMesh& expected, const TetMesh& actual) {
   EXPECT_TRUE((expected.rest_positions_m.array() == actual.rest_positions_m.array()).all())
       << "positions differ (bit-exact comparison)";
   EXPECT_TRUE(expected.tets == actual.tets);
+  EXPECT_TRUE(expected.edge_nodes == actual.edge_nodes);
 }
 
 TEST_F(MeshIoTest, TwoCubeMeshIsValid) {
@@ -138,6 +139,20 @@ TEST_F(MeshIoTest, RoundTripsAreExact) {
   ExpectSameMesh(mesh, ReadTetMesh(PathOf("v4.msh")));
   ExpectSameMesh(mesh, ReadTetMesh(PathOf("box.ele")));
   EXPECT_FALSE(fs::exists(PathOf("v2.msh.tmp")));  // renamed, not left behind
+}
+
+// A quadratic mesh goes out as Gmsh's 10-node tets (type 11) and comes back the same, edge nodes
+// included, whether or not they sit at their midpoints.
+TEST_F(MeshIoTest, QuadraticRoundTripsAreExact) {
+  TetMesh mesh = MakeQuadraticMesh(MakeTwoCubeMesh());
+  mesh.rest_positions_m.col(mesh.edge_nodes(0, 0)) +=
+      0.1 * (mesh.rest_positions_m.col(mesh.tets(0, 0)) -
+             mesh.rest_positions_m.col(mesh.edge_nodes(0, 0)));
+  WriteGmshMesh(mesh, PathOf("p2_v2.msh"), 2);
+  WriteGmshMesh(mesh, PathOf("p2_v4.msh"), 4);
+  EXPECT_NE(ReadText(PathOf("p2_v4.msh")).find("\n3 1 11 10\n"), std::string::npos);
+  ExpectSameMesh(mesh, ReadGmshMesh(PathOf("p2_v2.msh")));
+  ExpectSameMesh(mesh, ReadGmshMesh(PathOf("p2_v4.msh")));
 }
 
 // The versions read by Gmsh's own reader (libgmsh): files Gmsh wrote from our 4.1 file give the
