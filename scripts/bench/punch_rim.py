@@ -23,13 +23,14 @@ meshes' kind are what both are compared with. The fine quadratic mesh is pressed
 Hand runs chose the fraction (ν 0.45, 2026-11-29, P2 2/15): +9.45 % at 0.27, +9.29 % at 0.26,
 +9.17 % at 0.251, against +15.8 % with the nodes at the midpoints; exactly at ¼ the element is
 flat at its corner and refused. They also found the quarter-point meshes' error then set by the
-far cells (2/12 +5.4 % at 1.4 ms, 2/10 +3.6 % at 2.1 ms, against 2/15's +9.3 % at 0.86 ms): the
-sweep keeps the plain meshes' sizes, so that each pair differs by the nodes alone.
+far cells (2/12 +5.4 % at 1.4 ms, 2/10 +3.6 % at 2.1 ms, against 2/15's +9.3 % at 0.86 ms; all on
+the 10-node rim below, about 3 % soft for it): the sweep keeps the plain meshes' sizes, so that
+each pair differs by the nodes alone.
 
 Every rim is a polygon of the mesh's rim nodes (`rim_nodes`), inscribed in the circle: n nodes
-inscribe 1 − sin(2π/n)·n/2π less area, and a flat punch's stiffness goes about as the root of its
-area (a square one is within 2 % of the circle of its area; Johnson §5.2), so a coarse rim is
-softer than the circle for that alone; the markdown gives it per rim.
+inscribe 1 − sin(2π/n)·n/2π less area, and a flat punch's stiffness is close to that of the
+circle of its area (the usual approximation for a compact shape), which goes as the area's root:
+a coarse rim is softer than the circle for that alone, by what the markdown gives per rim.
 """
 import math
 import os
@@ -64,7 +65,8 @@ GRADED_CASES = {
               {"contact.tool_features": False}),
     "hertz": ("hertz_disk", "disk", ["--rim-radius-m", HERTZ_DISK_M, "--from-disk"], {}),
 }
-_MADE = {}  # (bench's folder, case, h_rim, h_far): (mesh file, tets); each mesh made once
+# (bench's folder, case, h_rim, h_far, quarter): (mesh file, tets, rim nodes); each mesh made once
+_MADE = {}
 
 
 def make_mesh(bench, rim_m, far_m, name="punch", quarter=False):
@@ -155,13 +157,19 @@ def chart(bench, runs, file="punch_rim.png",
           caption="Boussinesq F = 2 a E* d on unstructured meshes graded towards the punch's "
                   "rim (edge on the rim / far from it, mm; P2q diamonds: the quadratic meshes "
                   "with quarter-point nodes at the rim)"):
-    fig, axis = plt.subplots(figsize=(7, 4.8))
-    labels = indentation.pareto_panel(
-        axis, runs, sorted({r["variant"] for r in runs}),
-        title + "\n(labels: edge near / far, mm; "
-        + ("P2q: quarter-point nodes at the rim; " if any(r["variant"] == "quarter" for r in runs)
-           else "") + "lines: Pareto fronts)", label=label_of)
-    place_labels(axis, labels)
+    # A panel per ν: at 0.49 the linear element's locking sets the scale, and on one panel the
+    # quadratic points of both ratios crowd each other's labels.
+    nus = sorted({r["poisson_ratio"] for r in runs})
+    fig, axes = plt.subplots(1, len(nus), figsize=(6.5 * len(nus), 5.2), squeeze=False)
+    note = ("P2q: quarter-point nodes at the rim; "
+            if any(r["variant"] == "quarter" for r in runs) else "")
+    for axis, nu in zip(axes[0], nus):
+        shown = [r for r in runs if r["poisson_ratio"] == nu]
+        labels = indentation.pareto_panel(
+            axis, shown, sorted({r["variant"] for r in shown}),
+            f"{title}, ν {nu:g}\n(labels: edge near / far, mm; {note}lines: Pareto fronts)",
+            label=label_of)
+        place_labels(axis, labels)
     save_figure(fig, bench.path(file))
     return {"file": file,
             "caption": caption + ": the fitted coefficient's error against the bonded layer over "
