@@ -11,20 +11,12 @@
 #include <gtest/gtest.h>
 
 #include "fem/quadratic_tet.h"
+#include "tests/fem/test_utilities.h"
 
 namespace hapsim::fem {
 namespace {
 
-TetMesh MakeUnitQuadraticTet() {
-  TetMesh linear;
-  linear.rest_positions_m.resize(3, 4);
-  linear.rest_positions_m << 0, 1, 0, 0,  //
-      0, 0, 1, 0,                         //
-      0, 0, 0, 1;
-  linear.tets.resize(4, 1);
-  linear.tets << 0, 1, 2, 3;
-  return MakeQuadraticMesh(linear);
-}
+using test::MakeUnitQuadraticTet;
 
 // The plane z = c as two large triangles (their closest points are the nodes' projections).
 void MakePlane(double c, Matrix3Xd* vertices_m, Matrix3Xi* triangles) {

@@ -12,20 +12,12 @@
 #include <stdexcept>
 
 #include "fem/quadratic_tet.h"
+#include "tests/fem/test_utilities.h"
 
 namespace hapsim::fem {
 namespace {
 
-TetMesh MakeUnitQuadraticTet() {
-  TetMesh linear;
-  linear.rest_positions_m.resize(3, 4);
-  linear.rest_positions_m << 0, 1, 0, 0,  //
-      0, 0, 1, 0,                         //
-      0, 0, 0, 1;
-  linear.tets.resize(4, 1);
-  linear.tets << 0, 1, 2, 3;
-  return MakeQuadraticMesh(linear);
-}
+using test::MakeUnitQuadraticTet;
 
 P2Nodes NodesOf(const TetMesh& mesh, int t) {
   P2Nodes X;

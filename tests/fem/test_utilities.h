@@ -1,6 +1,7 @@
 #pragma once
 // Small helpers shared by the FEM validation tests: a static equilibrium solver, forces and
-// energies at the current rotations, rigid transforms, deterministic random numbers.
+// energies at the current rotations, rigid transforms, deterministic random numbers, the unit
+// quadratic tet.
 // Header-only; nothing here is under test.
 
 #include <Eigen/Core>
@@ -17,6 +18,7 @@
 #include "fem/fem_options.h"
 #include "fem/model.h"
 #include "fem/stiffness_assembly.h"
+#include "fem/tet_mesh.h"
 
 namespace hapsim::fem::test {
 
@@ -146,6 +148,18 @@ inline Eigen::VectorXd ZeroFixedDofs(const Model& model, Eigen::VectorXd v) {
   for (int i = 0; i < model.num_dofs(); ++i)
     if (model.dof_is_fixed[i]) v[i] = 0.0;
   return v;
+}
+
+// One quadratic tet, corners at the origin and the unit axes, its edge nodes at the midpoints.
+inline TetMesh MakeUnitQuadraticTet() {
+  TetMesh linear;
+  linear.rest_positions_m.resize(3, 4);
+  linear.rest_positions_m << 0, 1, 0, 0,  //
+      0, 0, 1, 0,                         //
+      0, 0, 0, 1;
+  linear.tets.resize(4, 1);
+  linear.tets << 0, 1, 2, 3;
+  return MakeQuadraticMesh(linear);
 }
 
 }  // namespace hapsim::fem::test
