@@ -70,7 +70,8 @@ TetMesh ReadVtkMesh(const std::string& path);
 TetMesh ReadTetMesh(const std::string& path);
 
 // Writes `mesh` as Gmsh MSH ASCII, version 2.2 (version_major 2) or 4.1 (version_major 4), with
-// node tags 1..N and element tags 1..T, all tets in one volume entity (tag 1).
+// node tags 1..N and element tags 1..T, all tets in one volume entity (tag 1); a quadratic mesh's
+// as Gmsh's 10-node tets (type 11), edge nodes included.
 // Throws InputError if version_major is neither 2 nor 4 or the file cannot be written.
 // Precondition: mesh indices are in range (checked, aborts otherwise).
 void WriteGmshMesh(const TetMesh& mesh, const std::string& path, int version_major);

@@ -84,6 +84,8 @@ void WriteGmshMesh(const TetMesh& mesh, const std::string& path, int version_maj
                      "got " +
                          std::to_string(version_major));
   CheckTetIndices(mesh.tets, mesh.num_nodes());
+  HAPSIM_INVARIANT(mesh.edge_nodes.size() == 0 || (mesh.edge_nodes.minCoeff() >= 0 &&
+                                                   mesh.edge_nodes.maxCoeff() < mesh.num_nodes()));
   WriteFileAtomically(path, [&](std::ostream& out) {
     if (version_major == 2) WriteGmsh22(mesh, out);
     if (version_major == 4) WriteGmsh41(mesh, out);

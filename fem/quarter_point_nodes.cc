@@ -22,14 +22,12 @@ int MoveEdgeNodesToQuarterPoints(const std::vector<bool>& singular, double fract
       if (singular[static_cast<size_t>(a)] == singular[static_cast<size_t>(b)]) continue;
       const int from = singular[static_cast<size_t>(a)] ? a : b, to = from == a ? b : a;
       const int node = mesh->edge_nodes(k, t);
-      // The same position from every tet around the edge: the move is made once, counted once.
+      if (moved[static_cast<size_t>(node)]) continue;  // from another tet around the edge
       mesh->rest_positions_m.col(node) =
           mesh->rest_positions_m.col(from) +
           fraction * (mesh->rest_positions_m.col(to) - mesh->rest_positions_m.col(from));
-      if (!moved[static_cast<size_t>(node)]) {
-        moved[static_cast<size_t>(node)] = true;
-        ++num_moved;
-      }
+      moved[static_cast<size_t>(node)] = true;
+      ++num_moved;
     }
   return num_moved;
 }

@@ -117,8 +117,9 @@ long FinishMesh(const Options& o, const std::string& temporary) {
   hapsim::fem::TetMesh mesh = hapsim::fem::ReadTetMesh(temporary);
   std::vector<bool> on_rim = FindRimNodes(o, mesh);
   const long num_rim_nodes = std::count(on_rim.begin(), on_rim.end(), true);
+  if (!o.from_disk && num_rim_nodes < 3)  // the rim is what the mesh is graded to: it must be there
+    throw std::runtime_error("fewer than 3 nodes found on the rim circle");
   if (o.quarter_point_fraction == 0.0) return num_rim_nodes;
-  if (num_rim_nodes < 3) throw std::runtime_error("fewer than 3 nodes found on the rim circle");
   mesh = hapsim::fem::MakeQuadraticMesh(mesh);
   on_rim.resize(static_cast<std::size_t>(mesh.num_nodes()), false);  // edge nodes: not on it
   hapsim::fem::MoveEdgeNodesToQuarterPoints(on_rim, o.quarter_point_fraction, &mesh);
@@ -128,7 +129,8 @@ long FinishMesh(const Options& o, const std::string& temporary) {
   return num_rim_nodes;
 }
 
-// Meshes and writes `temporary`.
+// Meshes and writes `temporary` (Gmsh), then reads it back to count the rim's nodes and, with a
+// quarter-point fraction, rewrites it quadratic (FinishMesh).
 Meshed MeshInto(const Options& o, const std::string& temporary) {
   hapsim::fem::internal::GmshSession session;
   gmsh::model::add("punch_block");

@@ -3,7 +3,9 @@
 // x = Σ N_a X_a with the nodes at e_i, e_i/4 and (e_i + e_j)/2: component i is
 // L_i (2 L_i − 1) + L0 L_i + 2 L_i (s − L_i) = s L_i), so x1 + x2 + x3 = s² and the field
 // u = (x1 + x2 + x3)^½ = s is linear in ξ: the element holds it exactly, where the straight one
-// (edge nodes at the midpoints) cannot.
+// (edge nodes at the midpoints) cannot. With the origin and (1,0,0) singular (an edge on the
+// singular line) the same working gives x2 + x3 = (ξ2 + ξ3)², so (x2 + x3)^½, a root of a
+// distance from that edge (zero on it, linear away from it), is held as exactly.
 #include "fem/quarter_point_nodes.h"
 
 #include <gtest/gtest.h>
@@ -25,11 +27,14 @@ P2Nodes NodesOf(const TetMesh& mesh, int t) {
   return X;
 }
 
-// The largest |u_h − (x1 + x2 + x3)^½| over a grid of points inside the tet, u_h the quadratic
-// interpolant of that field from its nodal values.
-double MaxRootFieldError(const P2Nodes& X) {
+// The largest |u_h − ρ(x)^½| over a grid of points inside the tet, u_h the quadratic interpolant
+// of that field from its nodal values; ρ(x) = x1 + x2 + x3 by default.
+double MaxRootFieldError(const P2Nodes& X,
+                         double (*rho)(const Eigen::Vector3d&) = [](const Eigen::Vector3d& x) {
+                           return x.sum();
+                         }) {
   Eigen::Matrix<double, kP2Nodes, 1> u;
-  for (int a = 0; a < kP2Nodes; ++a) u[a] = std::sqrt(X.col(a).sum());
+  for (int a = 0; a < kP2Nodes; ++a) u[a] = std::sqrt(rho(X.col(a)));
   double worst = 0.0;
   const int n = 8;
   for (int i = 1; i < n; ++i)
@@ -38,7 +43,7 @@ double MaxRootFieldError(const P2Nodes& X) {
         const Eigen::Vector3d xi(double(i) / n, double(j) / n, double(k) / n);
         const auto N = CalcP2ShapeFunctions(xi);
         const Eigen::Vector3d x = X * N;
-        worst = std::max(worst, std::abs(N.dot(u) - std::sqrt(x.sum())));
+        worst = std::max(worst, std::abs(N.dot(u) - std::sqrt(rho(x))));
       }
   return worst;
 }
@@ -57,6 +62,16 @@ TEST(QuarterPointNodes, TheRootOfTheDistanceIsHeldExactlyAtAQuarter) {
     const Eigen::Vector3d expected = ((i == 0 || j == 0) ? 0.25 : 0.5) * (Xi + Xj);
     EXPECT_LT((mesh.rest_positions_m.col(mesh.edge_nodes(k, 0)) - expected).norm(), 1e-15) << k;
   }
+}
+
+TEST(QuarterPointNodes, AlongASingularEdgeTheRootOfItsDistanceIsHeld) {
+  const auto rho = [](const Eigen::Vector3d& x) { return x.y() + x.z(); };
+  TetMesh mesh = MakeUnitQuadraticTet();
+  EXPECT_GT(MaxRootFieldError(NodesOf(mesh, 0), rho), 1e-2);
+  const std::vector<bool> singular = {true, true, false, false, false,
+                                      false, false, false, false, false};
+  EXPECT_EQ(MoveEdgeNodesToQuarterPoints(singular, 0.25, &mesh), 4);  // (0,1) itself stays
+  EXPECT_LT(MaxRootFieldError(NodesOf(mesh, 0), rho), 1e-14);
 }
 
 // Exactly at a quarter the map is singular at the corner (∂x/∂ξ = 0 along each moved edge), and
