@@ -11,8 +11,10 @@
 namespace hapsim::fem {
 namespace {
 
-// Precondition of every writer: tet indices address existing nodes.
-void CheckTetIndices(const Matrix4Xi& tets, Eigen::Index num_nodes) {
+// Precondition of every writer: tet indices (corners, and a quadratic mesh's edge nodes) address
+// existing nodes.
+template <typename Indices>
+void CheckTetIndices(const Indices& tets, Eigen::Index num_nodes) {
   HAPSIM_INVARIANT(tets.size() == 0 || (tets.minCoeff() >= 0 && tets.maxCoeff() < num_nodes));
 }
 
@@ -84,8 +86,7 @@ void WriteGmshMesh(const TetMesh& mesh, const std::string& path, int version_maj
                      "got " +
                          std::to_string(version_major));
   CheckTetIndices(mesh.tets, mesh.num_nodes());
-  HAPSIM_INVARIANT(mesh.edge_nodes.size() == 0 || (mesh.edge_nodes.minCoeff() >= 0 &&
-                                                   mesh.edge_nodes.maxCoeff() < mesh.num_nodes()));
+  CheckTetIndices(mesh.edge_nodes, mesh.num_nodes());
   WriteFileAtomically(path, [&](std::ostream& out) {
     if (version_major == 2) WriteGmsh22(mesh, out);
     if (version_major == 4) WriteGmsh41(mesh, out);

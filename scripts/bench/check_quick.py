@@ -232,7 +232,10 @@ def youngs_moduli(results_dir, folder):
     def walk(node):
         if isinstance(node, dict):
             for key, value in node.items():
-                found.append(value) if key == "youngs_modulus_Pa" else walk(value)
+                if key == "youngs_modulus_Pa":
+                    found.append(value)
+                else:
+                    walk(value)
         elif isinstance(node, list):
             for value in node:
                 walk(value)

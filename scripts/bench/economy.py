@@ -32,10 +32,10 @@ tolerance. Where they add up past it, the knob with the largest error of its own
 back towards the finest, and the combination is run again.
 
 The finest configuration is run again as it is (a configuration must give one force history) and,
-in a scene with FEM, once more with every Young's modulus 1 + 1e-12 times as large (PERTURBATION). Where that far smaller
-change moves the force history by more than the tolerance, the scene's history is not well posed
-(a contact that flips on rounding sends it elsewhere) and its knobs' errors do not rank its
-configurations: the report says so.
+in a scene with FEM, once more with every Young's modulus 1 + 1e-12 times as large (PERTURBATION).
+Where that far smaller change moves the force history by more than the tolerance, the scene's
+history is not well posed (a contact that flips on rounding sends it elsewhere) and its knobs'
+errors do not rank its configurations: the report says so.
 
 Rigid-only scenes (peg_in_hole, probe_on_tray) build no FEM: only the visual rate (and a contact
 law their rigid objects allow) is a knob there.
@@ -362,10 +362,10 @@ class SceneRuns:
             options += ["--mode", spec["mode"]]
         started = time.monotonic()
         record = {"config": dict(config), "description": describe(spec, config)}
-        if again == "perturbed":
-            record["youngs_scale"] = 1.0 + PERTURBATION
+        youngs_scale = 1.0 + PERTURBATION if again == "perturbed" else 1.0
+        if youngs_scale != 1.0:
+            record["youngs_scale"] = youngs_scale
         try:
-            youngs_scale = 1.0 + PERTURBATION if again == "perturbed" else 1.0
             scene = self.bench.scene_variant(spec["path"], edits_for(spec, config, youngs_scale),
                                              name)
             summary, frames, folder = self.bench.sim(scene, name, *options)

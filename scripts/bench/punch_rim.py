@@ -41,7 +41,7 @@ import re
 import yaml
 
 import indentation
-from common import REPO, BenchError, place_labels, plt, save_figure
+from common import REPO, BenchError, label_log_x, place_labels, plt, save_figure
 
 GRADING_DISTANCE_M = 0.02
 # (h_rim, h_far) per element: the full sweep, the quick one, and the fine mesh that checks the
@@ -175,6 +175,7 @@ def chart(bench, runs, file="punch_rim.png",
             axis, shown, sorted({r["variant"] for r in shown}),
             f"{title}, ν {nu:g}\n(labels: edge near / far, mm; {note}lines: Pareto fronts)",
             label=label_of)
+        label_log_x(axis)
         place_labels(axis, labels)
     save_figure(fig, bench.path(file))
     return {"file": file,

@@ -84,7 +84,7 @@ TEST(QuarterPointNodes, JustAboveAQuarterTheElementIsValid) {
   MoveEdgeNodesToQuarterPoints(singular, 0.26, &above);
   EXPECT_TRUE(FindQuadraticTetProblem(NodesOf(at_quarter, 0)).has_value());
   EXPECT_FALSE(FindQuadraticTetProblem(NodesOf(above, 0)).has_value());
-  EXPECT_LT(MaxRootFieldError(NodesOf(above, 0)), 0.03);
+  EXPECT_LT(MaxRootFieldError(NodesOf(above, 0)), 0.01);  // 0.003 there; 0.043 straight
 }
 
 // Two tets on the face (1, 2, 3), apexes 0 and 4, node 1 singular: its edges to 0, 2, 3 and 4
